@@ -1,0 +1,96 @@
+"""Clamped (optionally rational) B-spline curve of any degree."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.interpolate import BSpline as _ScipyBSpline
+
+from medax.errors import CurveError
+from medax.geometry._types import FloatArray
+from medax.geometry.curve import Curve
+
+
+def clamped_uniform_knots(n_ctrl: int, degree: int) -> FloatArray:
+    """Clamped knot vector on [0, 1] with uniform interior knots, shape ``(n_ctrl+degree+1,)``."""
+    n_inner = n_ctrl - degree - 1
+    inner = np.linspace(0.0, 1.0, n_inner + 2)[1:-1]
+    return np.concatenate((np.zeros(degree + 1), inner, np.ones(degree + 1)))
+
+
+class BSpline(Curve):
+    """B-spline ``C(t)`` with control points (m, dim), clamped knots (m + p + 1,) and optional
+    positive weights (m,) (then a NURBS). The knot domain is mapped linearly onto ``[0, 1]``."""
+
+    def __init__(
+        self,
+        control_points: FloatArray,
+        degree: int,
+        knots: FloatArray | None = None,
+        weights: FloatArray | None = None,
+    ) -> None:
+        ctrl = np.asarray(control_points, dtype=np.float64)
+        if ctrl.ndim != 2 or ctrl.shape[1] not in (2, 3):
+            raise CurveError(f"B-spline control points must be (m, 2|3), got shape {ctrl.shape}")
+        if not 1 <= degree < ctrl.shape[0]:
+            raise CurveError(
+                f"B-spline degree {degree} needs at least {degree + 1} control points, "
+                f"got {ctrl.shape[0]}"
+            )
+        if knots is None:
+            knots = clamped_uniform_knots(ctrl.shape[0], degree)
+        kn = np.asarray(knots, dtype=np.float64)
+        if kn.size != ctrl.shape[0] + degree + 1 or np.any(np.diff(kn) < 0):
+            raise CurveError("B-spline knots must be non-decreasing, m + degree + 1 of them")
+        lo, hi = kn[degree], kn[-degree - 1]
+        if not hi > lo:
+            raise CurveError("B-spline knot domain is empty")
+        kn = (kn - lo) / (hi - lo)
+        self.control_points, self.degree, self.knots = ctrl, int(degree), kn
+        self.weights = None if weights is None else np.asarray(weights, dtype=np.float64)
+        if self.weights is not None and (
+            self.weights.shape != (ctrl.shape[0],) or np.any(self.weights <= 0)
+        ):
+            raise CurveError("B-spline weights must be positive, one per control point")
+        if self.weights is None:
+            self._spl = _ScipyBSpline(kn, ctrl, degree, extrapolate=False)
+        else:
+            hom = np.column_stack((ctrl * self.weights[:, None], self.weights))
+            self._spl = _ScipyBSpline(kn, hom, degree, extrapolate=False)
+
+    @property
+    def dim(self) -> int:
+        return int(self.control_points.shape[1])
+
+    def complexity(self) -> int:
+        return max(1, int(np.unique(self.knots).size - 1))
+
+    def _raw(self, t: FloatArray, nu: int) -> FloatArray:
+        t = np.clip(np.asarray(t, dtype=np.float64), 0.0, 1.0)
+        return np.asarray(self._spl(t, nu))
+
+    def evaluate(self, t: FloatArray) -> FloatArray:
+        h = self._raw(t, 0)
+        if self.weights is None:
+            return h
+        return h[:, :-1] / h[:, -1:]
+
+    def derivative(self, t: FloatArray, order: int = 1) -> FloatArray:
+        if self.weights is None:
+            return self._raw(t, order)
+        h0, h1 = self._raw(t, 0), self._raw(t, 1)
+        w0, w1 = h0[:, -1:], h1[:, -1:]
+        c = h0[:, :-1] / w0
+        d1 = (h1[:, :-1] - w1 * c) / w0
+        if order == 1:
+            return d1
+        h2 = self._raw(t, 2)
+        w2 = h2[:, -1:]
+        return (h2[:, :-1] - 2.0 * w1 * d1 - w2 * c) / w0
+
+    def reversed(self) -> BSpline:
+        kn = 1.0 - self.knots[::-1]
+        w = None if self.weights is None else self.weights[::-1]
+        return BSpline(self.control_points[::-1], self.degree, kn, w)
+
+    def transformed(self, offset: FloatArray, scale: float) -> BSpline:
+        return BSpline((self.control_points - offset) / scale, self.degree, self.knots, self.weights)

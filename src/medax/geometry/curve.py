@@ -1,0 +1,222 @@
+"""The curve interface and a global closest-point query shared by all curve kinds.
+
+Every curve is parametrised on ``t in [0, 1]`` and lives in ``dim`` = 2 or 3 dimensions.
+Methods are vectorised: ``t`` has shape ``(n,)``, points ``(n, dim)``.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from medax.geometry._types import FloatArray
+
+
+@dataclass(frozen=True)
+class Closest:
+    """Answer of a closest-point query for ``n`` points.
+
+    ``t`` (n,) curve parameters of the foot points, ``foot`` (n, dim) the foot points,
+    ``distance`` (n,) the Euclidean distances (same unit as the coordinates).
+    """
+
+    t: FloatArray
+    foot: FloatArray
+    distance: FloatArray
+
+
+class Curve(ABC):
+    """A parametric curve ``C(t)``, ``t in [0, 1]``."""
+
+    #: number of samples per unit of :meth:`complexity` used by the global search
+    samples_per_piece: int = 48
+
+    @property
+    @abstractmethod
+    def dim(self) -> int:
+        """Dimension of the space the curve lives in (2 or 3)."""
+
+    @abstractmethod
+    def evaluate(self, t: FloatArray) -> FloatArray:
+        """Points ``C(t)``, shape ``(n, dim)`` for ``t`` of shape ``(n,)``."""
+
+    @abstractmethod
+    def derivative(self, t: FloatArray, order: int = 1) -> FloatArray:
+        """Derivative ``d^k C / dt^k`` (k = ``order`` in 1, 2), shape ``(n, dim)``."""
+
+    @abstractmethod
+    def reversed(self) -> Curve:
+        """The same point set traversed from end to start."""
+
+    def transformed(self, offset: FloatArray, scale: float) -> Curve:
+        """The image under ``x -> (x - offset) / scale`` (a similarity; planar curves)."""
+        raise NotImplementedError(f"{type(self).__name__} cannot be transformed")
+
+    @property
+    def kind(self) -> str:
+        """Short name of the curve kind (``line``, ``arc``, ``bspline``, ``polyline``...)."""
+        return type(self).__name__.lower()
+
+    def complexity(self) -> int:
+        """Number of smooth pieces (spans, segments); sets the sampling density."""
+        return 1
+
+    @property
+    def start(self) -> FloatArray:
+        """First point, shape ``(dim,)``."""
+        return self.evaluate(np.zeros(1))[0]
+
+    @property
+    def end(self) -> FloatArray:
+        """Last point, shape ``(dim,)``."""
+        return self.evaluate(np.ones(1))[0]
+
+    def length(self, n: int = 0) -> float:
+        """Arc length, by Gauss-Legendre quadrature on ``complexity()`` pieces."""
+        pieces = max(self.complexity(), 1) * 8
+        x, w = np.polynomial.legendre.leggauss(10)
+        edges = np.linspace(0.0, 1.0, pieces + 1)
+        a, b = edges[:-1, None], edges[1:, None]
+        t = (0.5 * (b - a) * x[None, :] + 0.5 * (a + b)).ravel()
+        speed = np.linalg.norm(self.derivative(t), axis=1).reshape(pieces, -1)
+        return float(np.sum(0.5 * (b - a) * speed * w[None, :]))
+
+    def sample(self, n: int) -> FloatArray:
+        """``n`` points at equal parameter steps, shape ``(n, dim)``."""
+        return self.evaluate(np.linspace(0.0, 1.0, n))
+
+    @cached_property
+    def _search(self) -> tuple[FloatArray, FloatArray, cKDTree]:
+        n = self.samples_per_piece * max(self.complexity(), 1) + 1
+        t = np.linspace(0.0, 1.0, n)
+        pts = self.evaluate(t)
+        return t, pts, cKDTree(pts)
+
+    def closest(self, points: FloatArray) -> Closest:
+        """Global closest points on the curve for ``points`` of shape ``(n, dim)``.
+
+        The search is global: the nearest of dense samples picks candidate brackets (the
+        ``k`` nearest samples, so a nearest point that jumps between distant parts of a
+        wavy curve is found), then a safeguarded Newton iteration on
+        ``g(t) = (C(t) - x) . C'(t)`` refines each bracket to machine precision.
+        """
+        return closest_by_search(self, np.asarray(points, dtype=np.float64))
+
+
+def closest_by_search(curve: Curve, points: FloatArray, k: int = 4) -> Closest:
+    """Generic global closest-point query (see :meth:`Curve.closest`)."""
+    ts, pts, tree = curve._search
+    n = points.shape[0]
+    k = min(k, ts.size)
+    _, idx = tree.query(points, k=k)
+    idx = np.asarray(idx).reshape(n, k)
+    dt = ts[1] - ts[0]
+    lo = np.clip(ts[idx] - dt, 0.0, 1.0).ravel()
+    hi = np.clip(ts[idx] + dt, 0.0, 1.0).ravel()
+    x = np.repeat(points, k, axis=0)
+    t = _bracketed_newton(curve, x, lo, hi)
+    foot = curve.evaluate(t)
+    dist = np.linalg.norm(foot - x, axis=1).reshape(n, k)
+    best = np.argmin(dist, axis=1)
+    rows = np.arange(n)
+    t = t.reshape(n, k)[rows, best]
+    foot = foot.reshape(n, k, -1)[rows, best]
+    return Closest(t=t, foot=foot, distance=dist[rows, best])
+
+
+def _bracketed_newton(
+    curve: Curve, x: FloatArray, lo: FloatArray, hi: FloatArray, iters: int = 60
+) -> FloatArray:
+    """Minimise ``|C(t) - x|`` over ``t in [lo, hi]`` for all rows at once.
+
+    ``g(t) = (C - x) . C'`` is the half derivative of the squared distance. Where ``g`` has
+    the same sign at both bracket ends the minimum is at an end; otherwise Newton steps are
+    kept inside a shrinking sign-change bracket (bisection when a step leaves it).
+    """
+
+    def g_of(t: FloatArray) -> FloatArray:
+        return np.einsum("ij,ij->i", curve.evaluate(t) - x, curve.derivative(t))
+
+    g_lo, g_hi = g_of(lo), g_of(hi)
+    interior = (g_lo < 0.0) & (g_hi > 0.0)
+    # no interior minimum: the smaller end distance wins
+    d_lo = np.linalg.norm(curve.evaluate(lo) - x, axis=1)
+    d_hi = np.linalg.norm(curve.evaluate(hi) - x, axis=1)
+    t = np.where(d_lo <= d_hi, lo, hi)
+    if not np.any(interior):
+        return t
+    a, b, xi = lo[interior].copy(), hi[interior].copy(), x[interior]
+    s = 0.5 * (a + b)
+    active = np.ones(s.size, dtype=bool)
+    for _ in range(iters):
+        ia = np.nonzero(active)[0]
+        if ia.size == 0:
+            break
+        sa = s[ia]
+        c = curve.evaluate(sa) - xi[ia]
+        c1 = curve.derivative(sa)
+        c2 = curve.derivative(sa, 2)
+        g = np.einsum("ij,ij->i", c, c1)
+        dg = np.einsum("ij,ij->i", c1, c1) + np.einsum("ij,ij->i", c, c2)
+        aa, bb = a[ia], b[ia]
+        aa = np.where(g < 0.0, sa, aa)
+        bb = np.where(g > 0.0, sa, bb)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = np.where(dg > 0.0, g / dg, np.inf)
+        new = sa - step
+        bad = ~np.isfinite(new) | (new <= aa) | (new >= bb)
+        new = np.where(bad, 0.5 * (aa + bb), new)
+        done = (np.abs(new - sa) <= 1e-15 * (1.0 + np.abs(sa))) | (bb - aa <= 4e-16) | (g == 0.0)
+        a[ia], b[ia], s[ia] = aa, bb, new
+        active[ia[done]] = False
+    t[interior] = s
+    return t
+
+
+class SubCurve(Curve):
+    """The piece ``t in [t0, t1]`` of ``base``, reparametrised onto ``[0, 1]`` (exact)."""
+
+    def __init__(self, base: Curve, t0: float, t1: float) -> None:
+        self.base, self.t0, self.t1 = base, float(t0), float(t1)
+
+    @property
+    def dim(self) -> int:
+        return self.base.dim
+
+    @property
+    def kind(self) -> str:
+        return self.base.kind
+
+    def complexity(self) -> int:
+        return max(1, int(np.ceil(self.base.complexity() * abs(self.t1 - self.t0))))
+
+    def _map(self, t: FloatArray) -> FloatArray:
+        return self.t0 + np.asarray(t, dtype=np.float64) * (self.t1 - self.t0)
+
+    def evaluate(self, t: FloatArray) -> FloatArray:
+        return self.base.evaluate(self._map(t))
+
+    def derivative(self, t: FloatArray, order: int = 1) -> FloatArray:
+        return self.base.derivative(self._map(t), order) * (self.t1 - self.t0) ** order
+
+    def reversed(self) -> SubCurve:
+        return SubCurve(self.base, self.t1, self.t0)
+
+    def transformed(self, offset: FloatArray, scale: float) -> SubCurve:
+        return SubCurve(self.base.transformed(offset, scale), self.t0, self.t1)
+
+    def closest(self, points: FloatArray) -> Closest:
+        return closest_by_search(self, np.asarray(points, dtype=np.float64))
+
+
+def sub_curve(curve: Curve, t0: float, t1: float) -> Curve:
+    """The piece of ``curve`` between parameters ``t0`` and ``t1`` (reversed if ``t1 < t0``)."""
+    if isinstance(curve, SubCurve):
+        a = curve.t0 + t0 * (curve.t1 - curve.t0)
+        b = curve.t0 + t1 * (curve.t1 - curve.t0)
+        return SubCurve(curve.base, a, b)
+    return SubCurve(curve, t0, t1)

@@ -1,0 +1,199 @@
+"""The 4-sided region: four side curves in counter-clockwise order and an embedding."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from medax import tolerances
+from medax.errors import RegionError
+from medax.geometry._types import FloatArray
+from medax.geometry.curve import Curve
+from medax.geometry.embedded_curve import EmbeddedCurve
+from medax.geometry.embedding import Embedding, PlaneEmbedding
+
+#: the two opposite pairs: (0, 2) and (1, 3)
+PAIRS: tuple[tuple[int, int], ...] = ((0, 2), (1, 3))
+_SAMPLES = 200  # samples per side for orientation and crossing checks
+
+
+@dataclass(frozen=True)
+class PairRoles:
+    """Which sides play which role for one choice of constraint pair.
+
+    ``a1 = S_k``, ``a2 = S_{k+2}`` are the constraints; ``b1 = S_{k-1}`` (where ``a1``
+    starts) is the start side and ``b2 = S_{k+1}`` the end side.
+    """
+
+    a1: int
+    a2: int
+    b1: int
+    b2: int
+
+
+def pair_roles(pair: tuple[int, int]) -> PairRoles:
+    """Roles of the sides for ``pair`` = (0, 2) or (1, 3)."""
+    if tuple(pair) not in PAIRS:
+        raise RegionError(f"pair must be (0, 2) or (1, 3), got {tuple(pair)}")
+    k = pair[0]
+    return PairRoles(a1=k, a2=(k + 2) % 4, b1=(k + 3) % 4, b2=(k + 1) % 4)
+
+
+@dataclass(frozen=True)
+class Region:
+    """Four side curves ``S0..S3`` in the parameter plane, CCW, side k from corner k to k+1.
+
+    ``embedding`` maps the parameter plane to space (identity for a planar region);
+    ``space_sides`` optionally gives the sides in space exactly (else ``E(S_k)``).
+    Build with :meth:`Region.build`, which checks and orients.
+    """
+
+    sides: tuple[Curve, Curve, Curve, Curve]
+    embedding: Embedding = field(default_factory=PlaneEmbedding)
+    name: str = "region"
+    reoriented: bool = False
+    space_sides: tuple[Curve, Curve, Curve, Curve] | None = None
+
+    @classmethod
+    def build(
+        cls,
+        sides: Sequence[Curve],
+        name: str = "region",
+        embedding: Embedding | None = None,
+        space_sides: Sequence[Curve] | None = None,
+        check: bool = True,
+    ) -> Region:
+        """Check the sides (closed corners, no zero-length side, no crossings) and orient
+        them counter-clockwise in the parameter plane.
+
+        Clockwise input is reversed keeping side numbers: side k still joins the same two
+        corners, so pair (0, 2) still means the same two sides; ``reoriented`` says so.
+        """
+        if len(sides) != 4:
+            raise RegionError(f"region '{name}' needs 4 sides, got {len(sides)}")
+        emb = embedding if embedding is not None else PlaneEmbedding()
+        s4 = (sides[0], sides[1], sides[2], sides[3])
+        sp4 = None if space_sides is None else tuple(space_sides)
+        region = cls(s4, emb, name, False, sp4)  # type: ignore[arg-type]
+        if check:
+            region.check()
+        if region.signed_area() < 0.0:
+            flip = (s4[0].reversed(), s4[3].reversed(), s4[2].reversed(), s4[1].reversed())
+            sflip = None
+            if sp4 is not None:
+                sflip = (sp4[0].reversed(), sp4[3].reversed(), sp4[2].reversed(), sp4[1].reversed())
+            region = cls(flip, emb, name, True, sflip)
+        return region
+
+    # ---- geometry -------------------------------------------------------------------------
+    @property
+    def corners(self) -> FloatArray:
+        """Corner k = start of side k, shape ``(4, 2)``."""
+        return np.array([s.start for s in self.sides])
+
+    def space_curve(self, k: int) -> Curve:
+        """Side ``k`` as a curve in space (where distances are measured)."""
+        if self.space_sides is not None:
+            return self.space_sides[k]
+        if self.embedding.is_identity:
+            return self.sides[k]
+        return self._embedded[k]
+
+    @cached_property
+    def _embedded(self) -> tuple[Curve, ...]:
+        return tuple(EmbeddedCurve(s, self.embedding) for s in self.sides)
+
+    @cached_property
+    def boundary(self) -> FloatArray:
+        """Closed sampled boundary in the parameter plane, shape ``(4 * n, 2)``."""
+        return np.concatenate([s.sample(_SAMPLES)[:-1] for s in self.sides])
+
+    @cached_property
+    def diagonal(self) -> float:
+        """Diagonal of the bounding box of the region in space: the length scale."""
+        pts = np.concatenate([self.space_curve(k).sample(_SAMPLES) for k in range(4)])
+        return float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
+
+    def signed_area(self) -> float:
+        """Signed area in the parameter plane (> 0 for counter-clockwise)."""
+        b = self.boundary
+        x, y = b[:, 0], b[:, 1]
+        return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+    def side_lengths(self) -> FloatArray:
+        """Lengths of the four sides in space, shape ``(4,)``."""
+        return np.array([self.space_curve(k).length() for k in range(4)])
+
+    def contains(self, p: FloatArray) -> np.ndarray:
+        """Whether parameter points ``p`` (n, 2) are inside (even-odd on the sampled boundary)."""
+        from matplotlib.path import Path  # noqa: PLC0415  (lazy: only for this test)
+
+        return np.asarray(Path(self.boundary).contains_points(np.asarray(p)), dtype=bool)
+
+    # ---- checks ---------------------------------------------------------------------------
+    def check(self) -> None:
+        """Raise :class:`RegionError` naming the side or corner that is wrong."""
+        pts = np.concatenate([s.sample(_SAMPLES) for s in self.sides])
+        diag = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
+        if not np.isfinite(diag) or diag == 0.0:
+            raise RegionError(f"region '{self.name}' is degenerate (all points coincide)")
+        for k, s in enumerate(self.sides):
+            if s.dim != 2:
+                raise RegionError(f"region '{self.name}': side {k} is not a 2-D curve")
+            if s.length() <= tolerances.MIN_SIDE * diag:
+                raise RegionError(f"region '{self.name}': side {k} has zero length")
+        for k in range(4):
+            gap = float(np.linalg.norm(self.sides[k].end - self.sides[(k + 1) % 4].start))
+            if gap > tolerances.CORNER_TOL * diag:
+                raise RegionError(
+                    f"region '{self.name}': side {k} ends {self.sides[k].end.tolist()} but side "
+                    f"{(k + 1) % 4} starts {self.sides[(k + 1) % 4].start.tolist()} "
+                    f"(corner {(k + 1) % 4} open by {gap:.3g})"
+                )
+        self._check_crossings(diag)
+
+    def _check_crossings(self, diag: float) -> None:
+        polys = [s.sample(_SAMPLES) for s in self.sides]
+        for i in range(4):
+            for j in range(i + 1, 4):
+                a, b = polys[i], polys[j]
+                # adjacent sides share a corner: drop the segments touching it
+                if j == i + 1:
+                    a, b = a[:-2], b[2:]
+                elif i == 0 and j == 3:
+                    a, b = a[2:], b[:-2]
+                if _polylines_cross(a, b, 1e-12 * diag):
+                    raise RegionError(f"region '{self.name}': side {i} crosses side {j}")
+        for i, p in enumerate(polys):
+            if _self_crossing(p, 1e-12 * diag):
+                raise RegionError(f"region '{self.name}': side {i} crosses itself")
+
+
+def _segments_cross(a0: FloatArray, a1: FloatArray, b0: FloatArray, b1: FloatArray, eps: float):
+    """Proper intersection table of segments ``a0a1`` (n,2) vs ``b0b1`` (m,2), shape (n, m)."""
+
+    def orient(p: FloatArray, q: FloatArray, r: FloatArray) -> FloatArray:
+        return (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1]) - (q[..., 1] - p[..., 1]) * (
+            r[..., 0] - p[..., 0]
+        )
+
+    A0, A1 = a0[:, None, :], a1[:, None, :]
+    B0, B1 = b0[None, :, :], b1[None, :, :]
+    o1, o2 = orient(A0, A1, B0), orient(A0, A1, B1)
+    o3, o4 = orient(B0, B1, A0), orient(B0, B1, A1)
+    tol = eps * eps
+    return (o1 * o2 < -tol) & (o3 * o4 < -tol)
+
+
+def _polylines_cross(a: FloatArray, b: FloatArray, eps: float) -> bool:
+    if len(a) < 2 or len(b) < 2:
+        return False
+    return bool(np.any(_segments_cross(a[:-1], a[1:], b[:-1], b[1:], eps)))
+
+
+def _self_crossing(p: FloatArray, eps: float) -> bool:
+    table = _segments_cross(p[:-1], p[1:], p[:-1], p[1:], eps)
+    return bool(np.any(np.triu(table, k=2)))

@@ -1,0 +1,117 @@
+"""Read 4-sided planar regions from the JSON format of ``regions.json``.
+
+A file maps region names to ``{"corners": [[x, y] x 4], "sides": [side x 4]}``; a side is
+``{"kind": "line"}``, ``{"kind": "arc", "sagitta": h}`` or ``{"kind": "arc", "center":
+[x, y], "radius": r}``, ``{"kind": "bspline", "degree": p, "points": [[x, y], ...]}`` or
+``{"kind": "polyline", "points": [[x, y], ...]}``. Keys starting with ``_`` are metadata.
+"""
+
+from __future__ import annotations
+
+import json
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from medax.errors import CurveError, InputError, RegionError
+from medax.geometry.arc import Arc
+from medax.geometry.bspline import BSpline
+from medax.geometry.curve import Curve
+from medax.geometry.line import Line
+from medax.geometry.polyline import Polyline
+from medax.geometry.region import Region
+
+SIDE_KINDS = ("line", "arc", "bspline", "polyline")
+
+
+def sample_regions_path() -> Path:
+    """Path of the sample ``regions.json`` shipped inside the package."""
+    return Path(str(resources.files("medax") / "data" / "regions.json"))
+
+
+def load_region_file(path: str | Path) -> dict[str, Any]:
+    """The raw JSON mapping of a regions file, with clear errors for a missing or bad file."""
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"{p}: no such file")
+    try:
+        data = json.loads(p.read_text(encoding="utf-8"))
+    except UnicodeDecodeError as err:
+        raise InputError(f"{p}: not a text file ({err.reason})") from err
+    except json.JSONDecodeError as err:
+        raise InputError(f"{p}: malformed JSON at line {err.lineno}: {err.msg}") from err
+    if not isinstance(data, dict):
+        raise InputError(f"{p}: expected a JSON object mapping region names to regions")
+    return data
+
+
+def region_names(data: dict[str, Any]) -> list[str]:
+    """Region names in a loaded file (metadata keys starting with ``_`` skipped)."""
+    return [k for k in data if not k.startswith("_")]
+
+
+def read_region(path: str | Path, name: str) -> Region:
+    """Read region ``name`` from the regions file ``path``."""
+    data = load_region_file(path)
+    if name not in region_names(data):
+        known = ", ".join(region_names(data)) or "none"
+        raise InputError(f"{path}: no region named '{name}' (regions: {known})")
+    return region_from_dict(data[name], name)
+
+
+def read_regions(path: str | Path) -> dict[str, Region]:
+    """All regions of a file, by name."""
+    data = load_region_file(path)
+    return {n: region_from_dict(data[n], n) for n in region_names(data)}
+
+
+def region_from_dict(spec: Any, name: str) -> Region:
+    """A checked, counter-clockwise :class:`Region` from one JSON region object."""
+    if not isinstance(spec, dict) or "corners" not in spec or "sides" not in spec:
+        raise RegionError(f"region '{name}': needs 'corners' and 'sides'")
+    try:
+        corners = np.asarray(spec["corners"], dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise RegionError(f"region '{name}': corners are not numbers") from err
+    if corners.shape != (4, 2) or not np.all(np.isfinite(corners)):
+        raise RegionError(f"region '{name}': needs 4 finite corners [x, y], got {corners.shape}")
+    sides_spec = spec["sides"]
+    if not isinstance(sides_spec, list) or len(sides_spec) != 4:
+        raise RegionError(f"region '{name}': needs a list of 4 sides")
+    sides = [
+        _side(sides_spec[k], corners[k], corners[(k + 1) % 4], name, k) for k in range(4)
+    ]
+    return Region.build(sides, name=name)
+
+
+def _side(spec: Any, p0: np.ndarray, p1: np.ndarray, name: str, k: int) -> Curve:
+    where = f"region '{name}' side {k}"
+    if not isinstance(spec, dict) or "kind" not in spec:
+        raise CurveError(f"{where}: needs a 'kind'")
+    kind = spec["kind"]
+    try:
+        if kind == "line":
+            return Line(p0, p1)
+        if kind == "arc":
+            if "sagitta" in spec:
+                return Arc.from_sagitta(p0, p1, float(spec["sagitta"]))
+            if "center" in spec and "radius" in spec:
+                return Arc.from_center(p0, p1, np.asarray(spec["center"], float), spec["radius"])
+            raise CurveError("an arc needs 'sagitta', or 'center' and 'radius'")
+        if kind in ("bspline", "polyline"):
+            pts = np.asarray(spec.get("points"), dtype=np.float64)
+            if pts.ndim != 2 or pts.shape[0] < 2 or pts.shape[1] != 2:
+                raise CurveError(f"'points' must be a list of [x, y], got shape {pts.shape}")
+            for end, corner, which in ((pts[0], p0, "first"), (pts[-1], p1, "last")):
+                if np.linalg.norm(end - corner) > 1e-9 * max(1.0, float(np.abs(corner).max())):
+                    raise CurveError(f"{which} point {end.tolist()} is not corner {corner.tolist()}")
+            if kind == "polyline":
+                return Polyline(pts)
+            return BSpline(pts, int(spec.get("degree", 3)))
+    except CurveError as err:
+        raise CurveError(f"{where}: {err}") from err
+    except (TypeError, ValueError) as err:
+        raise CurveError(f"{where}: bad {kind} definition ({err})") from err
+    raise CurveError(f"{where}: unknown side kind '{kind}' (known: {', '.join(SIDE_KINDS)})")
