@@ -1,0 +1,64 @@
+"""Entry point of the ``medax`` command.
+
+Each subcommand lives in ``medax.cli.<name>`` and provides ``add_parser(subparsers)`` (which
+registers its options) and ``run(args) -> int``. ``main(argv)`` is callable in-process.
+Errors of the :class:`~medax.errors.MedaxError` family are printed on one line with a
+non-zero exit code; nothing else is caught.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import sys
+from collections.abc import Sequence
+
+from medax import __version__
+from medax.errors import MedaxError
+
+SUBCOMMANDS = ("axis", "mesh", "classify", "simplify", "demo")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every available subcommand registered."""
+    parser = argparse.ArgumentParser(
+        prog="medax",
+        description="Product-oriented medial axes of 4-sided regions and CAD faces, fillet "
+        "simplification of STEP solids, and structured quad meshes.",
+    )
+    parser.add_argument("--version", action="version", version=f"medax {__version__}")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log progress to stderr")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in SUBCOMMANDS:
+        try:
+            module = importlib.import_module(f"medax.cli.{name}")
+        except ModuleNotFoundError as err:
+            if err.name == f"medax.cli.{name}":
+                continue  # subcommand not built yet
+            raise
+        module.add_parser(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``medax`` with ``argv`` (default ``sys.argv[1:]``); returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return 2
+    logging.basicConfig(
+        level=logging.INFO if args.verbose else logging.WARNING,
+        format="medax: %(message)s",
+        stream=sys.stderr,
+    )
+    try:
+        return int(args.run(args))
+    except MedaxError as err:
+        print(f"medax {args.command}: error: {err}", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
