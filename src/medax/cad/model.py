@@ -1,0 +1,231 @@
+"""The fillet classification data model (the paper's section 3, steps 1 and 2).
+
+Everything here is a frozen value. Faces, edges and vertices are named by stable 0-based
+integer indices: index ``i`` is entry ``i + 1`` of the ``TopTools_IndexedMapOfShape`` (OCP 8:
+``OCP.collections.IndexedMap_TopoDS_Shape_TopTools_ShapeMapHasher``) built
+with ``TopExp.MapShapes_s`` on the classified solid (:attr:`Classification.face_map`,
+:attr:`Classification.edge_map`, :attr:`Classification.vertex_map`), so
+``classification.face(i)`` returns the ``TopoDS_Face`` of face ``i`` and the indices stay
+valid as long as the solid (:attr:`Classification.shape`) is not modified.
+
+Face classes (paper, step 1):
+
+- ``fillet``: an edge blend, a 4-sided rolling-ball face between two supporting faces
+  (constant or variable radius), see :class:`FilletRecord`;
+- ``corner_blend``: a blend where three or more fillets meet (the paper's point-transition
+  fillet), see :class:`CornerRecord`;
+- ``supporting``: a non-blend face joined to a blend by a smooth (tangent) edge;
+- ``protection``: every other face.
+
+Edge classes (paper, step 2; meaningful on the edges of supporting faces, computed for all):
+
+- ``smooth``: a tangent edge between a blend face and a supporting face (a fillet constraint);
+- ``semi_smooth``: not smooth, but one of its vertices lies on a smooth edge;
+- ``non_smooth``: the rest.
+
+Lengths are in the file's length unit (:attr:`Classification.unit`), angles in radians.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass, field
+from enum import StrEnum
+from typing import Any
+
+
+class FaceClass(StrEnum):
+    """Class of a face (the JSON report writes ``.value``)."""
+
+    FILLET = "fillet"
+    CORNER_BLEND = "corner_blend"
+    SUPPORTING = "supporting"
+    PROTECTION = "protection"
+
+
+class EdgeClass(StrEnum):
+    """Class of an edge (the JSON report writes ``.value``)."""
+
+    SMOOTH = "smooth"
+    SEMI_SMOOTH = "semi_smooth"
+    NON_SMOOTH = "non_smooth"
+
+
+BLEND_CLASSES = (FaceClass.FILLET, FaceClass.CORNER_BLEND)
+
+
+@dataclass(frozen=True)
+class FaceInfo:
+    """One face of the solid.
+
+    ``surface`` is the OCCT surface type in lower case (``plane``, ``cylinder``, ``cone``,
+    ``sphere``, ``torus``, ``bspline``, ``bezier``, ``revolution``, ``extrusion``, ``offset``,
+    ``other``). ``radius`` is the blend radius where constant (fillets and corner blends
+    only), else None. ``edges`` are the face's edge indices (each once, seams included),
+    ``neighbours`` the other faces sharing an edge with it (sorted).
+    """
+
+    index: int
+    cls: FaceClass
+    surface: str
+    area: float
+    centroid: tuple[float, float, float]
+    edges: tuple[int, ...]
+    neighbours: tuple[int, ...]
+    radius: float | None = None
+
+
+@dataclass(frozen=True)
+class EdgeInfo:
+    """One edge of the solid.
+
+    ``faces``: the faces containing it (two for a manifold edge; one face for a seam, which
+    bounds the same face twice, or for a free edge). ``vertices``: its vertex indices (one
+    for a closed edge). ``tangent`` is the numerical tangency test: the largest angle
+    between the two faces' normals over samples along the edge, ``max_angle``, is below
+    the tangency tolerance (a seam is tangent; a free edge is not). ``length`` in the unit
+    of the file.
+    """
+
+    index: int
+    cls: EdgeClass
+    faces: tuple[int, ...]
+    vertices: tuple[int, ...]
+    tangent: bool
+    max_angle: float
+    length: float
+    curve: str = "other"
+    is_free: bool = False
+
+    @property
+    def is_seam(self) -> bool:
+        """True when the edge bounds a single face twice (closed surfaces)."""
+        return len(self.faces) == 1 and not self.is_free
+
+
+@dataclass(frozen=True)
+class FilletRecord:
+    """An edge fillet: a 4-sided blend face.
+
+    ``smooth_edges[k]`` is the chain of edges (usually one) of constraint side ``k`` in the
+    face's wire order; these are tangent to ``supporting[k]`` (the supporting faces across
+    the constraint sides; the two may be the same face, e.g. a fillet inside a slot).
+    ``cross_edges`` are the start and end sides (each one edge index; for a fillet closed
+    around an axis, e.g. a torus around a boss, both are the seam edge and ``closed`` is
+    True). Following the face's outer wire: smooth side 0, cross edge 0 or 1, smooth side 1,
+    the other cross edge. ``radius`` is the rolling-ball radius where constant, else None.
+    """
+
+    face: int
+    smooth_edges: tuple[tuple[int, ...], tuple[int, ...]]
+    cross_edges: tuple[int, int]
+    supporting: tuple[int, int]
+    radius: float | None
+    closed: bool = False
+
+    @property
+    def constraint_edges(self) -> tuple[int, int]:
+        """The two smooth edges when each side is one edge; raises ValueError otherwise."""
+        a, b = self.smooth_edges
+        if len(a) != 1 or len(b) != 1:
+            raise ValueError(f"fillet face {self.face}: a constraint side has several edges")
+        return a[0], b[0]
+
+
+@dataclass(frozen=True)
+class CornerRecord:
+    """A corner blend (point-transition fillet) where three or more fillets meet.
+
+    ``fillets`` are the blend faces (fillets or other corner blends) joined to it;
+    ``supporting`` the non-blend faces it touches by a tangent edge; ``edges`` all its
+    edges. ``radius`` is the sphere's radius for a spherical corner, else None.
+    """
+
+    face: int
+    fillets: tuple[int, ...]
+    supporting: tuple[int, ...]
+    edges: tuple[int, ...]
+    radius: float | None
+
+
+@dataclass(frozen=True)
+class Doubt:
+    """A face the classifier was not sure about, with the reason (one line)."""
+
+    face: int
+    reason: str
+
+
+@dataclass(frozen=True)
+class Classification:
+    """Faces, edges and blend records of one solid.
+
+    ``faces[i].index == i`` and ``edges[j].index == j``. ``shape`` is the classified
+    (healed) solid; ``face_map``/``edge_map``/``vertex_map`` the OCCT indexed maps the
+    indices refer to (index ``i`` is map entry ``i + 1``). ``unit`` is the length unit
+    (e.g. ``"mm"``); ``source`` the file (or a label) and ``solid`` which solid of the file.
+    ``tangent_angle`` is the tolerance used by the tangency test (radians).
+    """
+
+    faces: tuple[FaceInfo, ...]
+    edges: tuple[EdgeInfo, ...]
+    fillets: tuple[FilletRecord, ...]
+    corners: tuple[CornerRecord, ...]
+    shape: Any = field(repr=False, compare=False)
+    face_map: Any = field(repr=False, compare=False)
+    edge_map: Any = field(repr=False, compare=False)
+    vertex_map: Any = field(repr=False, compare=False)
+    unit: str = "mm"
+    source: str = ""
+    solid: int = 0
+    tangent_angle: float = 1e-3
+    doubts: tuple[Doubt, ...] = ()
+
+    # ---- access to OCCT shapes ------------------------------------------------------------
+    def face(self, i: int) -> Any:
+        """The ``TopoDS_Face`` of face ``i``."""
+        from OCP.TopoDS import TopoDS
+
+        return TopoDS.Face(self.face_map.FindKey(i + 1))
+
+    def edge(self, j: int) -> Any:
+        """The ``TopoDS_Edge`` of edge ``j``."""
+        from OCP.TopoDS import TopoDS
+
+        return TopoDS.Edge(self.edge_map.FindKey(j + 1))
+
+    def vertex(self, k: int) -> Any:
+        """The ``TopoDS_Vertex`` of vertex ``k``."""
+        from OCP.TopoDS import TopoDS
+
+        return TopoDS.Vertex(self.vertex_map.FindKey(k + 1))
+
+    # ---- queries --------------------------------------------------------------------------
+    def indices(self, cls: FaceClass | str) -> tuple[int, ...]:
+        """Indices of the faces of class ``cls``."""
+        c = FaceClass(cls)
+        return tuple(f.index for f in self.faces if f.cls is c)
+
+    @property
+    def blends(self) -> tuple[int, ...]:
+        """Indices of all blend faces (fillets and corner blends)."""
+        return tuple(f.index for f in self.faces if f.cls in BLEND_CLASSES)
+
+    def fillet_of(self, face: int) -> FilletRecord | None:
+        """The fillet record of face ``face``, or None."""
+        for rec in self.fillets:
+            if rec.face == face:
+                return rec
+        return None
+
+    def edge_classes(self, face: int) -> dict[int, EdgeClass]:
+        """Class of each edge of ``face`` (paper, step 2, for supporting faces)."""
+        return {j: self.edges[j].cls for j in self.faces[face].edges}
+
+    def counts(self) -> dict[str, int]:
+        """Number of faces per class (all four classes present), and ``faces``/``edges``."""
+        c = Counter(f.cls.value for f in self.faces)
+        out = {k.value: int(c.get(k.value, 0)) for k in FaceClass}
+        out["faces"] = len(self.faces)
+        out["edges"] = len(self.edges)
+        return out
