@@ -107,6 +107,17 @@ class Curve(ABC):
         return closest_by_search(self, np.asarray(points, dtype=np.float64))
 
 
+def closest_near(curve: Curve, points: FloatArray, t0: FloatArray, width: float) -> Closest:
+    """Local closest points: the nearest point of ``curve`` to ``points[i]`` with parameter in
+    ``[t0[i] - width, t0[i] + width]`` (a branch of the curve), for all points at once."""
+    x = np.asarray(points, dtype=np.float64)
+    lo = np.clip(np.asarray(t0) - width, 0.0, 1.0)
+    hi = np.clip(np.asarray(t0) + width, 0.0, 1.0)
+    t = _bracketed_newton(curve, x, lo, hi)
+    foot = curve.evaluate(t)
+    return Closest(t=t, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
+
+
 def closest_by_search(curve: Curve, points: FloatArray, k: int = 4) -> Closest:
     """Generic global closest-point query (see :meth:`Curve.closest`)."""
     ts, pts, tree = curve._search
@@ -170,7 +181,8 @@ def _bracketed_newton(
         new = sa - step
         bad = ~np.isfinite(new) | (new <= aa) | (new >= bb)
         new = np.where(bad, 0.5 * (aa + bb), new)
-        done = (np.abs(new - sa) <= 1e-15 * (1.0 + np.abs(sa))) | (bb - aa <= 4e-16) | (g == 0.0)
+        # the distance is stationary at the foot: |dt| < 1e-10 leaves it exact to round-off
+        done = (np.abs(new - sa) <= 1e-10) & ~bad | (bb - aa <= 4e-16) | (g == 0.0)
         a[ia], b[ia], s[ia] = aa, bb, new
         active[ia[done]] = False
     t[interior] = s

@@ -1,0 +1,117 @@
+"""``trace_axis``: the medial axis of a 4-sided region between one pair of opposite sides."""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from medax import tolerances
+from medax.axis.endpoints import end_point
+from medax.axis.field import DistanceField
+from medax.axis.refine import fit_and_refine
+from medax.axis.result import MedialAxis, WorkCounts
+from medax.axis.trace import TraceStats, trace_frame, trace_paper
+from medax.errors import InputError
+from medax.geometry.fitting import interpolate
+from medax.geometry.region import Region, pair_roles
+
+log = logging.getLogger(__name__)
+METHODS = ("frame", "paper")
+
+
+def trace_axis(
+    region: Region,
+    pair: tuple[int, int] = (0, 2),
+    tol: float = tolerances.CURVE_TOL,
+    method: str = "frame",
+    ratio: float = 0.5,
+    point_tol: float = tolerances.POINT_TOL,
+) -> MedialAxis:
+    """Trace the curve ``d1 / (d1 + d2) = ratio`` (the medial axis for ``ratio = 1/2``)
+    between constraints ``A1 = S[pair[0]]`` and ``A2 = S[pair[1]]``, from B1 to B2.
+
+    ``tol`` bounds the fitted B-spline's equidistance error and ``point_tol`` that of every
+    point, both relative to the region's diagonal. ``method="paper"`` reproduces the paper
+    (direction ``e1 + e2``, step = shortest side / 5, the ``|d1 - d2| / 2n`` correction to
+    ``0.99 < d1/d2 < 1.01``, a B-spline through the points without refinement).
+
+    Planar regions are traced in normalised coordinates (centred, unit diagonal) so that
+    regions far from the origin or in small units keep their relative accuracy.
+    """
+    if method not in METHODS:
+        raise InputError(f"unknown method '{method}' (known: {', '.join(METHODS)})")
+    if not 0.0 < ratio < 1.0:
+        raise InputError(f"ratio must be in (0, 1), got {ratio}")
+    if not tol > 0.0 or not point_tol > 0.0:
+        raise InputError(f"tolerances must be positive, got tol={tol}, point_tol={point_tol}")
+    roles = pair_roles(pair)
+    work, offset, scale = _normalised(region)
+    field = DistanceField(work, roles, ratio)
+    diag = work.diagonal
+    tol_pt, tol_cv = point_tol * diag, tol * diag
+    b1, b2 = work.sides[roles.b1], work.sides[roles.b2]
+    s0, p0 = end_point(field, b1, f"side {roles.b1} (B1)")
+    s1, p1 = end_point(field, b2, f"side {roles.b2} (B2)")
+    shortest = float(work.side_lengths().min())
+    stats = TraceStats()
+    if method == "frame":
+        pts = trace_frame(
+            field, p0, p1, h0=shortest / 5.0, h_min=1e-7 * diag, h_max=0.1 * diag,
+            tol=tol_pt, stats=stats,
+        )  # fmt: skip
+        fit = fit_and_refine(field, pts, tol_pt, tol_cv)
+        pts, s, spline = fit.points, fit.sample, fit.spline
+        curve_error, rounds = fit.curve_error, fit.rounds
+        stats.corrector_iterations += fit.corrector_iterations
+    else:
+        b2_curve = work.space_curve(roles.b2)
+        pts = trace_paper(
+            field, p0, p1, shortest / 5.0,
+            lambda q: b2_curve.closest(work.embedding.evaluate(q)).distance, stats,
+        )  # fmt: skip
+        s = field(pts)
+        spline, u = interpolate(pts, (), degree=min(3, len(pts) - 1))
+        uu = np.linspace(0.0, 1.0, 10 * (len(pts) - 1) + 1)
+        curve_error, rounds = float(field(spline.evaluate(uu)).error.max()), 0
+    point_error = float(s.error.max())
+    if method == "frame" and curve_error > tol_cv:
+        log.warning(
+            "%s pair %s: fitted curve error %.3g exceeds the tolerance %.3g",
+            region.name, pair, curve_error / diag, tol,
+        )  # fmt: skip
+    counts = WorkCounts(
+        points=len(pts),
+        predictor_steps=stats.steps,
+        corrector_iterations=stats.corrector_iterations,
+        distance_evaluations=field.evaluations,
+        refinements=rounds,
+    )
+    # back to the caller's coordinates (identity for surface regions)
+    pts_out = pts * scale + offset
+    sx = s.x * scale + offset if work.embedding.is_identity else s.x
+    q1 = s.q1 * scale + offset if work.embedding.is_identity else s.q1
+    q2 = s.q2 * scale + offset if work.embedding.is_identity else s.q2
+    spline_out = spline.transformed(-offset / scale, 1.0 / scale) if scale != 1.0 or np.any(
+        offset
+    ) else spline
+    return MedialAxis(
+        region=region, pair=(int(pair[0]), int(pair[1])), roles=roles, method=method,
+        points=pts_out, space_points=sx, foot1=q1, foot2=q2, d1=s.d1 * scale, d2=s.d2 * scale,
+        spline=spline_out, t_start=s0, t_end=s1,
+        max_point_error=point_error * scale, max_curve_error=curve_error * scale,
+        tol=tol, counts=counts,
+    )  # fmt: skip
+
+
+def _normalised(region: Region) -> tuple[Region, np.ndarray, float]:
+    """A planar region moved to the origin and scaled to unit diagonal, with the offset and
+    scale that map it back (``x = x' * scale + offset``); surface regions unchanged."""
+    if not region.embedding.is_identity:
+        return region, np.zeros(region.embedding.dim), 1.0
+    pts = region.boundary
+    offset = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
+    scale = region.diagonal
+    sides = tuple(s.transformed(offset, scale) for s in region.sides)
+    work = Region(sides, region.embedding, region.name, region.reoriented)  # type: ignore[arg-type]
+    return work, offset, scale

@@ -1,0 +1,155 @@
+"""Fit a B-spline through the axis points and refine until the curve itself is on the axis.
+
+The fitted curve is checked between the points (10 samples per interval); where it strays
+beyond the tolerance, the interval's midpoint on the curve is corrected onto the axis and
+inserted, all such points of a round at once. Kinks of the axis (where a foot point jumps
+between distant parts of a wavy constraint) are located by bisection and become C0 breaks.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from medax.axis.correct import correct_newton
+from medax.axis.field import DistanceField, FieldSample
+from medax.axis.kinks import kink_intervals, locate_kink
+from medax.geometry._types import FloatArray
+from medax.geometry.bspline import BSpline
+from medax.geometry.fitting import interpolate
+
+#: samples per interval when checking the fitted curve ("10x denser")
+CHECK_SAMPLES = 10
+MAX_ROUNDS = 30
+DEGREE = 3
+
+
+@dataclass
+class Fitted:
+    """Refined points (n, 2), their field sample, kink indices, spline and measured errors."""
+
+    points: FloatArray
+    sample: FieldSample
+    breaks: list[int]
+    spline: BSpline
+    u: FloatArray
+    curve_error: float
+    rounds: int
+    corrector_iterations: int
+
+
+def _take(s: FieldSample, idx: np.ndarray) -> FieldSample:
+    return FieldSample(*(getattr(s, f)[idx] for f in FieldSample.__dataclass_fields__))
+
+
+def _cat(a: FieldSample, b: FieldSample) -> FieldSample:
+    return FieldSample(
+        *(np.concatenate((getattr(a, f), getattr(b, f))) for f in FieldSample.__dataclass_fields__)
+    )
+
+
+def fit_and_refine(
+    field: DistanceField, points: FloatArray, tol_point: float, tol_curve: float
+) -> Fitted:
+    """Refine ``points`` (n, 2) (on the axis, ordered B1 -> B2, ends exact) until the fitted
+    B-spline's equidistance error is within ``tol_curve`` (absolute) everywhere it is checked."""
+    scale = field.region.diagonal
+    pts = np.asarray(points, dtype=np.float64)
+    s = field(pts)
+    breaks: set[int] = set()  # indices into pts of C0 break points
+    tried: set[int] = set()  # kink intervals Newton did not confirm (refined instead)
+    iters = 0
+    curve_error = np.inf
+    spline: BSpline | None = None
+    u = np.zeros(0)
+    rounds = 0
+    for rounds in range(1, MAX_ROUNDS + 1):  # noqa: B007
+        # 1. pieces between breaks need DEGREE + 1 points: insert chord midpoints where short
+        cuts = [0, *sorted(breaks), len(pts) - 1]
+        short = [
+            i for a, b in zip(cuts[:-1], cuts[1:], strict=True) if b - a < DEGREE for i in range(a, b)
+        ]
+        if short:
+            pts, s, breaks, it = _insert(field, pts, s, breaks, np.array(short), None, None, tol_point)
+            iters += it
+            continue
+        spline, u = interpolate(pts, sorted(breaks), DEGREE)
+        # 2. kinks: foot jumps not yet at a break
+        kinks = [
+            i for i in kink_intervals(s, scale) if i not in tried and i not in breaks and i + 1 not in breaks
+        ]
+        found = [(i, locate_kink(field, s, pts, i, tol_point)) for i in kinks]
+        tried |= set(kinks)
+        hits = [(i, q) for i, q in found if q is not None]
+        if hits:
+            idx = np.array([i for i, _ in hits], dtype=np.int64)
+            kp = np.array([q for _, q in hits])
+            pts, s, breaks = _insert_at(pts, s, breaks, idx, kp, field(kp), as_break=True)
+            tried = set()
+            continue
+        # 3. check the curve between the points
+        frac = np.arange(1, CHECK_SAMPLES) / CHECK_SAMPLES
+        uu = (u[:-1, None] + frac[None, :] * np.diff(u)[:, None]).ravel()
+        err = field(spline.evaluate(uu)).error.reshape(len(u) - 1, -1).max(axis=1)
+        curve_error = float(err.max())
+        bad = np.nonzero(err > tol_curve)[0]
+        if bad.size == 0:
+            break
+        # cubic interpolation error ~ h^4: split each bad interval into enough pieces
+        pieces = np.clip(np.ceil(1.3 * (err[bad] / tol_curve) ** 0.25), 2, 8).astype(np.int64)
+        pts, s, breaks, it = _insert(field, pts, s, breaks, bad, spline, u, tol_point, pieces)
+        iters += it
+    assert spline is not None
+    return Fitted(pts, s, sorted(breaks), spline, u, curve_error, rounds, iters)
+
+
+def _insert(
+    field: DistanceField,
+    pts: FloatArray,
+    s: FieldSample,
+    breaks: set[int],
+    intervals: np.ndarray,
+    spline: BSpline | None,
+    u: FloatArray | None,
+    tol: float,
+    pieces: np.ndarray | None = None,
+) -> tuple[FloatArray, FieldSample, set[int], int]:
+    """Split each interval into ``pieces`` (default 2) by corrected points taken on the
+    spline (or the chord when there is no spline yet)."""
+    if pieces is None:
+        pieces = np.full(len(intervals), 2, dtype=np.int64)
+    rep = pieces - 1
+    intervals = np.repeat(intervals, rep)
+    frac = np.concatenate([np.arange(1, m) / m for m in pieces])
+    if spline is not None and u is not None:
+        guess = spline.evaluate(u[intervals] + frac * (u[intervals + 1] - u[intervals]))
+    else:
+        guess = pts[intervals] + frac[:, None] * (pts[intervals + 1] - pts[intervals])
+    new, sn, _, it = correct_newton(field, guess, tol)
+    pts, s, breaks = _insert_at(pts, s, breaks, intervals, new, sn, as_break=False)
+    return pts, s, breaks, it
+
+
+def _insert_at(
+    pts: FloatArray,
+    s: FieldSample,
+    breaks: set[int],
+    intervals: np.ndarray,
+    new: FloatArray,
+    sn: FieldSample,
+    as_break: bool,
+) -> tuple[FloatArray, FieldSample, set[int]]:
+    """Insert ``new`` points after indices ``intervals``, keeping the order and re-indexing
+    the break set."""
+    n = len(pts)
+    order = np.argsort(np.concatenate((np.arange(n, dtype=float), intervals + 0.5)), kind="stable")
+    # several points in one interval keep their given order (stable sort, ascending input)
+    pts = np.concatenate((pts, new))[order]
+    s = _take(_cat(s, sn), order)
+    pos = np.empty(n + len(intervals), dtype=np.int64)
+    pos[order] = np.arange(n + len(intervals))
+    new_breaks = {int(pos[b]) for b in breaks}
+    if as_break:
+        new_breaks |= {int(pos[n + j]) for j in range(len(intervals))}
+    return pts, s, new_breaks

@@ -1,0 +1,224 @@
+"""Read STEP / IGES / OCCT BRep files into healed solids.
+
+Every OCCT failure is caught here and re-raised as a one-line :class:`CadError` naming the
+file. Healing: ``ShapeFix_Shape``, then ``ShapeUpgrade_UnifySameDomain`` merges faces (and
+edges) lying on the same surface so split faces do not inflate counts. STEP and IGES shapes
+are converted by OCCT to millimetres; ``Part.file_unit`` is the unit named in the file.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from OCP.BRep import BRep_Builder, BRep_Tool
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeSolid
+from OCP.BRepCheck import BRepCheck_Analyzer
+from OCP.BRepTools import BRepTools
+from OCP.IFSelect import IFSelect_RetDone
+from OCP.ShapeFix import ShapeFix_Shape, ShapeFix_Solid
+from OCP.ShapeUpgrade import ShapeUpgrade_UnifySameDomain
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_SHELL, TopAbs_SOLID, TopAbs_VERTEX
+from OCP.TopExp import TopExp, TopExp_Explorer
+from OCP.TopoDS import TopoDS, TopoDS_Shape
+
+from medax.errors import CadError
+
+log = logging.getLogger(__name__)
+
+#: extensions understood, by format
+EXTENSIONS = {
+    ".step": "step",
+    ".stp": "step",
+    ".iges": "iges",
+    ".igs": "iges",
+    ".brep": "brep",
+    ".brp": "brep",
+}
+
+
+@dataclass(frozen=True)
+class Part:
+    """The solids of one file, healed, in ``unit`` (OCCT's mm for STEP/IGES).
+
+    ``solids`` are ``TopoDS_Solid`` objects; ``file_unit`` is the length unit the file
+    declares (``""`` when it declares none, e.g. BRep); ``notes`` say what healing did.
+    """
+
+    source: str
+    solids: tuple[Any, ...]
+    unit: str = "mm"
+    file_unit: str = ""
+    notes: tuple[str, ...] = field(default=())
+
+
+def read_part(path: str | Path, unify: bool = True) -> Part:
+    """Read ``path`` (STEP, IGES or BRep by extension) into healed solids.
+
+    Raises :class:`CadError` (one line naming the file) for a missing, empty, unreadable or
+    truncated file, an unknown extension, a file with no solid, or a shell that is not closed.
+    """
+    p = Path(path)
+    fmt = EXTENSIONS.get(p.suffix.lower())
+    if fmt is None:
+        known = ", ".join(sorted(EXTENSIONS))
+        raise CadError(f"{p}: unknown extension '{p.suffix}' (expected one of {known})")
+    if not p.is_file():
+        raise CadError(f"{p}: no such file")
+    if p.stat().st_size == 0:
+        raise CadError(f"{p}: file is empty")
+    try:
+        shape, file_unit = _READERS[fmt](p)
+    except CadError:
+        raise
+    except Exception as err:  # OCCT raises Standard_Failure subclasses
+        raise CadError(f"{p}: could not be read as {fmt.upper()} ({err})") from err
+    if shape is None or shape.IsNull():
+        raise CadError(f"{p}: no shape could be read (truncated or not a {fmt.upper()} file?)")
+    notes: list[str] = []
+    solids = _solids(shape, p, notes)
+    healed = tuple(heal(s, p, unify=unify) for s in solids)
+    if len(healed) > 1:
+        notes.append(f"{len(healed)} solids; each is classified separately")
+    for n in notes:
+        log.info("%s: %s", p, n)
+    unit = "mm" if fmt in ("step", "iges") else ""
+    return Part(str(p), healed, unit or "mm", file_unit, tuple(notes))
+
+
+def heal(solid: Any, where: str | Path = "shape", unify: bool = True) -> Any:
+    """``ShapeFix_Shape`` then (``unify``) ``ShapeUpgrade_UnifySameDomain``; returns the solid."""
+    try:
+        fix = ShapeFix_Shape(solid)
+        fix.Perform()
+        shape = fix.Shape()
+        if unify:
+            u = ShapeUpgrade_UnifySameDomain(shape, True, True, False)
+            u.Build()
+            shape = u.Shape()
+    except Exception as err:
+        raise CadError(f"{where}: healing failed ({err})") from err
+    out = _first(shape, TopAbs_SOLID)
+    if out is None:
+        raise CadError(f"{where}: healing lost the solid")
+    return TopoDS.Solid(out)
+
+
+def count(shape: Any, kind: Any) -> int:
+    """Number of distinct sub-shapes of ``kind`` (e.g. ``TopAbs_FACE``) in ``shape``."""
+    from OCP.collections import IndexedMap_TopoDS_Shape_TopTools_ShapeMapHasher as IMap
+
+    m = IMap()
+    TopExp.MapShapes_s(shape, kind, m)
+    return int(m.Extent())
+
+
+# ---- format readers ----------------------------------------------------------------------
+def _read_step(p: Path) -> tuple[TopoDS_Shape | None, str]:
+    from OCP.collections import Sequence_TCollection_AsciiString as Seq
+    from OCP.STEPControl import STEPControl_Reader
+
+    reader = STEPControl_Reader()
+    status = reader.ReadFile(str(p))
+    if status != IFSelect_RetDone:
+        raise CadError(f"{p}: not a readable STEP file (status {status.name})")
+    lengths, angles, solid_angles = Seq(), Seq(), Seq()
+    unit = ""
+    try:
+        reader.FileUnits(lengths, angles, solid_angles)
+        if lengths.Length() > 0:
+            unit = str(lengths.Value(1).ToCString()).lower()
+    except Exception:  # units are informative only
+        unit = ""
+    if reader.NbRootsForTransfer() == 0:
+        raise CadError(f"{p}: STEP file holds no shape (truncated or empty model?)")
+    reader.TransferRoots()
+    if reader.NbShapes() == 0:
+        raise CadError(f"{p}: STEP file holds no transferable shape")
+    return reader.OneShape(), unit
+
+
+def _read_iges(p: Path) -> tuple[TopoDS_Shape | None, str]:
+    from OCP.IGESControl import IGESControl_Reader
+
+    reader = IGESControl_Reader()
+    status = reader.ReadFile(str(p))
+    if status != IFSelect_RetDone:
+        raise CadError(f"{p}: not a readable IGES file (status {status.name})")
+    reader.TransferRoots()
+    if reader.NbShapes() == 0:
+        raise CadError(f"{p}: IGES file holds no transferable shape")
+    return reader.OneShape(), ""
+
+
+def _read_brep(p: Path) -> tuple[TopoDS_Shape | None, str]:
+    shape = TopoDS_Shape()
+    ok = BRepTools.Read_s(shape, str(p), BRep_Builder())
+    if not ok:
+        raise CadError(f"{p}: not a readable BRep file")
+    return shape, ""
+
+
+_READERS = {"step": _read_step, "iges": _read_iges, "brep": _read_brep}
+
+
+# ---- solids -------------------------------------------------------------------------------
+def _first(shape: Any, kind: Any) -> Any:
+    exp = TopExp_Explorer(shape, kind)
+    return exp.Current() if exp.More() else None
+
+
+def _all(shape: Any, kind: Any) -> list[Any]:
+    out = []
+    exp = TopExp_Explorer(shape, kind)
+    while exp.More():
+        out.append(exp.Current())
+        exp.Next()
+    return out
+
+
+def _solids(shape: Any, p: Path, notes: list[str]) -> list[Any]:
+    """The solids of ``shape``; closed shells are made solids, open shells refused."""
+    solids = [TopoDS.Solid(s) for s in _all(shape, TopAbs_SOLID)]
+    if solids:
+        return solids
+    shells = [TopoDS.Shell(s) for s in _all(shape, TopAbs_SHELL)]
+    if not shells:
+        nf, ne, nv = (count(shape, k) for k in (TopAbs_FACE, TopAbs_EDGE, TopAbs_VERTEX))
+        what = f"{nf} faces" if nf else (f"{ne} curves" if ne else f"{nv} points")
+        raise CadError(f"{p}: no solid in the file (only {what})")
+    out = []
+    for k, shell in enumerate(shells):
+        free = _free_edges(shell)
+        if free:
+            raise CadError(f"{p}: shell {k} is not closed ({free} free edges); need a solid")
+        mk = BRepBuilderAPI_MakeSolid(shell)
+        fix = ShapeFix_Solid(mk.Solid())
+        fix.Perform()
+        solid = _first(fix.Solid(), TopAbs_SOLID)
+        if solid is None or not BRepCheck_Analyzer(solid).IsValid():
+            raise CadError(f"{p}: shell {k} could not be made a valid solid")
+        out.append(TopoDS.Solid(solid))
+        notes.append(f"shell {k} made a solid")
+    return out
+
+
+def _free_edges(shell: Any) -> int:
+    """Number of edges of ``shell`` bounding only one face (seams excluded)."""
+    from OCP.collections import (
+        IndexedDataMap_TopoDS_Shape_List_TopoDS_Shape_TopTools_ShapeMapHasher as EFMap,
+    )
+
+    m = EFMap()
+    TopExp.MapShapesAndAncestors_s(shell, TopAbs_EDGE, TopAbs_FACE, m)
+    free = 0
+    for i in range(1, m.Extent() + 1):
+        edge = TopoDS.Edge(m.FindKey(i))
+        if BRep_Tool.Degenerated_s(edge):
+            continue
+        faces = m.FindFromIndex(i)
+        if faces.Size() == 1 and not BRep_Tool.IsClosed_s(edge, TopoDS.Face(faces.First())):
+            free += 1
+    return free

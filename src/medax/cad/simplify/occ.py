@@ -1,0 +1,130 @@
+"""Small OCP helpers shared by the simplification modules (maps, sampling, normals).
+
+Points are returned as numpy arrays ``(n, 3)`` in the part's length unit.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from OCP.BRep import BRep_Tool
+from OCP.BRepAdaptor import BRepAdaptor_Curve, BRepAdaptor_Surface
+from OCP.BRepLProp import BRepLProp_SLProps
+from OCP.BRepTools import BRepTools
+from OCP.collections import IndexedMap_TopoDS_Shape_TopTools_ShapeMapHasher as ShapeMap
+from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
+from OCP.gp import gp_Pnt
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_REVERSED, TopAbs_VERTEX
+from OCP.TopExp import TopExp, TopExp_Explorer
+from OCP.TopoDS import TopoDS
+
+Array = NDArray[np.float64]
+
+
+def shape_map(shape: Any, kind: Any) -> Any:
+    """Indexed map of the sub-shapes of ``kind`` (``TopAbs_FACE``...) of ``shape`` (1-based)."""
+    m = ShapeMap()
+    TopExp.MapShapes_s(shape, kind, m)
+    return m
+
+
+def faces_of(shape: Any) -> Iterator[Any]:
+    """Faces of ``shape`` in exploration order (orientation composed)."""
+    exp = TopExp_Explorer(shape, TopAbs_FACE)
+    while exp.More():
+        yield TopoDS.Face(exp.Current())
+        exp.Next()
+
+
+def edges_of(shape: Any) -> Iterator[Any]:
+    """Edges of ``shape`` in exploration order, orientation composed with the parent's."""
+    exp = TopExp_Explorer(shape, TopAbs_EDGE)
+    while exp.More():
+        yield TopoDS.Edge(exp.Current())
+        exp.Next()
+
+
+def vertices_of(shape: Any) -> Iterator[Any]:
+    """Vertices of ``shape``."""
+    exp = TopExp_Explorer(shape, TopAbs_VERTEX)
+    while exp.More():
+        yield TopoDS.Vertex(exp.Current())
+        exp.Next()
+
+
+def count(shape: Any, kind: Any) -> int:
+    """Number of distinct sub-shapes of ``kind``."""
+    return int(shape_map(shape, kind).Size())
+
+
+def xyz(p: Any) -> Array:
+    """``gp_Pnt``/``gp_Vec``/``gp_Dir`` -> array (3,)."""
+    return np.array([p.X(), p.Y(), p.Z()])
+
+
+def vertex_point(v: Any) -> Array:
+    """Position of a vertex, (3,)."""
+    return xyz(BRep_Tool.Pnt_s(v))
+
+
+def edge_points(edge: Any, n: int) -> Array:
+    """``n`` points along an edge (its own parameter, ends included), (n, 3)."""
+    c = BRepAdaptor_Curve(edge)
+    ts = np.linspace(c.FirstParameter(), c.LastParameter(), n)
+    return np.array([xyz(c.Value(float(t))) for t in ts])
+
+
+def edge_ends(edge: Any) -> tuple[Any, Any]:
+    """First and last vertex of an edge following its orientation."""
+    return TopExp.FirstVertex_s(edge, True), TopExp.LastVertex_s(edge, True)
+
+
+def face_normal_at(face: Any, point: Array) -> Array | None:
+    """Outward unit normal of ``face`` (orientation applied) at the foot of ``point`` (3,)."""
+    surf = BRep_Tool.Surface_s(face)
+    proj = GeomAPI_ProjectPointOnSurf(gp_Pnt(*map(float, point)), surf)
+    if proj.NbPoints() == 0:
+        return None
+    u, v = proj.LowerDistanceParameters()
+    props = BRepLProp_SLProps(BRepAdaptor_Surface(face), u, v, 1, 1e-9)
+    if not props.IsNormalDefined():
+        return None
+    n = xyz(props.Normal())
+    if face.Orientation() == TopAbs_REVERSED:
+        n = -n
+    return n
+
+
+def max_normal_angle(face1: Any, face2: Any, points: Array) -> float:
+    """Largest angle (rad) between the normals of two faces over ``points`` (n, 3).
+
+    ``inf`` when a normal is undefined at a sample. Tangent faces sharing an edge with
+    coherent (outward) orientations have angle ~0.
+    """
+    worst = 0.0
+    for p in points:
+        n1 = face_normal_at(face1, p)
+        n2 = face_normal_at(face2, p)
+        if n1 is None or n2 is None:
+            return float("inf")
+        worst = max(worst, float(np.arccos(np.clip(n1 @ n2, -1.0, 1.0))))
+    return worst
+
+
+def uv_bounds(face: Any) -> tuple[float, float, float, float]:
+    """(umin, umax, vmin, vmax) of a face."""
+    b = BRepTools.UVBounds_s(face)
+    return float(b[0]), float(b[1]), float(b[2]), float(b[3])
+
+
+def diagonal(shape: Any) -> float:
+    """Bounding-box diagonal of ``shape`` (optimal box, no enlargement)."""
+    from OCP.Bnd import Bnd_Box
+    from OCP.BRepBndLib import BRepBndLib
+
+    box = Bnd_Box()
+    BRepBndLib.AddOptimal_s(shape, box, False, False)
+    return float(np.linalg.norm(xyz(box.CornerMax()) - xyz(box.CornerMin())))

@@ -1,0 +1,55 @@
+"""Interpolating B-splines through ordered points, with optional C0 breaks."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.interpolate import make_interp_spline
+
+from medax.geometry._types import FloatArray
+from medax.geometry.bspline import BSpline
+
+
+def chord_parameters(points: FloatArray) -> FloatArray:
+    """Normalised cumulative chord length of ``points`` (n, dim), shape ``(n,)``."""
+    seg = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    u = np.concatenate(([0.0], np.cumsum(seg)))
+    return u / u[-1]
+
+
+def interpolate(
+    points: FloatArray, breaks: FloatArray | list[int] = (), degree: int = 3
+) -> tuple[BSpline, FloatArray]:
+    """Clamped B-spline through ``points`` (n, dim) at chord-length parameters.
+
+    ``breaks`` are indices of interior points where the curve may turn (a kink): there the
+    knot multiplicity is ``degree``, so the spline is only C0. Each piece between breaks is
+    a not-a-knot interpolant of ``degree`` (lowered for pieces with too few points and then
+    raised back by knot-free degree elevation of the interpolant is avoided: callers keep at
+    least ``degree + 1`` points per piece). Returns the spline (parameter domain [0, 1]) and
+    the parameters ``u`` (n,) of the points on it.
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    u = chord_parameters(pts)
+    cuts = [0, *sorted(int(b) for b in breaks), len(pts) - 1]
+    knots: list[FloatArray] = []
+    ctrl: list[FloatArray] = []
+    for j, (a, b) in enumerate(zip(cuts[:-1], cuts[1:], strict=True)):
+        n_piece = b - a + 1
+        if n_piece < degree + 1:
+            raise ValueError(f"piece {j} has {n_piece} points; degree {degree} needs more")
+        spl = make_interp_spline(u[a : b + 1], pts[a : b + 1], k=degree)
+        t, c = np.asarray(spl.t), np.asarray(spl.c)
+        if j == 0:
+            knots.append(t[: len(t) - degree - 1])  # all but the closing knots
+            ctrl.append(c)
+        else:
+            knots.append(t[degree + 1 : len(t) - degree - 1])
+            ctrl.append(c[1:])
+        if j == len(cuts) - 2:
+            knots.append(t[len(t) - degree - 1 :])
+        else:
+            knots.append(np.full(degree, u[b]))
+    # the loop appended the junction knots with multiplicity `degree` (C0 joints)
+    kn = np.concatenate(knots)
+    cp = np.concatenate(ctrl)
+    return BSpline(cp, degree, kn), u
