@@ -129,7 +129,9 @@ def _pad3(points: FloatArray) -> FloatArray:
     return np.column_stack((points, np.zeros(len(points))))
 
 
-def _write_msh(path: Path, points: FloatArray, quads: IntArray, data: dict[str, FloatArray]) -> None:
+def _write_msh(
+    path: Path, points: FloatArray, quads: IntArray, data: dict[str, FloatArray]
+) -> None:
     import meshio  # noqa: PLC0415
 
     m = len(quads)
@@ -147,7 +149,9 @@ def _write_msh(path: Path, points: FloatArray, quads: IntArray, data: dict[str, 
         meshio.write(str(path), mesh, file_format="gmsh", binary=False)
 
 
-def _write_vtu(path: Path, points: FloatArray, quads: IntArray, data: dict[str, FloatArray]) -> None:
+def _write_vtu(
+    path: Path, points: FloatArray, quads: IntArray, data: dict[str, FloatArray]
+) -> None:
     import meshio  # noqa: PLC0415
 
     cell_data = {k: [v] for k, v in data.items()}
