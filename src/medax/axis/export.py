@@ -1,0 +1,45 @@
+"""The ``axis.json`` record of a traced axis."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from medax.axis.result import MedialAxis
+
+
+def axis_record(axis: MedialAxis) -> dict[str, Any]:
+    """A JSON-ready dict: region, pair, points (B1 -> B2), spline, errors, counts."""
+    diag = axis.diagonal
+    return {
+        "region": axis.region.name,
+        "pair": list(axis.pair),
+        "method": axis.method,
+        "constraints": [axis.roles.a1, axis.roles.a2],
+        "start_side": axis.roles.b1,
+        "end_side": axis.roles.b2,
+        "reoriented": axis.region.reoriented,
+        "points": axis.points.tolist(),
+        "space_points": axis.space_points.tolist(),
+        "distances": axis.d1.tolist(),
+        "t_start": axis.t_start,
+        "t_end": axis.t_end,
+        "spline": {
+            "degree": axis.spline.degree,
+            "knots": axis.spline.knots.tolist(),
+            "control_points": axis.spline.control_points.tolist(),
+        },
+        "max_point_error": axis.max_point_error,
+        "max_curve_error": axis.max_curve_error,
+        "max_point_error_rel": axis.max_point_error / diag,
+        "max_curve_error_rel": axis.max_curve_error / diag,
+        "tol": axis.tol,
+        "diagonal": diag,
+        "n_points": axis.n_points,
+        "counts": {
+            "points": axis.counts.points,
+            "predictor_steps": axis.counts.predictor_steps,
+            "corrector_iterations": axis.counts.corrector_iterations,
+            "distance_evaluations": axis.counts.distance_evaluations,
+            "refinement_rounds": axis.counts.refinements,
+        },
+    }

@@ -1,0 +1,1 @@
+"""Plots (matplotlib, Agg backend) and off-screen 3D views; imported lazily by the CLI."""
