@@ -37,8 +37,12 @@ def side_function(spec: dict, p0, p1):
         if "sagitta" in spec:
             am = math.atan2(*(apex - centre)[::-1])
             sweep = 2 * ((am - a0 + math.pi) % (2 * math.pi) - math.pi)
-        return lambda t: centre + r * np.column_stack(
-            (np.cos(a0 + sweep * np.asarray(t)), np.sin(a0 + sweep * np.asarray(t)))
+        return lambda t: (
+            centre
+            + r
+            * np.column_stack(
+                (np.cos(a0 + sweep * np.asarray(t)), np.sin(a0 + sweep * np.asarray(t)))
+            )
         )
     if kind == "bspline":
         pts = np.asarray(spec["points"], float)
@@ -75,12 +79,17 @@ class DenseDistance:
                 lo = max(self.t[j] - self.dt, 0.0)
                 hi = min(self.t[j] + self.dt, 1.0)
                 res = minimize_scalar(
-                    lambda s: float(np.sum((self.f(np.array([s]))[0] - xi) ** 2)),
+                    lambda s, xi=xi: float(np.sum((self.f(np.array([s]))[0] - xi) ** 2)),
                     bounds=(lo, hi),
                     method="bounded",
                     options={"xatol": 1e-14},
                 )
-                best = min(best, math.sqrt(res.fun), float(np.linalg.norm(self.f(np.array([lo]))[0] - xi)), float(np.linalg.norm(self.f(np.array([hi]))[0] - xi)))
+                best = min(
+                    best,
+                    math.sqrt(res.fun),
+                    float(np.linalg.norm(self.f(np.array([lo]))[0] - xi)),
+                    float(np.linalg.norm(self.f(np.array([hi]))[0] - xi)),
+                )
             out[i] = best
         return out
 

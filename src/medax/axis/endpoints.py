@@ -7,10 +7,10 @@ import logging
 import numpy as np
 from scipy.optimize import brentq
 
+from medax.axis.field import DistanceField
 from medax.errors import TraceError
 from medax.geometry._types import FloatArray
 from medax.geometry.curve import Curve
-from medax.axis.field import DistanceField
 
 log = logging.getLogger(__name__)
 _SCAN = 257  # samples of the side scanned for sign changes

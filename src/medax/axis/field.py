@@ -67,4 +67,6 @@ class DistanceField:
         gx = (1.0 - r) * u1 - r * u2
         grad = gx if emb.is_identity else np.einsum("nij,ni->nj", emb.jacobian(p), gx)
         g = (1.0 - r) * d1 - r * d2
-        return FieldSample(x=x, d1=d1, d2=d2, q1=c1.foot, q2=c2.foot, t1=c1.t, t2=c2.t, g=g, grad=grad)
+        return FieldSample(
+            x=x, d1=d1, d2=d2, q1=c1.foot, q2=c2.foot, t1=c1.t, t2=c2.t, g=g, grad=grad
+        )

@@ -92,9 +92,11 @@ def trace_axis(
     sx = s.x * scale + offset if work.embedding.is_identity else s.x
     q1 = s.q1 * scale + offset if work.embedding.is_identity else s.q1
     q2 = s.q2 * scale + offset if work.embedding.is_identity else s.q2
-    spline_out = spline.transformed(-offset / scale, 1.0 / scale) if scale != 1.0 or np.any(
-        offset
-    ) else spline
+    spline_out = (
+        spline.transformed(-offset / scale, 1.0 / scale)
+        if scale != 1.0 or np.any(offset)
+        else spline
+    )
     return MedialAxis(
         region=region, pair=(int(pair[0]), int(pair[1])), roles=roles, method=method,
         points=pts_out, space_points=sx, foot1=q1, foot2=q2, d1=s.d1 * scale, d2=s.d2 * scale,
@@ -108,7 +110,7 @@ def _normalised(region: Region) -> tuple[Region, np.ndarray, float]:
     """A planar region moved to the origin and scaled to unit diagonal, with the offset and
     scale that map it back (``x = x' * scale + offset``); surface regions unchanged."""
     if not region.embedding.is_identity:
-        return region, np.zeros(region.embedding.dim), 1.0
+        return region, np.zeros(2), 1.0
     pts = region.boundary
     offset = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
     scale = region.diagonal

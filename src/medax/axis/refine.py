@@ -68,16 +68,23 @@ def fit_and_refine(
         # 1. pieces between breaks need DEGREE + 1 points: insert chord midpoints where short
         cuts = [0, *sorted(breaks), len(pts) - 1]
         short = [
-            i for a, b in zip(cuts[:-1], cuts[1:], strict=True) if b - a < DEGREE for i in range(a, b)
+            i
+            for a, b in zip(cuts[:-1], cuts[1:], strict=True)
+            if b - a < DEGREE
+            for i in range(a, b)
         ]
         if short:
-            pts, s, breaks, it = _insert(field, pts, s, breaks, np.array(short), None, None, tol_point)
+            pts, s, breaks, it = _insert(
+                field, pts, s, breaks, np.array(short), None, None, tol_point
+            )
             iters += it
             continue
         spline, u = interpolate(pts, sorted(breaks), DEGREE)
         # 2. kinks: foot jumps not yet at a break
         kinks = [
-            i for i in kink_intervals(s, scale) if i not in tried and i not in breaks and i + 1 not in breaks
+            i
+            for i in kink_intervals(s, scale)
+            if i not in tried and i not in breaks and i + 1 not in breaks
         ]
         found = [(i, locate_kink(field, s, pts, i, tol_point)) for i in kinks]
         tried |= set(kinks)

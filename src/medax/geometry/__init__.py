@@ -8,7 +8,12 @@ from medax.geometry.embedding import Embedding, PlaneEmbedding
 from medax.geometry.line import Line
 from medax.geometry.polyline import Polyline
 from medax.geometry.region import PAIRS, PairRoles, Region, pair_roles
-from medax.geometry.region_io import read_region, read_regions, region_from_dict, sample_regions_path
+from medax.geometry.region_io import (
+    read_region,
+    read_regions,
+    region_from_dict,
+    sample_regions_path,
+)
 
 __all__ = [
     "PAIRS",

@@ -93,4 +93,6 @@ class BSpline(Curve):
         return BSpline(self.control_points[::-1], self.degree, kn, w)
 
     def transformed(self, offset: FloatArray, scale: float) -> BSpline:
-        return BSpline((self.control_points - offset) / scale, self.degree, self.knots, self.weights)
+        return BSpline(
+            (self.control_points - offset) / scale, self.degree, self.knots, self.weights
+        )

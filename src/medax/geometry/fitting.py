@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from scipy.interpolate import make_interp_spline
 
@@ -17,16 +19,14 @@ def chord_parameters(points: FloatArray) -> FloatArray:
 
 
 def interpolate(
-    points: FloatArray, breaks: FloatArray | list[int] = (), degree: int = 3
+    points: FloatArray, breaks: Sequence[int] = (), degree: int = 3
 ) -> tuple[BSpline, FloatArray]:
     """Clamped B-spline through ``points`` (n, dim) at chord-length parameters.
 
     ``breaks`` are indices of interior points where the curve may turn (a kink): there the
     knot multiplicity is ``degree``, so the spline is only C0. Each piece between breaks is
-    a not-a-knot interpolant of ``degree`` (lowered for pieces with too few points and then
-    raised back by knot-free degree elevation of the interpolant is avoided: callers keep at
-    least ``degree + 1`` points per piece). Returns the spline (parameter domain [0, 1]) and
-    the parameters ``u`` (n,) of the points on it.
+    a not-a-knot interpolant and needs at least ``degree + 1`` points. Returns the spline
+    (parameter domain [0, 1]) and the parameters ``u`` (n,) of the points on it.
     """
     pts = np.asarray(points, dtype=np.float64)
     u = chord_parameters(pts)

@@ -80,9 +80,7 @@ def region_from_dict(spec: Any, name: str) -> Region:
     sides_spec = spec["sides"]
     if not isinstance(sides_spec, list) or len(sides_spec) != 4:
         raise RegionError(f"region '{name}': needs a list of 4 sides")
-    sides = [
-        _side(sides_spec[k], corners[k], corners[(k + 1) % 4], name, k) for k in range(4)
-    ]
+    sides = [_side(sides_spec[k], corners[k], corners[(k + 1) % 4], name, k) for k in range(4)]
     return Region.build(sides, name=name)
 
 
@@ -106,7 +104,9 @@ def _side(spec: Any, p0: np.ndarray, p1: np.ndarray, name: str, k: int) -> Curve
                 raise CurveError(f"'points' must be a list of [x, y], got shape {pts.shape}")
             for end, corner, which in ((pts[0], p0, "first"), (pts[-1], p1, "last")):
                 if np.linalg.norm(end - corner) > 1e-9 * max(1.0, float(np.abs(corner).max())):
-                    raise CurveError(f"{which} point {end.tolist()} is not corner {corner.tolist()}")
+                    raise CurveError(
+                        f"{which} point {end.tolist()} is not corner {corner.tolist()}"
+                    )
             if kind == "polyline":
                 return Polyline(pts)
             return BSpline(pts, int(spec.get("degree", 3)))

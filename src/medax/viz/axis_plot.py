@@ -14,7 +14,9 @@ _SIDE_COLOURS = ("#1f77b4", "#2ca02c", "#1f77b4", "#2ca02c")
 _AXIS_COLOURS = ("#d62728", "#9467bd")
 
 
-def plot_axes(region: Region, axes: Sequence[MedialAxis], path: str | Path, circles: int = 5) -> Path:
+def plot_axes(
+    region: Region, axes: Sequence[MedialAxis], path: str | Path, circles: int = 5
+) -> Path:
     """Draw ``region`` (sides labelled S0..S3), each axis as its fitted B-spline with its
     points, and ``circles`` equal-distance circles per axis (centre on the axis, radius
     ``d1 = d2``, touching both constraints). Writes PNG or SVG by the file's extension."""
@@ -32,15 +34,20 @@ def plot_axes(region: Region, axes: Sequence[MedialAxis], path: str | Path, circ
     for j, axis in enumerate(axes):
         colour = _AXIS_COLOURS[j % 2]
         curve = axis.spline.sample(2000)
-        label = f"axis {axis.pair} ({axis.method}), {axis.n_points} pts, err {axis.max_curve_error / axis.diagonal:.1e}"
+        rel = axis.max_curve_error / axis.diagonal
+        label = f"axis {axis.pair} ({axis.method}), {axis.n_points} pts, err {rel:.1e}"
         ax.plot(curve[:, 0], curve[:, 1], color=colour, lw=1.6, label=label)
         ax.plot(axis.points[:, 0], axis.points[:, 1], ".", color=colour, ms=3)
         idx = np.linspace(0, axis.n_points - 1, circles + 2).round().astype(int)[1:-1]
         for i in idx:
-            c = plt.Circle(axis.points[i], axis.d1[i], fill=False, ls="--", lw=0.8, color=colour, alpha=0.7)
+            c = plt.Circle(
+                axis.points[i], axis.d1[i], fill=False, ls="--", lw=0.8, color=colour, alpha=0.7
+            )
             ax.add_patch(c)
             for foot in (axis.foot1[i], axis.foot2[i]):
-                ax.plot(*np.column_stack((axis.points[i], foot[:2])), color=colour, lw=0.5, alpha=0.7)
+                ax.plot(
+                    *np.column_stack((axis.points[i], foot[:2])), color=colour, lw=0.5, alpha=0.7
+                )
     ax.set_aspect("equal")
     ax.set_title(f"medax: medial axes of '{region.name}'")
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.06), fontsize=8, frameon=False)

@@ -1,0 +1,94 @@
+"""Curves: evaluation, length, closest points against independent computations."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.interpolate import BSpline as SciBSpline
+from scipy.spatial import cKDTree
+
+from medax.geometry import Arc, BSpline, Line, Polyline
+from medax.geometry.curve import sub_curve
+
+RNG = np.random.default_rng(7)
+
+
+def wavy_spline() -> BSpline:
+    pts = np.array([[0, 0], [2, -1.2], [4, 0.9], [6, -0.8], [8, 1.3], [10, 0.5]], float)
+    return BSpline(pts, 3)
+
+
+CURVES = {
+    "line": Line(np.array([1.0, 2.0]), np.array([4.0, -2.0])),
+    "arc": Arc.from_sagitta(np.array([0.0, 0.0]), np.array([10.0, 0.0]), -3.0),
+    "bspline": wavy_spline(),
+    "polyline": Polyline(np.array([[0, 0], [1, 2], [3, 2.5], [4, 0], [6, 1]], float)),
+    "nurbs": BSpline(
+        np.array([[1, 0], [1, 1], [0, 1]], float), 2, weights=np.array([1, math.sqrt(0.5), 1])
+    ),
+}
+
+
+@pytest.mark.parametrize("name", sorted(CURVES))
+def test_closest_is_global_and_exact(name):
+    c = CURVES[name]
+    dense = c.sample(400_001)
+    pts = RNG.uniform(dense.min(0) - 3, dense.max(0) + 3, size=(2000, 2))
+    ref, _ = cKDTree(dense).query(pts)
+    got = c.closest(pts)
+    # never farther than the dense reference; at most the sampling error (half a spacing) closer
+    spacing = np.linalg.norm(np.diff(dense, axis=0), axis=1).max()
+    assert np.all(got.distance <= ref + 1e-12)
+    assert np.all(got.distance >= ref - 0.5 * spacing)
+    assert np.allclose(np.linalg.norm(got.foot - pts, axis=1), got.distance)
+    assert np.allclose(c.evaluate(got.t), got.foot)
+
+
+def test_nurbs_quarter_circle_is_exact():
+    c = CURVES["nurbs"]
+    t = np.linspace(0, 1, 101)
+    assert np.allclose(np.linalg.norm(c.evaluate(t), axis=1), 1.0, atol=1e-14)
+    assert c.length() == pytest.approx(math.pi / 2, rel=1e-12)
+
+
+def test_bspline_matches_scipy_and_derivative():
+    c = wavy_spline()
+    knots = np.r_[np.zeros(4), [1 / 3, 2 / 3], np.ones(4)]
+    ref = SciBSpline(knots, c.control_points, 3)
+    t = np.linspace(0, 1, 57)
+    assert np.allclose(c.evaluate(t), ref(t), atol=1e-14)
+    h = 1e-6
+    fd = (c.evaluate(t[1:-1] + h) - c.evaluate(t[1:-1] - h)) / (2 * h)
+    assert np.allclose(c.derivative(t[1:-1]), fd, atol=1e-6)
+
+
+def test_lengths():
+    assert CURVES["line"].length() == pytest.approx(5.0)
+    arc = Arc(np.zeros(2), 2.0, 0.3, -1.7)
+    assert arc.length() == pytest.approx(3.4)
+    assert Curve_length_by_sampling(CURVES["bspline"]) == pytest.approx(
+        CURVES["bspline"].length(), rel=1e-8
+    )
+
+
+def Curve_length_by_sampling(c) -> float:  # noqa: N802
+    p = c.sample(200_001)
+    return float(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1)))
+
+
+def test_sagitta_arc_geometry():
+    arc = Arc.from_sagitta(np.array([0.0, 0.0]), np.array([10.0, 0.0]), 2.0)
+    # positive sagitta bulges to the right of travel: apex at (5, -2)
+    assert np.allclose(arc.evaluate(np.array([0.5]))[0], [5.0, -2.0])
+    assert np.allclose(arc.end, [10.0, 0.0])
+
+
+def test_reversed_and_sub_curve():
+    c = CURVES["bspline"]
+    t = np.linspace(0, 1, 11)
+    assert np.allclose(c.reversed().evaluate(t), c.evaluate(1 - t))
+    s = sub_curve(c, 0.25, 0.75)
+    assert np.allclose(s.evaluate(t), c.evaluate(0.25 + 0.5 * t))
+    assert np.allclose(sub_curve(s, 0.5, 1.0).evaluate(t), c.evaluate(0.5 + 0.25 * t))
