@@ -9,6 +9,8 @@ are converted by OCCT to millimetres; ``Part.file_unit`` is the unit named in th
 from __future__ import annotations
 
 import logging
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -70,7 +72,8 @@ def read_part(path: str | Path, unify: bool = True) -> Part:
     if p.stat().st_size == 0:
         raise CadError(f"{p}: file is empty")
     try:
-        shape, file_unit = _READERS[fmt](p)
+        with quiet_occt():
+            shape, file_unit = _READERS[fmt](p)
     except CadError:
         raise
     except Exception as err:  # OCCT raises Standard_Failure subclasses
@@ -86,6 +89,22 @@ def read_part(path: str | Path, unify: bool = True) -> Part:
         log.info("%s: %s", p, n)
     unit = "mm" if fmt in ("step", "iges") else ""
     return Part(str(p), healed, unit or "mm", file_unit, tuple(notes))
+
+
+@contextmanager
+def quiet_occt() -> Iterator[None]:
+    """Detach OCCT's default message printers (its parsers print to stdout) meanwhile."""
+    from OCP.Message import Message
+
+    messenger = Message.DefaultMessenger_s()
+    printers = list(messenger.Printers())
+    for pr in printers:
+        messenger.RemovePrinter(pr)
+    try:
+        yield
+    finally:
+        for pr in printers:
+            messenger.AddPrinter(pr)
 
 
 def heal(solid: Any, where: str | Path = "shape", unify: bool = True) -> Any:
@@ -123,7 +142,7 @@ def _read_step(p: Path) -> tuple[TopoDS_Shape | None, str]:
     reader = STEPControl_Reader()
     status = reader.ReadFile(str(p))
     if status != IFSelect_RetDone:
-        raise CadError(f"{p}: not a readable STEP file (status {status.name})")
+        raise CadError(f"{p}: not a readable STEP file (syntax error, truncated or not STEP)")
     lengths, angles, solid_angles = Seq(), Seq(), Seq()
     unit = ""
     try:
@@ -146,7 +165,7 @@ def _read_iges(p: Path) -> tuple[TopoDS_Shape | None, str]:
     reader = IGESControl_Reader()
     status = reader.ReadFile(str(p))
     if status != IFSelect_RetDone:
-        raise CadError(f"{p}: not a readable IGES file (status {status.name})")
+        raise CadError(f"{p}: not a readable IGES file (syntax error, truncated or not IGES)")
     reader.TransferRoots()
     if reader.NbShapes() == 0:
         raise CadError(f"{p}: IGES file holds no transferable shape")

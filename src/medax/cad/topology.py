@@ -153,14 +153,18 @@ def face_normals(face: Any, uv: FloatArray, surf: Any = None) -> FloatArray:
     """Outward unit normals (n, 3) of ``face`` at parameters ``uv`` (n, 2); rows are NaN
     where the normal is undefined (poles, apexes)."""
     s = surf if surf is not None else BRepAdaptor_Surface(face, False)
-    out = np.full((len(uv), 3), np.nan)
+    d = np.empty((len(uv), 2, 3))
     p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
     for k, (u, v) in enumerate(uv):
         s.D1(float(u), float(v), p, du, dv)
-        n = np.cross((du.X(), du.Y(), du.Z()), (dv.X(), dv.Y(), dv.Z()))
-        norm = float(np.linalg.norm(n))
-        if norm > 1e-14 * max(du.Magnitude() * dv.Magnitude(), 1e-300):
-            out[k] = n / norm
+        d[k, 0] = (du.X(), du.Y(), du.Z())
+        d[k, 1] = (dv.X(), dv.Y(), dv.Z())
+    n = np.cross(d[:, 0], d[:, 1])
+    norm = np.linalg.norm(n, axis=1)
+    scale = np.linalg.norm(d[:, 0], axis=1) * np.linalg.norm(d[:, 1], axis=1)
+    good = norm > 1e-14 * np.maximum(scale, 1e-300)
+    out = np.full((len(uv), 3), np.nan)
+    out[good] = n[good] / norm[good, None]
     if face.Orientation() == TopAbs_REVERSED:
         out = -out
     return out

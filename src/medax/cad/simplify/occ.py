@@ -128,3 +128,26 @@ def diagonal(shape: Any) -> float:
     box = Bnd_Box()
     BRepBndLib.AddOptimal_s(shape, box, False, False)
     return float(np.linalg.norm(xyz(box.CornerMax()) - xyz(box.CornerMin())))
+
+
+def edge_curve(edge: Any) -> tuple[Any, float, float]:
+    """(3-D ``Geom_Curve`` with the edge's location applied, first, last) of an edge."""
+    first, last = BRep_Tool.Range_s(edge)
+    return BRep_Tool.Curve_s(edge, first, last), float(first), float(last)
+
+
+def face_inside_point(face: Any) -> Array | None:
+    """A point inside ``face`` (3,), found on a UV grid with the face classifier."""
+    from OCP.BRepTopAdaptor import BRepTopAdaptor_FClass2d
+    from OCP.gp import gp_Pnt2d
+    from OCP.TopAbs import TopAbs_IN
+
+    cls = BRepTopAdaptor_FClass2d(face, 1e-9)
+    u0, u1, v0, v1 = uv_bounds(face)
+    surf = BRepAdaptor_Surface(face)
+    for fu in (0.5, 0.3, 0.7, 0.1, 0.9, 0.2, 0.8):
+        for fv in (0.5, 0.3, 0.7, 0.1, 0.9, 0.2, 0.8):
+            u, v = u0 + fu * (u1 - u0), v0 + fv * (v1 - v0)
+            if cls.Perform(gp_Pnt2d(u, v)) == TopAbs_IN:
+                return xyz(surf.Value(u, v))
+    return None

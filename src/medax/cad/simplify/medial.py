@@ -1,0 +1,105 @@
+"""The medial curve of a constant-radius fillet: the iso-line at the mid parameter.
+
+On a fillet whose two smooth edges are iso-lines of its surface in one direction (a
+cylinder between two planes, a torus around a boss), the curve at the mid parameter in that
+direction is equidistant from both smooth edges by symmetry of the circular section. This
+is verified, not assumed: :func:`medial_curve` measures ``|d1 - d2|`` with
+``BRepExtrema_DistShapeShape`` at samples and refuses the fillet when it is above the tolerance
+(the general case needs the traced axis of ``medax.axis``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from OCP.BRep import BRep_Tool
+from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeVertex
+from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+from OCP.GeomAbs import GeomAbs_Cylinder, GeomAbs_Torus
+from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
+from OCP.gp import gp_Pnt
+
+from medax.cad.simplify.occ import edge_points, uv_bounds
+
+#: The medial tool edge is extended past the fillet by this fraction of its length on both
+#: sides (the splitter keeps only the part on the face), unless it is closed.
+EXTEND = 0.02
+
+
+@dataclass(frozen=True)
+class Medial:
+    """Medial curve of a fillet: ``edge`` (the splitter tool), the iso direction (``"u"``
+    when the curve is ``u = mid``), the mid parameter, the measured equidistance error
+    ``error`` (length unit) and the blend ``radius``."""
+
+    edge: Any
+    iso: str
+    mid: float
+    error: float
+    radius: float
+
+
+def _uv(surface: Any, p: np.ndarray) -> tuple[float, float]:
+    proj = GeomAPI_ProjectPointOnSurf(gp_Pnt(*map(float, p)), surface)
+    u, v = proj.LowerDistanceParameters()
+    return float(u), float(v)
+
+
+def medial_curve(face: Any, edge1: Any, edge2: Any, rel_tol: float = 1e-9) -> Medial | str:
+    """Medial curve of the fillet ``face`` between smooth edges ``edge1`` and ``edge2``.
+
+    Returns a :class:`Medial`, or a one-line reason (str) when the fillet is not a
+    constant-radius iso-line fillet whose mid iso-line is equidistant to ``rel_tol x radius``.
+    """
+    ad = BRepAdaptor_Surface(face)
+    kind = ad.GetType()
+    if kind == GeomAbs_Cylinder:
+        radius = ad.Cylinder().Radius()
+    elif kind == GeomAbs_Torus:
+        radius = ad.Torus().MinorRadius()
+    else:
+        return "not a cylinder or torus fillet (variable radius or freeform): not supported"
+    surf = BRep_Tool.Surface_s(face)
+    u0, u1, v0, v1 = uv_bounds(face)
+    ends = []
+    for e in (edge1, edge2):
+        pts = edge_points(e, 5)
+        uv = np.array([_uv(surf, p) for p in pts])
+        ends.append(uv)
+    spread = [np.ptp(uv, axis=0) for uv in ends]
+    if all(s[0] < 1e-9 for s in spread):  # smooth edges are u-iso lines: cross direction u
+        iso, mid, lo, hi, closed_dir = "u", 0.5 * (u0 + u1), v0, v1, ad.IsVPeriodic()
+    elif all(s[1] < 1e-9 for s in spread):
+        iso, mid, lo, hi, closed_dir = "v", 0.5 * (v0 + v1), u0, u1, ad.IsUPeriodic()
+    else:
+        return "smooth edges are not iso-lines of the fillet surface: not supported"
+    period = 2 * math.pi
+    full = closed_dir and abs((hi - lo) - period) < 1e-9
+    if not full:
+        ext = EXTEND * (hi - lo)
+        lo, hi = lo - ext, hi + ext
+        if closed_dir and hi - lo >= period:
+            return "fillet wraps almost all around its axis: not supported"
+    curve = surf.UIso(mid) if iso == "u" else surf.VIso(mid)
+    mk = BRepBuilderAPI_MakeEdge(curve, lo, hi)
+    if not mk.IsDone():
+        return "could not build the medial edge"
+    edge = mk.Edge()
+    # Equidistance, measured with BRepExtrema at samples inside the face.
+    a, b = (lo, hi) if full else (lo + (hi - lo) * EXTEND, hi - (hi - lo) * EXTEND)
+    err = 0.0
+    for t in np.linspace(a, b, 9):
+        p = curve.Value(float(t))
+        vtx = BRepBuilderAPI_MakeVertex(p).Vertex()
+        d = []
+        for e in (edge1, edge2):
+            ext = BRepExtrema_DistShapeShape(vtx, e)
+            d.append(ext.Value())
+        err = max(err, abs(d[0] - d[1]))
+    if err > rel_tol * radius:
+        return f"mid iso-line not equidistant ({err:.2e} > {rel_tol:g} x radius)"
+    return Medial(edge, iso, float(mid), float(err), float(radius))

@@ -1,0 +1,121 @@
+"""What the simplifier is told about each blend: :class:`FilletSpec`.
+
+Built from the classifier's :class:`~medax.cad.model.Classification` (fillet records), or,
+for parts built with OCCT in tests, from the blend faces of the fillet builder's history
+(:func:`specs_from_blend_faces`): there the two smooth edges are the blend's edges shared
+with a non-blend face that is tangent to it (normals compared at samples).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any
+
+from OCP.collections import (
+    IndexedDataMap_TopoDS_Shape_List_TopoDS_Shape_TopTools_ShapeMapHasher as AncestorMap,
+)
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
+from OCP.TopExp import TopExp
+from OCP.TopoDS import TopoDS
+
+from medax.cad.simplify.occ import edge_points, edges_of, max_normal_angle, shape_map
+from medax.tolerances import TANGENT_ANGLE
+
+
+@dataclass(frozen=True)
+class FilletSpec:
+    """An edge fillet to remove: face ``face`` (0-based face index of the solid), its two
+    smooth edges ``smooth_edges`` (0-based edge indices) and the supporting faces across
+    them, ``supporting`` (same order). ``radius`` where constant (length unit), else None."""
+
+    face: int
+    smooth_edges: tuple[int, int]
+    supporting: tuple[int, int]
+    radius: float | None = None
+
+
+@dataclass(frozen=True)
+class BlendInput:
+    """Blends of a solid: fillets to try, and blends refused up front with a reason."""
+
+    fillets: tuple[FilletSpec, ...]
+    refused: tuple[tuple[int, str], ...]
+
+    @property
+    def blend_faces(self) -> tuple[int, ...]:
+        """All blend face indices (tried and refused), sorted."""
+        return tuple(sorted({f.face for f in self.fillets} | {i for i, _ in self.refused}))
+
+
+def edge_face_map(shape: Any) -> Any:
+    """Edge -> faces ancestor map of ``shape``."""
+    m = AncestorMap()
+    TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, m)
+    return m
+
+
+def specs_from_blend_faces(shape: Any, blends: Iterable[int]) -> BlendInput:
+    """Fillet specs from known blend faces (0-based indices), e.g. the fillet history.
+
+    A blend with exactly two tangent non-blend neighbours, each across one edge, is a
+    fillet; any other blend (corner blends, chains of blends) is refused with the reason.
+    """
+    fmap = shape_map(shape, TopAbs_FACE)
+    emap = shape_map(shape, TopAbs_EDGE)
+    e2f = edge_face_map(shape)
+    blend_set = set(blends)
+    fillets: list[FilletSpec] = []
+    refused: list[tuple[int, str]] = []
+    for b in sorted(blend_set):
+        face = TopoDS.Face(fmap.FindKey(b + 1))
+        smooth: list[tuple[int, int]] = []
+        blend_nbrs: set[int] = set()
+        seen: set[int] = set()
+        for e in edges_of(face):
+            ei = emap.FindIndex(e) - 1
+            if ei in seen:
+                continue
+            seen.add(ei)
+            for f in e2f.FindFromKey(e):
+                fi = fmap.FindIndex(f) - 1
+                if fi == b:
+                    continue
+                if fi in blend_set:
+                    blend_nbrs.add(fi)
+                    continue
+                pts = edge_points(e, 7)[1:-1]
+                if max_normal_angle(face, TopoDS.Face(f), pts) < TANGENT_ANGLE:
+                    smooth.append((ei, fi))
+        if len(smooth) == 2 and smooth[0][1] != smooth[1][1]:
+            fillets.append(
+                FilletSpec(b, (smooth[0][0], smooth[1][0]), (smooth[0][1], smooth[1][1]))
+            )
+        elif len(smooth) == 2:
+            refused.append((b, f"both smooth edges on face {smooth[0][1]}"))
+        elif blend_nbrs and len(smooth) != 2:
+            refused.append((b, f"corner blend (meets blends {sorted(blend_nbrs)}): not supported"))
+        else:
+            refused.append((b, f"{len(smooth)} smooth edges (an edge fillet has 2)"))
+    return BlendInput(tuple(fillets), tuple(refused))
+
+
+def specs_from_classification(cls: Any) -> BlendInput:
+    """Fillet specs from a :class:`~medax.cad.model.Classification` (no reclassification).
+
+    Fillets whose constraint sides are single edges with two distinct supporting faces are
+    tried; corner blends and the rest are refused with the reason.
+    """
+    fillets: list[FilletSpec] = []
+    refused: list[tuple[int, str]] = []
+    for rec in cls.fillets:
+        a, b = rec.smooth_edges
+        if len(a) != 1 or len(b) != 1:
+            refused.append((rec.face, "a constraint side has several edges"))
+        elif rec.supporting[0] == rec.supporting[1]:
+            refused.append((rec.face, f"both smooth edges on face {rec.supporting[0]}"))
+        else:
+            fillets.append(FilletSpec(rec.face, (a[0], b[0]), tuple(rec.supporting), rec.radius))
+    for c in cls.corners:
+        refused.append((c.face, f"corner blend (meets fillets {list(c.fillets)}): not supported"))
+    return BlendInput(tuple(fillets), tuple(refused))

@@ -1,0 +1,64 @@
+"""Split every fillet along its medial curve with one ``BRepAlgoAPI_Splitter`` call.
+
+The solid is the argument, all medial edges the tools. The result's faces are traced back to
+the original faces through the splitter's history.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from OCP.BRepAlgoAPI import BRepAlgoAPI_Splitter
+from OCP.collections import List_TopoDS_Shape
+from OCP.TopAbs import TopAbs_FACE
+
+from medax.cad.simplify.occ import shape_map
+from medax.errors import CadError
+
+
+@dataclass(frozen=True)
+class SplitResult:
+    """The split solid ``shape``, its face map, and ``origin[k]``: the original face index
+    (0-based) of result face ``k`` (0-based)."""
+
+    shape: Any
+    face_map: Any
+    origin: tuple[int, ...]
+
+    def pieces(self, face: int) -> list[int]:
+        """Result faces coming from original face ``face``."""
+        return [k for k, o in enumerate(self.origin) if o == face]
+
+
+def split_along(shape: Any, tools: Sequence[Any], fuzzy: float = 0.0) -> SplitResult:
+    """Split ``shape`` by the edges ``tools``; raises :class:`CadError` when OCCT fails."""
+    args = List_TopoDS_Shape()
+    args.Append(shape)
+    tl = List_TopoDS_Shape()
+    for t in tools:
+        tl.Append(t)
+    sp = BRepAlgoAPI_Splitter()
+    sp.SetArguments(args)
+    sp.SetTools(tl)
+    if fuzzy > 0:
+        sp.SetFuzzyValue(fuzzy)
+    sp.Build()
+    if not sp.IsDone():
+        raise CadError("splitting the fillets along their medial curves failed (OCCT splitter)")
+    result = sp.Shape()
+    rmap = shape_map(result, TopAbs_FACE)
+    omap = shape_map(shape, TopAbs_FACE)
+    origin = [-1] * rmap.Size()
+    for i in range(1, omap.Size() + 1):
+        f = omap.FindKey(i)
+        mods = sp.Modified(f)
+        targets = list(mods) if mods.Size() > 0 else [f]
+        for g in targets:
+            k = rmap.FindIndex(g)
+            if k > 0:
+                origin[k - 1] = i - 1
+    if min(origin) < 0:
+        raise CadError("splitter history lost a face (cannot trace pieces to their faces)")
+    return SplitResult(result, rmap, tuple(origin))

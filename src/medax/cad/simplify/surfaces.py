@@ -1,0 +1,240 @@
+"""Exact surfaces for a merged face: a supporting face plus its fillet halves.
+
+Two cases have an exact answer (the issue's step 3):
+
+- **extrusion**: the halves are cylinders with parallel axes ``d`` and the supporting face is
+  a plane containing ``d``. The section by a plane normal to ``d`` is a G1 chain
+  arc - line - arc; joined into one rational B-spline it is extruded along ``d``.
+- **revolution**: the halves are tori (or cylinders) on one axis and the supporting face is a
+  plane normal to it or a coaxial cylinder or cone. The meridian section (line and arcs)
+  joined into one B-spline is revolved about the axis, starting at the x-direction of the
+  first torus so closed medial circles meet the seam.
+
+Anything else returns a reason string; the caller keeps those fillets.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from OCP.BRep import BRep_Tool
+from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.GC import GC_MakeArcOfCircle, GC_MakeSegment
+from OCP.Geom import Geom_SurfaceOfLinearExtrusion, Geom_SurfaceOfRevolution
+from OCP.GeomAbs import GeomAbs_Cone, GeomAbs_Cylinder, GeomAbs_Plane, GeomAbs_Torus
+from OCP.GeomConvert import GeomConvert, GeomConvert_CompCurveToBSplineCurve
+from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt
+
+from medax.cad.simplify.medial import Medial
+from medax.cad.simplify.occ import Array, edge_points, edges_of, xyz
+
+#: Free ends of the profile are extended by this fraction of the profile's length.
+FREE_END_EXTENSION = 0.1
+#: The medial end of each half-arc is extended past the medial curve by this angle (rad).
+MEDIAL_OVERSHOOT = 0.05
+
+
+@dataclass(frozen=True)
+class Half:
+    """A fillet half going to a supporting face: the fillet ``face``, its ``medial`` curve and
+    the smooth ``edge`` it shares with the supporting face."""
+
+    face: Any
+    medial: Medial
+    edge: Any
+
+
+@dataclass(frozen=True)
+class MergedSurface:
+    """The surface of a merged face, its ``kind`` (``extrusion``/``revolution``) and the
+    profile (a ``Geom_BSplineCurve``)."""
+
+    surface: Any
+    kind: str
+    profile: Any
+
+
+def _p(a: Array) -> gp_Pnt:
+    return gp_Pnt(float(a[0]), float(a[1]), float(a[2]))
+
+
+def _axis(ad: Any) -> tuple[Array, Array]:
+    kind = ad.GetType()
+    ax = {
+        GeomAbs_Cylinder: lambda: ad.Cylinder().Axis(),
+        GeomAbs_Torus: lambda: ad.Torus().Axis(),
+        GeomAbs_Cone: lambda: ad.Cone().Axis(),
+    }[kind]()
+    return xyz(ax.Location()), xyz(ax.Direction())
+
+
+def _half_params(half: Half) -> tuple[float, float, float]:
+    """(smooth-edge cross parameter, extended medial parameter, a parameter along the iso)."""
+    surf = BRep_Tool.Surface_s(half.face)
+    from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
+
+    p = edge_points(half.edge, 3)[1]
+    u, v = GeomAPI_ProjectPointOnSurf(_p(p), surf).LowerDistanceParameters()
+    cross, along = (u, v) if half.medial.iso == "u" else (v, u)
+    mid = half.medial.mid
+    # bring the edge parameter within half a period of mid (periodic directions)
+    while cross - mid > np.pi:
+        cross -= 2 * np.pi
+    while mid - cross > np.pi:
+        cross += 2 * np.pi
+    over = mid + np.sign(mid - cross) * MEDIAL_OVERSHOOT
+    return float(cross), float(over), float(along)
+
+
+def _half_points(half: Half, n: int = 3) -> Array:
+    """``n`` points across the half, from the smooth edge to past the medial curve (n, 3)."""
+    surf = BRep_Tool.Surface_s(half.face)
+    c0, c1, along = _half_params(half)
+    pts = []
+    for c in np.linspace(c0, c1, n):
+        uv = (c, along) if half.medial.iso == "u" else (along, c)
+        pts.append(xyz(surf.Value(float(uv[0]), float(uv[1]))))
+    return np.array(pts)
+
+
+def _boundary_samples(face: Any, n: int = 17) -> Array:
+    return np.vstack([edge_points(e, n) for e in edges_of(face)])
+
+
+def _chain(segment: tuple[Array, Array], arcs: list[Array], tol: float) -> list[Any] | str:
+    """Profile pieces: line ``segment`` (p0, p1) with each arc (3 points, first on the line's
+    end) attached at the matching end; free line ends extended. Returns curves in order."""
+    p0, p1 = segment
+    at: dict[int, Array] = {}
+    for arc in arcs:
+        d0, d1 = np.linalg.norm(arc[0] - p0), np.linalg.norm(arc[0] - p1)
+        end = 0 if d0 < d1 else 1
+        if min(d0, d1) > tol:
+            return "a fillet half does not meet an end of the face's section"
+        if end in at:
+            return "two fillet halves meet the same end of the face's section"
+        at[end] = arc
+    length = float(np.linalg.norm(p1 - p0))
+    if length < tol:
+        return "degenerate section of the supporting face"
+    t = (p1 - p0) / length
+    q0 = p0 if 0 in at else p0 - FREE_END_EXTENSION * length * t
+    q1 = p1 if 1 in at else p1 + FREE_END_EXTENSION * length * t
+    pieces: list[Any] = []
+    if 0 in at:
+        a = at[0][::-1]
+        a[-1] = q0
+        pieces.append(GC_MakeArcOfCircle(_p(a[0]), _p(a[1]), _p(a[2])).Value())
+    pieces.append(GC_MakeSegment(_p(q0), _p(q1)).Value())
+    if 1 in at:
+        a = at[1].copy()
+        a[0] = q1
+        pieces.append(GC_MakeArcOfCircle(_p(a[0]), _p(a[1]), _p(a[2])).Value())
+    return pieces
+
+
+def _join(pieces: list[Any], tol: float) -> Any:
+    comp = GeomConvert_CompCurveToBSplineCurve(GeomConvert.CurveToBSplineCurve_s(pieces[0]))
+    for c in pieces[1:]:
+        if not comp.Add(GeomConvert.CurveToBSplineCurve_s(c), tol, True):
+            raise ValueError("profile pieces do not join")
+    return comp.BSplineCurve()
+
+
+def _line_extent(points: Array, tol: float) -> tuple[Array, Array] | None:
+    """Extreme points of ``points`` (n, 3) when they are collinear within ``tol``."""
+    c = points.mean(axis=0)
+    _, s, vt = np.linalg.svd(points - c)
+    if s.size > 1 and np.abs((points - c) @ vt[1]).max() > tol:
+        return None
+    s_along = (points - c) @ vt[0]
+    return points[np.argmin(s_along)], points[np.argmax(s_along)]
+
+
+def merged_surface(support: Any, halves: list[Half], tol: float) -> MergedSurface | str:
+    """Exact surface covering ``support`` and its ``halves``, or the reason why there is none.
+
+    ``tol`` is the length tolerance of the geometric tests (e.g. 1e-7 x the part diagonal).
+    """
+    sad = BRepAdaptor_Surface(support)
+    hads = [BRepAdaptor_Surface(h.face) for h in halves]
+    kinds = {a.GetType() for a in hads}
+    if kinds == {GeomAbs_Cylinder} and sad.GetType() == GeomAbs_Plane:
+        return _extrusion(support, halves, hads, tol)
+    if kinds <= {GeomAbs_Torus, GeomAbs_Cylinder} and GeomAbs_Torus in kinds:
+        return _revolution(support, halves, hads, tol)
+    return "no exact surface for this face and its fillet halves (fitting not implemented)"
+
+
+def _extrusion(support: Any, halves: list[Half], hads: list[Any], tol: float) -> Any:
+    dirs = [_axis(a)[1] for a in hads]
+    d = dirs[0]
+    if any(np.linalg.norm(np.cross(d, e)) > 1e-9 for e in dirs[1:]):
+        return "fillets along non-parallel edges of one plane: no extrusion (not supported)"
+    n = xyz(BRepAdaptor_Surface(support).Plane().Axis().Direction())
+    if abs(n @ d) > 1e-9:
+        return "fillet axis not parallel to the supporting plane"
+    pts = _boundary_samples(support)
+    o = pts[0]
+
+    def proj(p: Array) -> Array:
+        return p - np.outer((p - o) @ d, d) if p.ndim == 2 else p - ((p - o) @ d) * d
+
+    ext = _line_extent(proj(pts), tol)
+    if ext is None:
+        return "supporting plane's section is not a line"
+    arcs = [proj(_half_points(h)) for h in halves]
+    pieces = _chain(ext, arcs, 10 * tol)
+    if isinstance(pieces, str):
+        return pieces
+    profile = _join(pieces, tol)
+    surf = Geom_SurfaceOfLinearExtrusion(profile, gp_Dir(*map(float, d)))
+    return MergedSurface(surf, "extrusion", profile)
+
+
+def _revolution(support: Any, halves: list[Half], hads: list[Any], tol: float) -> Any:
+    axes = [_axis(a) for a in hads]
+    c, a = axes[0]
+    for c2, a2 in axes[1:]:
+        off = (c2 - c) - ((c2 - c) @ a) * a
+        if np.linalg.norm(np.cross(a, a2)) > 1e-9 or np.linalg.norm(off) > tol:
+            return "fillet halves on different axes: no revolution (not supported)"
+    sad = BRepAdaptor_Surface(support)
+    sk = sad.GetType()
+    if sk == GeomAbs_Plane:
+        if np.linalg.norm(np.cross(xyz(sad.Plane().Axis().Direction()), a)) > 1e-9:
+            return "supporting plane not normal to the fillet axis"
+    elif sk in (GeomAbs_Cylinder, GeomAbs_Cone):
+        c2, a2 = _axis(sad)
+        off = (c2 - c) - ((c2 - c) @ a) * a
+        if np.linalg.norm(np.cross(a, a2)) > 1e-9 or np.linalg.norm(off) > tol:
+            return "supporting face not coaxial with its fillet"
+    else:
+        return "supporting face is not a plane, cylinder or cone: no revolution"
+    tor = next(h for h in hads if h.GetType() == GeomAbs_Torus).Torus()
+    x0 = xyz(tor.XAxis().Direction())
+    x0 = x0 - (x0 @ a) * a
+    x0 /= np.linalg.norm(x0)
+
+    def meridian(p: Array) -> Array:
+        r = p - c
+        z = r @ a
+        rho = np.linalg.norm(r - np.outer(z, a), axis=1)
+        return c + np.outer(rho, x0) + np.outer(z, a)
+
+    pts = meridian(_boundary_samples(support))
+    if np.min(np.linalg.norm(pts - c - np.outer((pts - c) @ a, a), axis=1)) < 10 * tol:
+        return "supporting face reaches the axis (pole): not supported"
+    ext = _line_extent(pts, tol)
+    if ext is None:
+        return "supporting face's meridian section is not a line"
+    arcs = [meridian(_half_points(h)) for h in halves]
+    pieces = _chain(ext, arcs, 10 * tol)
+    if isinstance(pieces, str):
+        return pieces
+    # Keep the free ends of a plane's radial line away from the axis.
+    profile = _join(pieces, tol)
+    surf = Geom_SurfaceOfRevolution(profile, gp_Ax1(_p(c), gp_Dir(*map(float, a))))
+    return MergedSurface(surf, "revolution", profile)

@@ -1,0 +1,155 @@
+"""Reading STEP / IGES / BRep files, healing, several solids, and bad input."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("OCP")
+
+from OCP.BRep import BRep_Builder  # noqa: E402
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge  # noqa: E402
+from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox  # noqa: E402
+from OCP.BRepTools import BRepTools  # noqa: E402
+from OCP.gp import gp_Pnt  # noqa: E402
+from OCP.IGESControl import IGESControl_Writer  # noqa: E402
+from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer  # noqa: E402
+from OCP.TopAbs import TopAbs_FACE, TopAbs_SHELL  # noqa: E402
+from OCP.TopExp import TopExp_Explorer  # noqa: E402
+from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Shell  # noqa: E402
+
+from medax.cad import parts  # noqa: E402
+from medax.cad.classify import classify_file, classify_solid  # noqa: E402
+from medax.cad.reader import count, read_part  # noqa: E402
+from medax.errors import CadError  # noqa: E402
+
+
+def write_step(shape, path: Path) -> Path:
+    w = STEPControl_Writer()
+    w.Transfer(shape, STEPControl_AsIs)
+    assert int(w.Write(str(path))) == 1  # IFSelect_RetDone
+    return path
+
+
+def test_step_round_trip_keeps_the_classification(tmp_path):
+    built = parts.plate_with_boss()
+    direct = classify_solid(built.shape).counts()
+    path = write_step(built.shape, tmp_path / "boss.step")
+    part = read_part(path)
+    assert part.unit == "mm" and part.file_unit.startswith("milli")
+    assert len(part.solids) == 1
+    (c,) = classify_file(str(path))
+    assert c.counts() == direct
+    assert c.source == str(path)
+
+
+def test_brep_and_iges_are_read(tmp_path):
+    built = parts.pocket()
+    brep = tmp_path / "pocket.brep"
+    assert BRepTools.Write_s(built.shape, str(brep))
+    assert classify_file(str(brep))[0].counts()["fillet"] == 4
+    iges = tmp_path / "pocket.igs"
+    w = IGESControl_Writer("MM", 1)
+    w.AddShape(built.shape)
+    w.ComputeModel()
+    assert w.Write(str(iges))
+    part = read_part(iges)
+    assert len(part.solids) == 1
+    assert count(part.solids[0], TopAbs_FACE) == count(built.shape, TopAbs_FACE)
+
+
+def test_unify_same_domain_merges_split_faces(tmp_path):
+    """Two boxes fused side by side: 11 split faces before, a single 6-face box after."""
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Fuse
+
+    a = BRepPrimAPI_MakeBox(10.0, 10.0, 10.0).Shape()
+    b = BRepPrimAPI_MakeBox(gp_Pnt(10.0, 0.0, 0.0), 10.0, 10.0, 10.0).Shape()
+    fused = BRepAlgoAPI_Fuse(a, b).Shape()
+    assert count(fused, TopAbs_FACE) == 10
+    path = write_step(fused, tmp_path / "fused.step")
+    assert count(read_part(path).solids[0], TopAbs_FACE) == 6
+    assert count(read_part(path, unify=False).solids[0], TopAbs_FACE) == 10
+
+
+def test_several_solids_each_classified(tmp_path):
+    comp = TopoDS_Compound()
+    bld = BRep_Builder()
+    bld.MakeCompound(comp)
+    bld.Add(comp, parts.pocket().shape)
+    bld.Add(comp, parts.stepped_shaft().shape)
+    path = write_step(comp, tmp_path / "two.step")
+    part = read_part(path)
+    assert len(part.solids) == 2
+    assert any("2 solids" in n for n in part.notes)
+    cs = classify_file(str(path))
+    assert sorted(c.counts()["fillet"] for c in cs) == [2, 4]
+    assert [c.solid for c in cs] == [0, 1]
+
+
+# ---- bad input ----------------------------------------------------------------------------
+def _err(path: Path) -> str:
+    with pytest.raises(CadError) as info:
+        read_part(path)
+    msg = str(info.value)
+    assert "\n" not in msg and str(path) in msg
+    return msg
+
+
+def test_missing_file(tmp_path):
+    assert "no such file" in _err(tmp_path / "nope.step")
+
+
+def test_empty_file(tmp_path):
+    p = tmp_path / "empty.step"
+    p.write_bytes(b"")
+    assert "empty" in _err(p)
+
+
+def test_truncated_step(tmp_path):
+    full = write_step(parts.pocket().shape, tmp_path / "full.step").read_bytes()
+    for frac in (0.1, 0.5, 0.9):
+        p = tmp_path / f"cut{frac}.step"
+        p.write_bytes(full[: int(frac * len(full))])
+        _err(p)
+
+
+def test_garbage_with_step_extension(tmp_path):
+    p = tmp_path / "junk.stp"
+    p.write_text("this is not a STEP file\n")
+    assert "not a readable STEP" in _err(p)
+
+
+def test_unknown_extension(tmp_path):
+    p = tmp_path / "part.obj"
+    p.write_text("v 0 0 0\n")
+    assert "unknown extension" in _err(p)
+
+
+def test_step_with_only_a_curve(tmp_path):
+    edge = BRepBuilderAPI_MakeEdge(gp_Pnt(0, 0, 0), gp_Pnt(1, 2, 3)).Edge()
+    p = write_step(edge, tmp_path / "curve.step")
+    assert "no solid" in _err(p)
+
+
+def test_open_shell(tmp_path):
+    box = BRepPrimAPI_MakeBox(10.0, 10.0, 10.0).Shape()
+    shell = TopoDS_Shell()
+    bld = BRep_Builder()
+    bld.MakeShell(shell)
+    exp = TopExp_Explorer(box, TopAbs_FACE)
+    for _ in range(5):  # five of six faces: an open box
+        bld.Add(shell, TopoDS.Face(exp.Current()))
+        exp.Next()
+    p = tmp_path / "open.brep"
+    assert BRepTools.Write_s(shell, str(p))
+    assert "not closed" in _err(p)
+
+
+def test_closed_shell_is_made_a_solid(tmp_path):
+    box = BRepPrimAPI_MakeBox(10.0, 10.0, 10.0).Shape()
+    exp = TopExp_Explorer(box, TopAbs_SHELL)
+    p = tmp_path / "shell.brep"
+    assert BRepTools.Write_s(exp.Current(), str(p))
+    part = read_part(p)
+    assert len(part.solids) == 1 and count(part.solids[0], TopAbs_FACE) == 6
