@@ -1,0 +1,289 @@
+"""Parametric surfaces ``x = S(u, v)`` as embeddings of the parameter plane into space.
+
+numpy only. Each class implements :class:`medax.geometry.embedding.Embedding` with an exact
+(analytic) jacobian, vectorised over points: ``evaluate(p)`` maps ``p`` (n, 2) to (n, 3),
+``jacobian(p)`` gives ``[dS/du, dS/dv]`` as (n, 3, 2). Parametrisations follow OpenCASCADE's
+(``Geom_*`` surfaces), so a CAD face's pcurves can be used as they are: the frame
+``origin, x, y, z`` is orthonormal, ``u`` the angle around ``z`` (radians) where relevant.
+
+- plane:    ``S = o + u x + v y``
+- cylinder: ``S = o + r (cos u x + sin u y) + v z``
+- cone:     ``S = o + (r + v sin a)(cos u x + sin u y) + v cos a z`` (``a`` semi-angle)
+- sphere:   ``S = o + r cos v (cos u x + sin u y) + r sin v z``
+- torus:    ``S = o + (R + r cos v)(cos u x + sin u y) + r sin v z``
+- NURBS:    tensor-product rational B-spline, poles (nu, nv, 3), optional weights (nu, nv)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from medax.errors import InputError
+from medax.geometry._types import FloatArray
+
+
+def _p(p: FloatArray) -> tuple[FloatArray, FloatArray]:
+    a = np.atleast_2d(np.asarray(p, dtype=np.float64))
+    return a[:, 0], a[:, 1]
+
+
+@dataclass(frozen=True)
+class Frame:
+    """An orthonormal frame: ``origin`` (3,), axes ``x``, ``y``, ``z`` (3,) each."""
+
+    origin: FloatArray
+    x: FloatArray
+    y: FloatArray
+    z: FloatArray
+
+    @classmethod
+    def make(cls, origin, x, y, z=None) -> Frame:  # type: ignore[no-untyped-def]
+        """A frame from possibly unnormalised axes (``z = x cross y`` when omitted)."""
+        o = np.asarray(origin, dtype=np.float64).reshape(3)
+        xa = np.asarray(x, dtype=np.float64).reshape(3)
+        ya = np.asarray(y, dtype=np.float64).reshape(3)
+        xa = xa / np.linalg.norm(xa)
+        ya = ya - xa * float(xa @ ya)
+        ya = ya / np.linalg.norm(ya)
+        za = np.cross(xa, ya) if z is None else np.asarray(z, dtype=np.float64).reshape(3)
+        za = za / np.linalg.norm(za)
+        if abs(abs(float(np.dot(np.cross(xa, ya), za))) - 1.0) > 1e-9:
+            raise InputError("surface frame axes are not orthonormal")
+        return cls(o, xa, ya, za)
+
+    def radial(self, u: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """``cos u x + sin u y`` and its u-derivative, each (n, 3)."""
+        c, s = np.cos(u)[:, None], np.sin(u)[:, None]
+        return c * self.x + s * self.y, -s * self.x + c * self.y
+
+
+class _Surface:
+    dim = 3
+    is_identity = False
+
+    def evaluate(self, p: FloatArray) -> FloatArray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def jacobian(self, p: FloatArray) -> FloatArray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def normal(self, p: FloatArray) -> FloatArray:
+        """Unit normals ``dS/du x dS/dv`` normalised, (n, 3) (NaN at singular points)."""
+        j = self.jacobian(p)
+        n = np.cross(j[:, :, 0], j[:, :, 1])
+        norm = np.linalg.norm(n, axis=1, keepdims=True)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return n / norm
+
+
+def _stack(du: FloatArray, dv: FloatArray) -> FloatArray:
+    return np.stack((du, dv), axis=2)
+
+
+@dataclass(frozen=True)
+class PlaneSurface(_Surface):
+    frame: Frame
+
+    def evaluate(self, p: FloatArray) -> FloatArray:
+        u, v = _p(p)
+        f = self.frame
+        return f.origin + u[:, None] * f.x + v[:, None] * f.y
+
+    def jacobian(self, p: FloatArray) -> FloatArray:
+        u, _ = _p(p)
+        n = len(u)
+        return _stack(np.broadcast_to(self.frame.x, (n, 3)), np.broadcast_to(self.frame.y, (n, 3)))
+
+
+@dataclass(frozen=True)
+class CylinderSurface(_Surface):
+    frame: Frame
+    radius: float
+
+    def evaluate(self, p: FloatArray) -> FloatArray:
+        u, v = _p(p)
+        rad, _ = self.frame.radial(u)
+        return self.frame.origin + self.radius * rad + v[:, None] * self.frame.z
+
+    def jacobian(self, p: FloatArray) -> FloatArray:
+        u, _ = _p(p)
+        _, drad = self.frame.radial(u)
+        return _stack(self.radius * drad, np.broadcast_to(self.frame.z, (len(u), 3)))
+
+
+@dataclass(frozen=True)
+class ConeSurface(_Surface):
+    frame: Frame
+    radius: float
+    semi_angle: float
+
+    def evaluate(self, p: FloatArray) -> FloatArray:
+        u, v = _p(p)
+        rad, _ = self.frame.radial(u)
+        a = self.semi_angle
+        r = (self.radius + v * np.sin(a))[:, None]
+        return self.frame.origin + r * rad + (v * np.cos(a))[:, None] * self.frame.z
+
+    def jacobian(self, p: FloatArray) -> FloatArray:
+        u, v = _p(p)
+        rad, drad = self.frame.radial(u)
+        a = self.semi_angle
+        r = (self.radius + v * np.sin(a))[:, None]
+        return _stack(r * drad, np.sin(a) * rad + np.cos(a) * self.frame.z)
+
+
+@dataclass(frozen=True)
+class SphereSurface(_Surface):
+    frame: Frame
+    radius: float
+
+    def evaluate(self, p: FloatArray) -> FloatArray:
+        u, v = _p(p)
+        rad, _ = self.frame.radial(u)
+        r = self.radius
+        return self.frame.origin + r * (
+            np.cos(v)[:, None] * rad + np.sin(v)[:, None] * self.frame.z
+        )
+
+    def jacobian(self, p: FloatArray) -> FloatArray:
+        u, v = _p(p)
+        rad, drad = self.frame.radial(u)
+        r = self.radius
+        cv, sv = np.cos(v)[:, None], np.sin(v)[:, None]
+        return _stack(r * cv * drad, r * (-sv * rad + cv * self.frame.z))
+
+
+@dataclass(frozen=True)
+class TorusSurface(_Surface):
+    frame: Frame
+    major_radius: float
+    minor_radius: float
+
+    def evaluate(self, p: FloatArray) -> FloatArray:
+        u, v = _p(p)
+        rad, _ = self.frame.radial(u)
+        big, r = self.major_radius, self.minor_radius
+        ring = (big + r * np.cos(v))[:, None]
+        return self.frame.origin + ring * rad + (r * np.sin(v))[:, None] * self.frame.z
+
+    def jacobian(self, p: FloatArray) -> FloatArray:
+        u, v = _p(p)
+        rad, drad = self.frame.radial(u)
+        big, r = self.major_radius, self.minor_radius
+        ring = (big + r * np.cos(v))[:, None]
+        dv = (-r * np.sin(v))[:, None] * rad + (r * np.cos(v))[:, None] * self.frame.z
+        return _stack(ring * drad, dv)
+
+
+# ---- NURBS --------------------------------------------------------------------------------
+def basis_and_derivative(
+    knots: FloatArray, degree: int, t: FloatArray
+) -> tuple[np.ndarray, FloatArray, FloatArray]:
+    """Non-zero B-spline basis functions and their first derivatives at ``t`` (n,).
+
+    ``knots`` is the full (clamped or not) knot vector with repeated entries. Returns the
+    span index (n,) ``i`` (functions ``N_{i-p..i}`` are non-zero), values (n, p+1) and
+    derivatives (n, p+1). Vectorised Cox-de Boor (The NURBS Book, A2.2 and A2.3).
+    """
+    kn = np.asarray(knots, dtype=np.float64)
+    t = np.asarray(t, dtype=np.float64)
+    p = int(degree)
+    m = kn.size - 1
+    n_ctrl = m - p
+    lo, hi = kn[p], kn[n_ctrl]
+    t = np.clip(t, lo, hi)
+    span = np.searchsorted(kn, t, side="right") - 1
+    span = np.clip(span, p, n_ctrl - 1)
+    nn = t.size
+    left = np.zeros((nn, p + 1))
+    right = np.zeros((nn, p + 1))
+    # ndu[:, j, r]: table of the NURBS Book; basis values of degree j in row j
+    ndu = np.zeros((nn, p + 1, p + 1))
+    ndu[:, 0, 0] = 1.0
+    for j in range(1, p + 1):
+        left[:, j] = t - kn[span + 1 - j]
+        right[:, j] = kn[span + j] - t
+        saved = np.zeros(nn)
+        for r in range(j):
+            ndu[:, j, r] = right[:, r + 1] + left[:, j - r]  # knot differences
+            denom = ndu[:, j, r]
+            with np.errstate(invalid="ignore", divide="ignore"):
+                temp = np.where(denom != 0.0, ndu[:, r, j - 1] / denom, 0.0)
+            ndu[:, r, j] = saved + right[:, r + 1] * temp
+            saved = left[:, j - r] * temp
+        ndu[:, j, j] = saved
+    values = ndu[:, :, p].copy()  # N_{i-p+r, p} for r = 0..p
+    ders = np.zeros((nn, p + 1))
+    if p > 0:
+        # N'_{k,p} = p (N_{k,p-1} / (u_{k+p} - u_k) - N_{k+1,p-1} / (u_{k+p+1} - u_{k+1}))
+        lower = ndu[:, :p, p - 1]  # N_{i-p+1+r, p-1} for r = 0..p-1
+        for r in range(p + 1):
+            k = span - p + r
+            acc = np.zeros(nn)
+            if r >= 1:
+                d = kn[k + p] - kn[k]
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    acc += np.where(d != 0.0, lower[:, r - 1] / d, 0.0)
+            if r <= p - 1:
+                d = kn[k + p + 1] - kn[k + 1]
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    acc -= np.where(d != 0.0, lower[:, r] / d, 0.0)
+            ders[:, r] = p * acc
+    return span, values, ders
+
+
+@dataclass(frozen=True)
+class NurbsSurface(_Surface):
+    """Tensor-product NURBS surface on its own knot domain (OCCT's parameters).
+
+    ``poles`` (nu, nv, 3); ``weights`` (nu, nv) positive or None (polynomial); ``uknots``
+    and ``vknots`` full knot vectors with repeats, lengths ``nu + udeg + 1`` and
+    ``nv + vdeg + 1``.
+    """
+
+    poles: FloatArray
+    udeg: int
+    vdeg: int
+    uknots: FloatArray
+    vknots: FloatArray
+    weights: FloatArray | None = None
+    _hom: FloatArray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        poles = np.asarray(self.poles, dtype=np.float64)
+        nu, nv = poles.shape[:2]
+        if poles.ndim != 3 or poles.shape[2] != 3:
+            raise InputError(f"NURBS poles must be (nu, nv, 3), got {poles.shape}")
+        if len(self.uknots) != nu + self.udeg + 1 or len(self.vknots) != nv + self.vdeg + 1:
+            raise InputError("NURBS knot vectors must have n + degree + 1 entries")
+        w = np.ones((nu, nv)) if self.weights is None else np.asarray(self.weights, float)
+        if w.shape != (nu, nv) or np.any(w <= 0.0):
+            raise InputError("NURBS weights must be positive, shape (nu, nv)")
+        hom = np.concatenate((poles * w[:, :, None], w[:, :, None]), axis=2)
+        object.__setattr__(self, "_hom", hom)
+
+    def _parts(self, p: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        u, v = _p(p)
+        su, nu_, du_ = basis_and_derivative(self.uknots, self.udeg, u)
+        sv, nv_, dv_ = basis_and_derivative(self.vknots, self.vdeg, v)
+        iu = su[:, None] - self.udeg + np.arange(self.udeg + 1)[None, :]  # (n, pu+1)
+        iv = sv[:, None] - self.vdeg + np.arange(self.vdeg + 1)[None, :]  # (n, pv+1)
+        block = self._hom[iu[:, :, None], iv[:, None, :]]  # (n, pu+1, pv+1, 4)
+        h = np.einsum("na,nb,nabk->nk", nu_, nv_, block)
+        hu = np.einsum("na,nb,nabk->nk", du_, nv_, block)
+        hv = np.einsum("na,nb,nabk->nk", nu_, dv_, block)
+        return h, hu, hv
+
+    def evaluate(self, p: FloatArray) -> FloatArray:
+        h, _, _ = self._parts(p)
+        return h[:, :3] / h[:, 3:]
+
+    def jacobian(self, p: FloatArray) -> FloatArray:
+        h, hu, hv = self._parts(p)
+        w = h[:, 3:]
+        x = h[:, :3] / w
+        du = (hu[:, :3] - hu[:, 3:] * x) / w
+        dv = (hv[:, :3] - hv[:, 3:] * x) / w
+        return _stack(du, dv)
