@@ -138,11 +138,11 @@ def edge_curve(edge: Any) -> tuple[Any, float, float]:
 
 def face_inside_point(face: Any) -> Array | None:
     """A point inside ``face`` (3,), found on a UV grid with the face classifier."""
-    from OCP.BRepTopAdaptor import BRepTopAdaptor_FClass2d
     from OCP.gp import gp_Pnt2d
+    from OCP.IntTools import IntTools_FClass2d
     from OCP.TopAbs import TopAbs_IN
 
-    cls = BRepTopAdaptor_FClass2d(face, 1e-9)
+    cls = IntTools_FClass2d(face, 1e-9)
     u0, u1, v0, v1 = uv_bounds(face)
     surf = BRepAdaptor_Surface(face)
     for fu in (0.5, 0.3, 0.7, 0.1, 0.9, 0.2, 0.8):

@@ -14,10 +14,8 @@ from typing import Any
 
 import numpy as np
 from OCP.BRep import BRep_Builder, BRep_Tool
-from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge
 from OCP.BRepLib import BRepLib
-from OCP.BRepLProp import BRepLProp_SLProps
 from OCP.Geom import Geom_TrimmedCurve
 from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
 from OCP.GeomConvert import GeomConvert, GeomConvert_CompCurveToBSplineCurve
@@ -152,7 +150,5 @@ def build_solid(
     fix.Perform()
     result = fix.Shape()
     BRepLib.SameParameter_s(result, tol, True)
-    return result, faces
-
-
-__all__ = ["build_solid", "BRepLProp_SLProps", "BRepAdaptor_Surface"]
+    ctx = fix.Context()
+    return result, [TopoDS.Face(ctx.Apply(f)) for f in faces]
