@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 from scipy.interpolate import BSpline as _ScipyBSpline
 
@@ -64,9 +66,34 @@ class BSpline(Curve):
     def complexity(self) -> int:
         return max(1, int(np.unique(self.knots).size - 1))
 
+    @cached_property
+    def _pieces(self) -> tuple[FloatArray, tuple[FloatArray, FloatArray, FloatArray]]:
+        """Break points (m+1,) and polynomial coefficients of value, first and second
+        derivative, each (degree+1, m, dim[+1]) in powers of ``t - x_i`` (scipy's PPoly
+        layout). Evaluating them by Horner's rule costs a few numpy operations for all
+        points, where scipy's BSpline call pays its overhead once per call and derivative."""
+        x = np.unique(self.knots)
+        k = self.degree
+        # Taylor coefficients at each interval start (right limits: scipy evaluates a knot
+        # with the interval to its right)
+        taylor = np.array([np.asarray(self._spl(x[:-1], nu)) for nu in range(k + 1)])
+        fact = np.array([float(np.prod(np.arange(1, nu + 1))) for nu in range(k + 1)])
+        c0 = (taylor / fact[:, None, None])[::-1]  # highest power first
+        powers = np.arange(k, -1, -1, dtype=np.float64)[:, None, None]
+        c1 = (c0 * powers)[:-1]
+        c2 = (c1 * (powers[1:] if k >= 1 else powers))[:-1] if k >= 2 else np.zeros_like(c0[:1])
+        return x, (c0, c1, c2)
+
     def _raw(self, t: FloatArray, nu: int) -> FloatArray:
+        x, coefs = self._pieces
         t = np.clip(np.asarray(t, dtype=np.float64), 0.0, 1.0)
-        return np.asarray(self._spl(t, nu))
+        i = np.clip(np.searchsorted(x, t, side="right") - 1, 0, len(x) - 2)
+        s = (t - x[i])[:, None]
+        c = coefs[nu]
+        out = c[0, i]
+        for m in range(1, c.shape[0]):
+            out = out * s + c[m, i]
+        return out
 
     def evaluate(self, t: FloatArray) -> FloatArray:
         h = self._raw(t, 0)

@@ -118,16 +118,19 @@ def closest_near(curve: Curve, points: FloatArray, t0: FloatArray, width: float)
     return Closest(t=t, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
 
 
-def closest_by_search(curve: Curve, points: FloatArray, k: int = 4) -> Closest:
-    """Generic global closest-point query (see :meth:`Curve.closest`)."""
-    ts, pts, tree = curve._search
+def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
+    """Generic global closest-point query (see :meth:`Curve.closest`).
+
+    Candidates are the ``k`` best local minima of the distance over the dense samples
+    (distinct parts of the curve, not neighbouring samples of one part); each is refined in
+    the bracket of its two neighbouring samples.
+    """
+    ts, _, _ = curve._search
     n = points.shape[0]
-    k = min(k, ts.size)
-    _, idx = tree.query(points, k=k)
-    idx = np.asarray(idx).reshape(n, k)
+    cand = _candidate_samples(curve, points, k)
     dt = ts[1] - ts[0]
-    lo = np.clip(ts[idx] - dt, 0.0, 1.0).ravel()
-    hi = np.clip(ts[idx] + dt, 0.0, 1.0).ravel()
+    lo = np.clip(ts[cand] - dt, 0.0, 1.0).ravel()
+    hi = np.clip(ts[cand] + dt, 0.0, 1.0).ravel()
     x = np.repeat(points, k, axis=0)
     t = _bracketed_newton(curve, x, lo, hi)
     foot = curve.evaluate(t)
@@ -137,6 +140,35 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 4) -> Closest:
     t = t.reshape(n, k)[rows, best]
     foot = foot.reshape(n, k, -1)[rows, best]
     return Closest(t=t, foot=foot, distance=dist[rows, best])
+
+
+_BLOCK = 2_000_000  # entries of the point x sample distance table per block
+
+
+def _candidate_samples(curve: Curve, points: FloatArray, k: int) -> np.ndarray:
+    """Indices (n, k) of the ``k`` nearest local minima of the sample distance per point."""
+    ts, pts, tree = curve._search
+    n, m = points.shape[0], pts.shape[0]
+    if m * n > 50 * _BLOCK:  # very long curves: nearest samples from the k-d tree
+        _, idx = tree.query(points, k=4 * k)
+        return np.asarray(idx)[:, ::4][:, :k]
+    out = np.empty((n, k), dtype=np.int64)
+    rows = max(1, _BLOCK // m)
+    for s in range(0, n, rows):
+        x = points[s : s + rows]
+        d2 = np.einsum("nmj,nmj->nm", x[:, None, :] - pts[None], x[:, None, :] - pts[None])
+        pad = np.pad(d2, ((0, 0), (1, 1)), constant_values=np.inf)
+        is_min = (d2 <= pad[:, :-2]) & (d2 <= pad[:, 2:])
+        score = np.where(is_min, d2, np.inf)
+        if k < m:
+            part = np.argpartition(score, k - 1, axis=1)[:, :k]
+        else:
+            part = np.tile(np.arange(m), (len(x), 1))[:, :k]
+        # rows with fewer than k local minima repeat their best one
+        best = np.argmin(score, axis=1)
+        part = np.where(np.isfinite(np.take_along_axis(score, part, 1)), part, best[:, None])
+        out[s : s + rows] = part
+    return out
 
 
 def _bracketed_newton(
@@ -179,10 +211,11 @@ def _bracketed_newton(
         with np.errstate(divide="ignore", invalid="ignore"):
             step = np.where(dg > 0.0, g / dg, np.inf)
         new = sa - step
-        bad = ~np.isfinite(new) | (new <= aa) | (new >= bb)
-        new = np.where(bad, 0.5 * (aa + bb), new)
         # the distance is stationary at the foot: |dt| < 1e-10 leaves it exact to round-off
-        done = (np.abs(new - sa) <= 1e-10) & ~bad | (bb - aa <= 4e-16) | (g == 0.0)
+        small = np.abs(step) <= 1e-10
+        bad = ~np.isfinite(new) | (new < aa) | (new > bb)
+        new = np.where(small, np.clip(new, aa, bb), np.where(bad, 0.5 * (aa + bb), new))
+        done = small | (bb - aa <= 4e-16) | (g == 0.0)
         a[ia], b[ia], s[ia] = aa, bb, new
         active[ia[done]] = False
     t[interior] = s
