@@ -128,10 +128,19 @@ class Region:
         return np.array([self.space_curve(k).length() for k in range(4)])
 
     def contains(self, p: FloatArray) -> np.ndarray:
-        """Whether parameter points ``p`` (n, 2) are inside (even-odd on the sampled boundary)."""
-        from matplotlib.path import Path  # noqa: PLC0415  (lazy: only for this test)
-
-        return np.asarray(Path(self.boundary).contains_points(np.asarray(p)), dtype=bool)
+        """Whether parameter points ``p`` (n, 2) are inside: even-odd crossing count against
+        the sampled boundary, all points and edges at once."""
+        q = np.atleast_2d(np.asarray(p, dtype=np.float64))
+        a = self.boundary
+        b = np.roll(a, -1, axis=0)
+        px, py = q[:, 0:1], q[:, 1:2]
+        straddle = (a[None, :, 1] > py) != (b[None, :, 1] > py)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x_cross = a[None, :, 0] + (py - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0]) / (
+                b[None, :, 1] - a[None, :, 1]
+            )
+        hits = straddle & (px < x_cross)
+        return np.asarray(np.sum(hits, axis=1) % 2 == 1)
 
     # ---- checks ---------------------------------------------------------------------------
     def check(self) -> None:
