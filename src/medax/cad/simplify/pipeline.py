@@ -269,6 +269,8 @@ def _attempt(work, sel, medials, surfaces, fmap, diag, vol0, tol) -> _Attempt | 
         shape, faces = build_solid(split, groups, used, BUILD_TOL * diag)
     except CadError as err:
         return str(err)
+    except Exception as err:  # OCCT Standard_Failure subclasses, translated here
+        return f"OCCT failed while rebuilding ({type(err).__name__}: {err})"
     c = check(shape)
     if not c.valid:
         return "rebuilt solid not valid (BRepCheck_Analyzer)"

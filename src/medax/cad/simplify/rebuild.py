@@ -29,6 +29,7 @@ from medax.cad.simplify.groups import Group, Run
 from medax.cad.simplify.occ import (
     edge_curve,
     edge_ends,
+    edge_points,
     edges_of,
     face_inside_point,
     face_normal_at,
@@ -102,15 +103,15 @@ def build_solid(
                 for k in g.members
                 if split.origin[k] == g.support
             )
-        else:
+            p = face_inside_point(ref)
+            if p is None:  # a boundary point serves too: the surfaces are smooth there
+                p = edge_points(next(edges_of(ref)), 3)[1]
+            n_out = face_normal_at(ref, p)
+            n_new, _ = _surface_normal(surf, p)
+            flip = n_out is None or float(n_out @ n_new) < 0
+        else:  # the face's own surface: its orientation says it all
             surf = BRep_Tool.Surface_s(member)
-            ref = member
-        p = face_inside_point(ref)
-        if p is None:
-            raise CadError(f"face {split.origin[g.members[0]]}: no interior point found")
-        n_out = face_normal_at(ref, p)
-        n_new, _ = _surface_normal(surf, p)
-        flip = n_out is None or float(n_out @ n_new) < 0
+            flip = member.Orientation() == TopAbs_REVERSED
         face = TopoDS_Face()
         builder.MakeFace(face, surf, tol)
         for loop in g.loops:

@@ -1,0 +1,81 @@
+"""Before/after picture of a fillet simplification: two shaded 3-D views side by side.
+
+Faces come as triangle arrays ``(m, 3, 3)`` per face (``medax.cad.simplify.tessellate``).
+Before: fillets in red, the faces that absorb fillet halves each in its own colour, the rest
+grey. After: each merged face in the colour of its supporting face, the rest grey, so the
+merged faces are visible. Rendered off-screen with matplotlib (Agg).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+GREY = (0.78, 0.78, 0.8)
+FILLET = (0.85, 0.2, 0.2)
+
+
+def _shade(tris: NDArray[np.float64], rgb: tuple[float, float, float]) -> NDArray[np.float64]:
+    n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
+    light = np.array([0.4, -0.5, 0.75])
+    light /= np.linalg.norm(light)
+    k = 0.45 + 0.55 * np.abs(n @ light)
+    return np.clip(np.outer(k, rgb), 0, 1)
+
+
+def plot_before_after(
+    before: Sequence[NDArray[np.float64]],
+    after: Sequence[NDArray[np.float64]],
+    before_colour: Sequence[int],
+    after_colour: Sequence[int],
+    path: str | Path,
+    title: str = "",
+) -> Path:
+    """Write the PNG ``path``.
+
+    ``before_colour[i]``/``after_colour[j]``: colour key of each face, ``-1`` grey, ``-2``
+    fillet red, ``k >= 0`` the ``k``-th colour of the qualitative map (same key = same new
+    face).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    cmap = plt.get_cmap("tab20")
+    fig = plt.figure(figsize=(12, 5.5))
+    allpts = np.vstack([t.reshape(-1, 3) for t in list(before) + list(after) if t.size])
+    lo, hi = allpts.min(axis=0), allpts.max(axis=0)
+    centre, half = (lo + hi) / 2, (hi - lo).max() / 2
+    for k, (faces, keys, label) in enumerate(
+        ((before, before_colour, "before"), (after, after_colour, "after"))
+    ):
+        ax = fig.add_subplot(1, 2, k + 1, projection="3d")
+        polys, colours = [], []
+        for tris, key in zip(faces, keys, strict=True):
+            if not tris.size:
+                continue
+            rgb = GREY if key == -1 else FILLET if key == -2 else cmap(key % 20)[:3]
+            polys.append(tris)
+            colours.append(_shade(tris, rgb))
+        # one collection, so matplotlib depth-sorts all triangles together
+        pc = Poly3DCollection(np.vstack(polys), facecolors=np.vstack(colours), edgecolors="none")
+        ax.add_collection3d(pc)
+        for i, c in enumerate(centre):
+            getattr(ax, "set_" + "xyz"[i] + "lim")(c - half, c + half)
+        ax.set_box_aspect((1, 1, 1))
+        ax.view_init(elev=28, azim=-58)
+        ax.set_axis_off()
+        ax.set_title(f"{label}: {len(faces)} faces")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    out = Path(path)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
