@@ -98,6 +98,7 @@ def classify_solid(
 
     corners = _corner_blends(topo, surfaces, wires, fillets, tangent)
     blend = set(fillets) | set(corners)
+    _near_misses(topo, surfaces, blend, tangent, doubts)
     edge_cls = _edge_classes(topo, tangent, blend)
     faces = _faces(topo, surfaces, blend, fillets, corners, edge_cls)
     edges = tuple(
@@ -238,6 +239,34 @@ def _corner_blends(
                 cross_of[i] = set(topo.face_edges[i])
                 changed = True
     return corners
+
+
+def _near_misses(
+    topo: Topology, surfaces: list[str], blend: set[int], tangent: np.ndarray, doubts: list[Doubt]
+) -> None:
+    """Doubt: curved non-blend faces tangent to non-blend neighbours (one-sided tangency,
+    more than four sides): looked like blends, were not taken as such."""
+    seen = {d.face for d in doubts}
+    for i in range(topo.n_faces):
+        if surfaces[i] == "plane" or i in blend or i in seen:
+            continue
+        nbrs = sorted(
+            {
+                f
+                for j in topo.face_edges[i]
+                if tangent[j]
+                for f in topo.edge_faces[j]
+                if f != i and f not in blend
+            }
+        )
+        if nbrs:
+            doubts.append(
+                Doubt(
+                    i,
+                    f"{surfaces[i]} face tangent to faces {nbrs} but not a 4-sided blend "
+                    f"tangent on both sides: not taken as a blend",
+                )
+            )
 
 
 # ---- edges and faces ----------------------------------------------------------------------
