@@ -1,0 +1,104 @@
+"""``medax simplify`` end to end on STEP files written from OCCT-built parts."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+
+from medax.cad.simplify import parts as P
+from medax.cad.simplify.step_out import write_step
+from medax.cli.main import main
+
+KEYS = {
+    "faces_before",
+    "faces_after",
+    "blends_removed",
+    "blends_kept",
+    "valid",
+    "volume_rel_change",
+    "max_deviation",
+    "face_groups",
+    "time_s",
+}
+
+
+@pytest.fixture(scope="module")
+def box_step(tmp_path_factory):
+    path = tmp_path_factory.mktemp("in") / "box4.step"
+    write_step(P.box_vertical_fillets().shape, path)
+    return path
+
+
+def test_cli_simplify_box(box_step, tmp_path, capsys):
+    out, rep, png = tmp_path / "s.step", tmp_path / "r.json", tmp_path / "ba.png"
+    code = main(
+        ["simplify", str(box_step), "-o", str(out), "--report", str(rep), "--png", str(png)]
+    )
+    assert code == 0
+    report = json.loads(rep.read_text())
+    assert KEYS <= set(report)
+    assert (report["faces_before"], report["faces_after"]) == (10, 6)
+    assert report["valid"] and abs(report["volume_rel_change"]) <= 1e-6
+    assert report["max_deviation"]["relative_to_diagonal"] <= 1e-7
+    assert png.stat().st_size > 10_000
+    # the written STEP reads back as a 6-face solid without fillets
+    assert (
+        main(
+            [
+                "simplify",
+                str(out),
+                "-o",
+                str(tmp_path / "again.step"),
+                "--report",
+                str(tmp_path / "r2.json"),
+            ]
+        )
+        == 0
+    )
+    again = json.loads((tmp_path / "r2.json").read_text())
+    assert again["faces_before"] == 6 and again["faces_after"] == 6
+    assert not again["blends_removed"] and again["valid"]
+    assert "no fillet" in " ".join(again["notes"])
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "again.step",
+        "ba.png",
+        "r.json",
+        "r2.json",
+        "s.step",
+    ]
+
+
+def test_cli_no_fillets_written_unchanged(tmp_path):
+    src = tmp_path / "plain.step"
+    write_step(BRepPrimAPI_MakeBox(10.0, 20.0, 5.0).Shape(), src)
+    out, rep = tmp_path / "o.step", tmp_path / "r.json"
+    assert main(["simplify", str(src), "-o", str(out), "--report", str(rep)]) == 0
+    report = json.loads(rep.read_text())
+    assert report["faces_before"] == report["faces_after"] == 6
+    assert report["notes"] == ["no fillets found: output equals input"]
+    assert out.exists()
+
+
+def test_cli_bad_output_fails_before_work(box_step, tmp_path, capsys):
+    out = tmp_path / "missing" / "o.step"
+    assert main(["simplify", str(box_step), "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert "does not exist" in err and err.count("\n") == 1
+    assert not out.parent.exists()
+
+
+def test_cli_missing_input(tmp_path, capsys):
+    out = tmp_path / "o.step"
+    assert main(["simplify", str(tmp_path / "nope.step"), "-o", str(out)]) == 1
+    assert "nope.step" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_truncated_step(box_step, tmp_path):
+    bad = tmp_path / "cut.step"
+    bad.write_text(box_step.read_text()[:500])
+    out = tmp_path / "o.step"
+    assert main(["simplify", str(bad), "-o", str(out)]) == 1
+    assert not out.exists()

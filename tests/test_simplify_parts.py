@@ -1,0 +1,119 @@
+"""Fillet simplification on parts built with OCCT (truth: the fillet builder's history,
+closed-form volumes, OCCT's own validity check and distances measured by BRepExtrema)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX
+
+from medax.cad.simplify import parts as P
+from medax.cad.simplify import simplify, specs_from_blend_faces, specs_from_classification
+from medax.cad.simplify.occ import count, faces_of
+from medax.cad.simplify.validate import check, face_samples, max_distance
+
+
+def _run(part: P.BuiltPart):
+    return simplify(part.shape, specs_from_blend_faces(part.shape, part.blends))
+
+
+@pytest.fixture(scope="module")
+def box4():
+    part = P.box_vertical_fillets(40.0, 30.0, 20.0, 5.0)
+    return part, _run(part)
+
+
+@pytest.fixture(scope="module")
+def boss():
+    part = P.plate_with_boss(3.0)
+    return part, _run(part)
+
+
+def test_box4_faces_valid_exact(box4):
+    part, r = box4
+    assert (r.faces_before, r.faces_after) == (10, 6)
+    assert r.faces_after == r.faces_before - len(part.blends)
+    assert sorted(r.blends_removed) == sorted(part.blends) and not r.blends_kept
+    c = check(r.shape)  # independent re-check of the written solid
+    assert c.valid and c.shells == 1 and c.closed
+    # the plain topology of a box again: 12 edges, 8 vertices
+    assert count(r.shape, TopAbs_EDGE) == 12 and count(r.shape, TopAbs_VERTEX) == 8
+    assert r.max_deviation <= 1e-7 * r.diagonal
+    assert r.medial_error <= 1e-9 * 5.0
+
+
+def test_box4_volume_matches_closed_form(box4):
+    _, r = box4
+    a, b, h, rad = 40.0, 30.0, 20.0, 5.0
+    exact = a * b * h - 4 * (rad**2 - math.pi * rad**2 / 4) * h
+    assert abs(r.volume_before - exact) <= 1e-9 * exact
+    assert abs(r.volume_after - exact) <= 1e-6 * exact
+    assert abs(r.volume_rel_change) <= 1e-6
+
+
+def test_box4_new_faces_cover_old_surface(box4):
+    """Every point of the old boundary lies on the new boundary and vice versa (BRepExtrema
+    on the whole solids, not the per-group check of the pipeline)."""
+    part, r = box4
+    old_faces, new_faces = list(faces_of(part.shape)), list(faces_of(r.shape))
+    old_pts = np.vstack([face_samples(f, 6) for f in old_faces])
+    new_pts = np.vstack([face_samples(f, 6) for f in new_faces])
+    assert max_distance(old_pts, new_faces) <= 1e-7 * r.diagonal
+    assert max_distance(new_pts, old_faces) <= 1e-7 * r.diagonal
+
+
+def test_box4_face_groups(box4):
+    part, r = box4
+    groups = r.report()["face_groups"]
+    assert sorted(g["new_face"] for g in groups) == list(range(6))
+    merged = [g for g in groups if g["fillet_halves"]]
+    assert len(merged) == 4 and all(g["surface"] == "extrusion" for g in merged)
+    # each fillet is split in two halves that go to two different faces
+    halves = sorted(h for g in merged for h in g["fillet_halves"])
+    assert halves == sorted(list(part.blends) * 2)
+    # every original face is accounted for exactly once as a whole face
+    whole = sorted(f for g in groups for f in g["original_faces"])
+    assert whole == sorted(set(range(10)) - set(part.blends))
+
+
+def test_plate_boss_revolution(boss):
+    part, r = boss
+    assert (r.faces_before, r.faces_after) == (10, 9)
+    assert r.valid and check(r.shape).valid
+    assert abs(r.volume_rel_change) <= 1e-6
+    assert r.max_deviation <= 1e-7 * r.diagonal
+    merged = [g for g in r.face_groups if g.halves]
+    assert len(merged) == 2 and {g.surface for g in merged} == {"revolution"}
+
+
+def test_box_all_edges_kept_with_reasons():
+    part = P.box_all_fillets()
+    r = _run(part)
+    assert r.faces_after == r.faces_before == 26
+    assert r.valid and not r.blends_removed
+    kept = dict(r.blends_kept)
+    assert sorted(kept) == sorted(part.blends)
+    assert all("corner" in reason for reason in kept.values())
+
+
+def test_no_fillets_unchanged():
+    box = BRepPrimAPI_MakeBox(10.0, 20.0, 30.0).Shape()
+    r = simplify(box, specs_from_blend_faces(box, []))
+    assert r.faces_after == r.faces_before == 6
+    assert r.volume_rel_change == 0.0 and r.valid
+    assert any("no fillets" in n for n in r.report()["notes"])
+
+
+def test_via_classifier_same_result():
+    """The classifier's records (issue 4) drive the same simplification."""
+    from medax.cad.classify import classify_solid
+    from medax.cad.reader import heal
+
+    part = P.box_vertical_fillets()
+    cls = classify_solid(heal(part.shape))
+    r = simplify(cls.shape, specs_from_classification(cls))
+    assert (r.faces_before, r.faces_after) == (10, 6) and r.valid
+    assert count(r.shape, TopAbs_FACE) == 6
