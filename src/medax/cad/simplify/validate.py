@@ -26,7 +26,7 @@ from OCP.BRepGProp import BRepGProp
 from OCP.gp import gp_Pnt, gp_Pnt2d
 from OCP.GProp import GProp_GProps
 from OCP.IntTools import IntTools_FClass2d
-from OCP.TopAbs import TopAbs_IN, TopAbs_SHELL
+from OCP.TopAbs import TopAbs_IN, TopAbs_OUT, TopAbs_SHELL
 from OCP.TopoDS import TopoDS_Compound
 
 from medax.cad.simplify.occ import Array, count, uv_bounds, xyz
@@ -91,19 +91,48 @@ def _compound(faces: Sequence[Any]) -> Any:
 
 
 def max_distance(points: Array, faces: Sequence[Any]) -> float:
-    """Largest distance from ``points`` (n, 3) to the union of ``faces``."""
-    target = _compound(faces)
+    """Largest distance from ``points`` (n, 3) to the union of ``faces``.
+
+    Each point is projected on each face's surface (``GeomAPI_ProjectPointOnSurf``); a foot
+    inside the face (face classifier) gives the distance. A point with no foot inside any
+    face is measured exactly with ``BRepExtrema_DistShapeShape`` against all ``faces``.
+    """
+    from OCP.BRep import BRep_Tool
+    from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
+
+    prepared = [
+        (GeomAPI_ProjectPointOnSurf(), BRep_Tool.Surface_s(f), IntTools_FClass2d(f, 1e-9))
+        for f in faces
+    ]
+    for (proj, surf, _), f in zip(prepared, faces, strict=True):
+        u0, u1, v0, v1 = uv_bounds(f)
+        du, dv = 0.1 * (u1 - u0), 0.1 * (v1 - v0)
+        proj.Init(surf, u0 - du, u1 + du, v0 - dv, v1 + dv)
+    target = None
     worst = 0.0
     for p in points:
-        v = BRepBuilderAPI_MakeVertex(gp_Pnt(*map(float, p))).Vertex()
-        d = BRepExtrema_DistShapeShape(v, target)
-        if not d.IsDone():
-            return float("inf")
-        worst = max(worst, float(d.Value()))
+        gp = gp_Pnt(*map(float, p))
+        best = float("inf")
+        for proj, _, cls in prepared:
+            proj.Perform(gp)
+            if proj.NbPoints() == 0:
+                continue
+            u, v = proj.LowerDistanceParameters()
+            if cls.Perform(gp_Pnt2d(u, v)) != TopAbs_OUT:
+                best = min(best, float(proj.LowerDistance()))
+        if best == float("inf"):
+            if target is None:
+                target = _compound(faces)
+            v = BRepBuilderAPI_MakeVertex(gp).Vertex()
+            d = BRepExtrema_DistShapeShape(v, target)
+            if not d.IsDone():
+                return float("inf")
+            best = float(d.Value())
+        worst = max(worst, best)
     return worst
 
 
-def deviation(old_faces: Sequence[Any], new_face: Any, n: int = 12) -> tuple[float, float]:
+def deviation(old_faces: Sequence[Any], new_face: Any, n: int = 8) -> tuple[float, float]:
     """(old -> new, new -> old) largest distances between ``old_faces`` and ``new_face``."""
     old_pts = np.vstack([face_samples(f, n) for f in old_faces])
     new_pts = face_samples(new_face, n)
