@@ -49,7 +49,7 @@ SURFACE_NAMES = {
 #: samples per edge for the spring/cross direction test
 DIRECTION_SAMPLES = 3
 #: samples across a face for the sweep and radius measurements
-SWEEP_SAMPLES = 24
+SWEEP_SAMPLES = 8
 
 
 @dataclass(frozen=True)

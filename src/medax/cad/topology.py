@@ -26,7 +26,7 @@ from medax import tolerances
 from medax.geometry._types import FloatArray
 
 #: samples per edge for the tangency test (interior points, ends excluded)
-TANGENCY_SAMPLES = 7
+TANGENCY_SAMPLES = 5
 
 
 @dataclass(frozen=True)
@@ -85,7 +85,7 @@ def build_topology(shape: Any) -> Topology:
         e = TopoDS.Edge(emap.FindKey(j + 1))
         faces: list[int] = []
         if ef.Contains(e):
-            for f in ef.FindFromKey(e):
+            for f in _shapes(ef.FindFromKey(e)):
                 i = fmap.FindIndex(f) - 1
                 if i >= 0 and i not in faces:
                     faces.append(i)
@@ -111,6 +111,19 @@ def build_topology(shape: Any) -> Topology:
         tuple(tuple(sorted(x)) for x in face_edges),
         tuple(degenerate),
     )
+
+
+def _shapes(lst: Any) -> list[Any]:
+    """The shapes of a ``TopTools_ListOfShape`` (Python iteration over OCP lists is slow:
+    about 0.7 ms per list; ``First``/``Last`` cover the usual one or two entries)."""
+    n = lst.Size()
+    if n == 0:
+        return []
+    if n == 1:
+        return [lst.First()]
+    if n == 2:
+        return [lst.First(), lst.Last()]
+    return list(lst)
 
 
 # ---- sampling helpers ---------------------------------------------------------------------
@@ -159,7 +172,14 @@ def face_normals(face: Any, uv: FloatArray, surf: Any = None) -> FloatArray:
         s.D1(float(u), float(v), p, du, dv)
         d[k, 0] = (du.X(), du.Y(), du.Z())
         d[k, 1] = (dv.X(), dv.Y(), dv.Z())
-    n = np.cross(d[:, 0], d[:, 1])
+    a, b = d[:, 0], d[:, 1]
+    n = np.column_stack(
+        (
+            a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1],
+            a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+            a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0],
+        )
+    )
     norm = np.linalg.norm(n, axis=1)
     scale = np.linalg.norm(d[:, 0], axis=1) * np.linalg.norm(d[:, 1], axis=1)
     good = norm > 1e-14 * np.maximum(scale, 1e-300)
@@ -170,9 +190,15 @@ def face_normals(face: Any, uv: FloatArray, surf: Any = None) -> FloatArray:
     return out
 
 
-def edge_angles(topo: Topology, j: int, samples: int = TANGENCY_SAMPLES) -> float:
+def edge_angles(
+    topo: Topology,
+    j: int,
+    samples: int = TANGENCY_SAMPLES,
+    plane_normals: dict[int, FloatArray] | None = None,
+) -> float:
     """Largest angle (radians) between the outward normals of the two faces of edge ``j``
-    over ``samples`` interior points; 0 for a seam or degenerate edge, pi for a free edge."""
+    over ``samples`` interior points; 0 for a seam or degenerate edge, pi for a free edge.
+    ``plane_normals`` (face index -> outward unit normal (3,)) short-cuts planar faces."""
     faces = topo.edge_faces[j]
     if topo.degenerate[j]:
         return 0.0
@@ -181,23 +207,40 @@ def edge_angles(topo: Topology, j: int, samples: int = TANGENCY_SAMPLES) -> floa
         return 0.0 if BRep_Tool.IsClosed_s(topo.edge(j), f) else float(np.pi)
     if len(faces) != 2:
         return float(np.pi)  # non-manifold edge: never tangent
+    pn = plane_normals or {}
+    if faces[0] in pn and faces[1] in pn:
+        cos = float(pn[faces[0]] @ pn[faces[1]])
+        return float(np.arccos(np.clip(cos, -1.0, 1.0)))
     e = topo.edge(j)
     t = edge_params(e, samples)
     normals = []
     for i in faces:
+        if i in pn:
+            normals.append(np.broadcast_to(pn[i], (samples, 3)))
+            continue
         f = topo.face(i)
         uv, _ = edge_uv(e, f, t)
         normals.append(face_normals(f, uv))
-    cos = np.sum(normals[0] * normals[1], axis=1)
-    ok = np.isfinite(cos)
+    cosv = np.sum(normals[0] * normals[1], axis=1)
+    ok = np.isfinite(cosv)
     if not np.any(ok):
         return float(np.pi)
-    return float(np.max(np.arccos(np.clip(cos[ok], -1.0, 1.0))))
+    return float(np.max(np.arccos(np.clip(cosv[ok], -1.0, 1.0))))
 
 
 def tangency(
     topo: Topology, angle_tol: float = tolerances.TANGENT_ANGLE
 ) -> tuple[np.ndarray, FloatArray]:
     """Tangency flags (n_edges,) bool and largest normal angles (n_edges,) in radians."""
-    angles = np.array([edge_angles(topo, j) for j in range(topo.n_edges)])
+    from OCP.GeomAbs import GeomAbs_Plane
+
+    planes: dict[int, FloatArray] = {}
+    for i in range(topo.n_faces):
+        f = topo.face(i)
+        s = BRepAdaptor_Surface(f, False)
+        if s.GetType() == GeomAbs_Plane:
+            n = face_normals(f, np.zeros((1, 2)), s)[0]
+            if np.all(np.isfinite(n)):
+                planes[i] = n
+    angles = np.array([edge_angles(topo, j, plane_normals=planes) for j in range(topo.n_edges)])
     return angles < angle_tol, angles
