@@ -1,0 +1,75 @@
+"""The structured grid: node numbering, quads, and the mesh result.
+
+Node ``(i, j)`` (``i = 0..n1`` along side S0 from corner 0 to corner 1, ``j = 0..n2`` along
+side S1 from corner 1 to corner 2) has index ``j * (n1 + 1) + i``. Node rows ``j = 0`` and
+``j = n2`` lie on S0 and on S2 (reversed), columns ``i = 0`` and ``i = n1`` on S3 (reversed)
+and on S1. Quads are ``(i, j), (i+1, j), (i+1, j+1), (i, j+1)``: counter-clockwise because the
+region's sides are.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from medax.geometry._types import FloatArray, IntArray
+from medax.geometry.region import Region
+from medax.mesh.quality import QuadQuality, quad_quality
+
+
+def structured_quads(n1: int, n2: int) -> IntArray:
+    """Quads (n1 * n2, 4) of an ``(n1 + 1) x (n2 + 1)`` node grid, row by row."""
+    i, j = np.meshgrid(np.arange(n1, dtype=np.int64), np.arange(n2, dtype=np.int64))
+    a = (j * (n1 + 1) + i).ravel()
+    return np.column_stack((a, a + 1, a + n1 + 2, a + n1 + 1))
+
+
+def boundary_indices(n1: int, n2: int) -> tuple[IntArray, IntArray, IntArray, IntArray]:
+    """Node indices on S0, S1, S2, S3, each in the side's own direction (corner k first)."""
+    row = n1 + 1
+    s0 = np.arange(row, dtype=np.int64)
+    s1 = n1 + row * np.arange(n2 + 1, dtype=np.int64)
+    s2 = (n2 * row + np.arange(row, dtype=np.int64))[::-1]
+    s3 = (row * np.arange(n2 + 1, dtype=np.int64))[::-1]
+    return s0, s1, s2, s3
+
+
+@dataclass(frozen=True)
+class QuadMesh:
+    """A structured quad mesh of ``region``.
+
+    ``params`` (n, 2) nodes in the parameter plane, ``points`` (n, dim) nodes in space
+    (equal to ``params`` for a planar region), ``quads`` (n1 * n2, 4) node indices, CCW.
+    ``n1``/``n2`` are the divisions along S0 and along S1; ``method`` how it was built;
+    ``info`` holds counts and timings (JSON-ready).
+    """
+
+    region: Region
+    params: FloatArray
+    points: FloatArray
+    n1: int
+    n2: int
+    method: str
+    info: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def quads(self) -> IntArray:
+        return structured_quads(self.n1, self.n2)
+
+    @property
+    def n_nodes(self) -> int:
+        return int(self.points.shape[0])
+
+    @property
+    def n_quads(self) -> int:
+        return self.n1 * self.n2
+
+    def grid(self) -> FloatArray:
+        """Space nodes as a grid ``(n2 + 1, n1 + 1, dim)``."""
+        return self.points.reshape(self.n2 + 1, self.n1 + 1, -1)
+
+    def quality(self) -> QuadQuality:
+        """Verdict metrics of the quads, measured in space."""
+        return quad_quality(self.points, self.quads)

@@ -1,0 +1,145 @@
+"""Structured quad meshes of a 4-sided region from medial axes (paper, section 4).
+
+Two methods build the same kind of grid: ``n1`` strips across the pair ``(S1, S3)`` and
+``n2`` across ``(S0, S2)``, node ``(i, j)`` the crossing of curve ``i`` of one family with
+curve ``j`` of the other (numbering in :mod:`medax.mesh.grid`).
+
+- ``"ratio"`` (default): the curves ``d_a / (d_a + d_b) = k / n`` of each pair, the tracer's
+  ``ratio`` curves, crossed directly (:mod:`medax.mesh.ratio_grid`). Any division counts.
+- ``"paper"``: the paper's recursion (:mod:`medax.mesh.split`): split along the medial axis,
+  recurse on both halves; the families' traced splines are then crossed
+  (:mod:`medax.mesh.crossings`). Division counts that are not powers of two split unequally
+  (curve ``floor(n/2)/n``); with ``size`` the paper's stopping rule applies.
+
+``size`` sets the counts: ``n = ceil(longest of the two sides a family divides / size)``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+
+import numpy as np
+
+from medax import tolerances
+from medax.errors import InputError, MeshError
+from medax.geometry.region import Region
+from medax.mesh.crossings import family_crossings
+from medax.mesh.grid import QuadMesh, boundary_indices
+from medax.mesh.ratio_grid import ratio_grid
+from medax.mesh.split import FamilyCurve, axis_family
+
+log = logging.getLogger(__name__)
+
+METHODS = ("ratio", "paper")
+#: largest division count accepted per direction
+MAX_DIVISIONS = 4096
+
+
+def divisions_for_size(region: Region, size: float) -> tuple[int, int]:
+    """Division counts ``(n1, n2)`` so that no edge on the boundary exceeds ``size``."""
+    lengths = region.side_lengths()
+    if not (math.isfinite(size) and size > 0.0):
+        raise InputError(f"size must be positive, got {size}")
+    if size > float(lengths.max()):
+        raise InputError(
+            f"size {size:g} is larger than region '{region.name}' (longest side "
+            f"{float(lengths.max()):.4g})"
+        )
+    n1 = math.ceil(max(lengths[0], lengths[2]) / size * (1.0 - 1e-12))
+    n2 = math.ceil(max(lengths[1], lengths[3]) / size * (1.0 - 1e-12))
+    return max(n1, 1), max(n2, 1)
+
+
+def mesh_region(
+    region: Region,
+    divisions: tuple[int, int] | None = None,
+    size: float | None = None,
+    method: str = "ratio",
+    tol: float = 1e-9,
+) -> QuadMesh:
+    """A structured quad mesh of ``region`` with ``divisions = (n1, n2)`` (along S0, along S1)
+    or edges of about ``size`` (region units). ``tol`` (relative to the diagonal) bounds the
+    node error of the crossings and, for ``"paper"``, the traced splines' error."""
+    if method not in METHODS:
+        raise InputError(f"unknown mesh method '{method}' (known: {', '.join(METHODS)})")
+    if (divisions is None) == (size is None):
+        raise InputError("give exactly one of divisions and size")
+    if divisions is not None:
+        n1, n2 = (int(d) for d in divisions)
+        if n1 < 1 or n2 < 1:
+            raise InputError(f"divisions must be at least 1, got {n1},{n2}")
+    else:
+        assert size is not None
+        n1, n2 = divisions_for_size(region, size)
+    if max(n1, n2) > MAX_DIVISIONS:
+        raise InputError(f"divisions {n1},{n2} exceed the limit {MAX_DIVISIONS} per direction")
+    t0 = time.perf_counter()
+    info: dict = {}
+    if method == "ratio":
+        params, info = ratio_grid(region, n1, n2, point_tol=min(tol, tolerances.POINT_TOL))
+    else:
+        params, n1, n2 = _paper_grid(region, n1, n2, size, tol)
+    info["time_s"] = time.perf_counter() - t0
+    points = region.embedding.evaluate(params)
+    mesh = QuadMesh(region, params, points, n1, n2, method, info)
+    q = mesh.quality()
+    bad = int(np.count_nonzero(q.scaled_jacobian <= 0.0))
+    if bad:
+        log.warning("region '%s': %d inverted quads", region.name, bad)
+    return mesh
+
+
+def _paper_grid(
+    region: Region, n1: int, n2: int, size: float | None, tol: float
+) -> tuple[np.ndarray, int, int]:
+    """Nodes of the paper's recursion; with ``size`` the counts come from the recursion."""
+    diag = region.diagonal
+    if size is not None:
+        fam_v = axis_family(region, (1, 3), size=size, tol=tol)  # curves S0 -> S2, S1 -> S3
+        fam_u = axis_family(region, (0, 2), size=size, tol=tol)  # curves S3 -> S1, S0 -> S2
+    else:
+        fam_v = axis_family(region, (1, 3), divisions=n1, tol=tol)
+        fam_u = axis_family(region, (0, 2), divisions=n2, tol=tol)
+    n1, n2 = len(fam_v) + 1, len(fam_u) + 1
+    params = np.full(((n1 + 1) * (n2 + 1), 2), np.nan)
+    grid = params.reshape(n2 + 1, n1 + 1, 2)
+    s = region.sides
+    # pair (1, 3): A1 = S1, B1 = S0, B2 = S2; its curves ordered from S1 to S3 = i from n1 down
+    for k, fc in enumerate(fam_v):
+        i = n1 - 1 - k
+        grid[0, i] = s[0].evaluate(np.array([fc.t_b1]))[0]
+        grid[-1, i] = s[2].evaluate(np.array([fc.t_b2]))[0]
+    # pair (0, 2): A1 = S0, B1 = S3, B2 = S1; curves ordered from S0 to S2 = j upwards
+    for k, fc in enumerate(fam_u):
+        j = k + 1
+        grid[j, 0] = s[3].evaluate(np.array([fc.t_b1]))[0]
+        grid[j, -1] = s[1].evaluate(np.array([fc.t_b2]))[0]
+    c = region.corners
+    grid[0, 0], grid[0, -1], grid[-1, -1], grid[-1, 0] = c[0], c[1], c[2], c[3]
+    if fam_u and fam_v:
+        cross = family_crossings(
+            [f.curve for f in fam_u], [f.curve for f in fam_v], 1e-2 * tol * diag,
+            what=f"region '{region.name}'",
+        )  # fmt: skip
+        # cross[j-1, k] is curve j of (0, 2) with curve k of (1, 3), i.e. node (n1-1-k, j)
+        grid[1:-1, 1:-1] = cross[:, ::-1]
+    if not np.all(np.isfinite(params)):
+        raise MeshError(f"region '{region.name}': grid has unset nodes")  # pragma: no cover
+    _check_boundary(region, params, n1, n2)
+    return params, n1, n2
+
+
+def _check_boundary(region: Region, params: np.ndarray, n1: int, n2: int) -> None:
+    """Boundary nodes must be in order along their sides (else the grid folds)."""
+    for k, idx in enumerate(boundary_indices(n1, n2)):
+        t = region.sides[k].closest(params[idx]).t
+        if np.any(np.diff(t) <= 0.0):
+            raise MeshError(
+                f"region '{region.name}': nodes on side {k} are out of order (curves of the "
+                "other family cross before reaching it)"
+            )
+
+
+__all__ = ["METHODS", "FamilyCurve", "divisions_for_size", "mesh_region"]

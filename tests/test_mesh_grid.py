@@ -1,0 +1,174 @@
+"""The mesher against exact grids and invariants; the crossing finder on synthetic families."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from medax.errors import InputError, MeshError
+from medax.geometry import Arc, Line, Region, read_regions, sample_regions_path
+from medax.mesh.crossings import family_crossings
+from medax.mesh.grid import boundary_indices, structured_quads
+from medax.mesh.mesher import divisions_for_size, mesh_region
+from medax.mesh.split import split_region
+
+REGIONS = read_regions(sample_regions_path())
+
+
+def rectangle(w: float = 6.0, h: float = 2.0) -> Region:
+    c = np.array([[1.0, -1.0], [1.0 + w, -1.0], [1.0 + w, h - 1.0], [1.0, h - 1.0]])
+    return Region.build([Line(c[k], c[(k + 1) % 4]) for k in range(4)], name="rect")
+
+
+def test_structured_quads_ccw_unit_grid():
+    q = structured_quads(3, 2)
+    assert q.shape == (6, 4)
+    pts = np.array([[i, j] for j in range(3) for i in range(4)], dtype=float)
+    p = pts[q]
+    area = 0.5 * np.sum(
+        p[:, :, 0] * np.roll(p[:, :, 1], -1, 1) - np.roll(p[:, :, 0], -1, 1) * p[:, :, 1], axis=1
+    )
+    np.testing.assert_allclose(area, 1.0)
+    s0, s1, s2, s3 = boundary_indices(3, 2)
+    assert s0.tolist() == [0, 1, 2, 3] and s1.tolist() == [3, 7, 11]
+    assert s2.tolist() == [11, 10, 9, 8] and s3.tolist() == [8, 4, 0]
+
+
+@pytest.mark.parametrize("method", ["ratio", "paper"])
+def test_rectangle_is_uniform_grid(method):
+    r = rectangle()
+    m = mesh_region(r, (6, 4), method=method)
+    x = 1.0 + 6.0 * np.arange(7) / 6
+    y = -1.0 + 2.0 * np.arange(5) / 4
+    exact = np.stack(np.meshgrid(x, y), axis=-1)
+    assert np.abs(m.grid() - exact).max() <= 1e-9 * r.diagonal
+
+
+def polar(n1: int, n2: int) -> np.ndarray:
+    rad = 5.0 + 4.0 * np.arange(n1 + 1) / n1
+    ang = np.radians(120.0) * np.arange(n2 + 1) / n2
+    return np.stack((rad[None] * np.cos(ang[:, None]), rad[None] * np.sin(ang[:, None])), -1)
+
+
+def test_annulus_sector_paper_is_polar_grid():
+    r = REGIONS["annulus_sector"]
+    m = mesh_region(r, (4, 4), method="paper")
+    assert np.abs(m.grid() - polar(4, 4)).max() <= 1e-9 * r.diagonal
+
+
+def test_annulus_sector_ratio_arcs_are_concentric():
+    """The (S1, S3) ratio curves of two concentric arcs are the equally spaced arcs."""
+    r = REGIONS["annulus_sector"]
+    m = mesh_region(r, (5, 3))
+    g = m.grid()
+    radius = np.linalg.norm(g, axis=-1)
+    want = 5.0 + 4.0 * np.arange(6) / 5
+    assert np.abs(radius - want[None]).max() <= 1e-9 * r.diagonal
+    # the middle (S0, S2) curve of a symmetric sector is the 60 degree ray... only for even n2
+    m2 = mesh_region(r, (3, 2))
+    ang = np.degrees(np.arctan2(m2.grid()[1, :, 1], m2.grid()[1, :, 0]))
+    np.testing.assert_allclose(ang, 60.0, atol=1e-9)
+
+
+@pytest.mark.parametrize("name", sorted(REGIONS))
+@pytest.mark.parametrize("div", [(7, 12), (16, 16)])
+def test_invariants_ratio(name, div):
+    r = REGIONS[name]
+    n1, n2 = div
+    m = mesh_region(r, div)
+    assert m.n_nodes == (n1 + 1) * (n2 + 1) and m.quads.shape == (n1 * n2, 4)
+    q = m.quality()
+    assert np.all(q.scaled_jacobian > 0.0)  # every quad counter-clockwise
+    diag = r.diagonal
+    for k, idx in enumerate(boundary_indices(n1, n2)):
+        side = r.sides[k]
+        d = side.closest(m.params[idx]).distance
+        assert d.max() <= 1e-9 * diag, (name, k, d.max())
+        np.testing.assert_allclose(
+            m.params[idx[[0, -1]]], [side.start, side.end], atol=1e-12 * diag
+        )
+
+
+def test_ratio_nodes_are_on_their_curves():
+    """Independent check: node (i, j) has d0/(d0+d2) = j/n2 and d1/(d1+d3) = 1 - i/n1,
+    distances by dense sampling of the sides (not the closest-point solver)."""
+    r = REGIONS["wavy"]
+    n1, n2 = 5, 4
+    m = mesh_region(r, (n1, n2))
+    dense = [s.sample(200001) for s in r.sides]
+    p = m.params
+    d = np.array(
+        [np.min(np.linalg.norm(p[:, None] - s[None, ::10], axis=2), axis=1) for s in dense]
+    )
+    # refine the coarse minimum locally with the full sampling around it
+    for k, s in enumerate(dense):
+        i0 = np.argmin(np.linalg.norm(p[:, None] - s[None, ::10], axis=2), axis=1) * 10
+        for n in range(len(p)):
+            lo, hi = max(i0[n] - 20, 0), min(i0[n] + 21, len(s))
+            d[k, n] = np.min(np.linalg.norm(s[lo:hi] - p[n], axis=1))
+    j, i = np.divmod(np.arange(len(p)), n1 + 1)
+    inner = (i > 0) & (i < n1) & (j > 0) & (j < n2)  # on a side, sampling error dominates
+    phi_a = d[0] / (d[0] + d[2])
+    phi_b = d[1] / (d[1] + d[3])
+    assert np.abs(phi_a - j / n2)[inner].max() < 1e-7
+    assert np.abs(phi_b - (1 - i / n1))[inner].max() < 1e-7
+
+
+def test_paper_invariants_and_size_rule():
+    r = REGIONS["arcs"]
+    m = mesh_region(r, size=3.0, method="paper", tol=1e-7)
+    assert m.n1 >= 4 and m.n2 >= 4
+    assert np.all(m.quality().scaled_jacobian > 0.0)
+    for k, idx in enumerate(boundary_indices(m.n1, m.n2)):
+        assert r.sides[k].closest(m.params[idx]).distance.max() <= 1e-9 * r.diagonal
+    # every boundary edge at most the size (the paper's stopping rule on B1/B2 pieces)
+    for idx in boundary_indices(m.n1, m.n2):
+        assert np.linalg.norm(np.diff(m.points[idx], axis=0), axis=1).max() <= 3.0
+
+
+def test_split_region_gives_two_valid_regions():
+    from medax.axis import trace_axis
+
+    r = REGIONS["wavy"]
+    ax = trace_axis(r, (1, 3))
+    r1, r2 = split_region(r, (1, 3), ax.spline, ax.t_start, ax.t_end)
+    for half in (r1, r2):
+        Region.build(half.sides, name="half").check()
+        assert half.signed_area() > 0
+    assert r1.signed_area() + r2.signed_area() == pytest.approx(r.signed_area(), rel=1e-4)
+
+
+def test_family_crossings_lines_and_arcs():
+    # rays at 0..90 degrees and arcs of radius 1..3 cross at known polar points
+    dirs = [np.array([np.cos(a), np.sin(a)]) for a in np.radians([10.0, 40.0, 80.0])]
+    rays = [Line(0.5 * d, 4.0 * d) for d in dirs]
+    arcs = [Arc(np.zeros(2), rad, 0.0, np.pi / 2) for rad in (1.0, 2.0, 3.0, 3.5)]
+    x = family_crossings(rays, arcs, 1e-12)
+    ang = np.radians([10.0, 40.0, 80.0])[:, None]
+    rad = np.array([1.0, 2.0, 3.0, 3.5])[None]
+    np.testing.assert_allclose(x[..., 0], rad * np.cos(ang), atol=1e-12)
+    np.testing.assert_allclose(x[..., 1], rad * np.sin(ang), atol=1e-12)
+
+
+def test_family_crossings_errors():
+    a = [Line(np.array([0.0, 0.0]), np.array([1.0, 0.0]))]
+    b = [Line(np.array([2.0, -1.0]), np.array([2.0, 1.0]))]
+    with pytest.raises(MeshError, match="does not cross"):
+        family_crossings(a, b, 1e-12)
+    wave = [Arc(np.array([0.5, 0.0]), 0.3, np.pi, -np.pi)]  # upper half circle: crosses y=0.1 twice
+    flat = [Line(np.array([0.0, 0.1]), np.array([1.0, 0.1]))]
+    with pytest.raises(MeshError, match="more than once"):
+        family_crossings(flat, wave, 1e-12)
+
+
+def test_bad_input():
+    r = REGIONS["trapezoid"]
+    with pytest.raises(InputError, match="at least 1"):
+        mesh_region(r, (0, 3))
+    with pytest.raises(InputError, match="positive"):
+        mesh_region(r, size=-1.0)
+    with pytest.raises(InputError, match="larger than region"):
+        mesh_region(r, size=100.0)
+    with pytest.raises(InputError, match="unknown mesh method"):
+        mesh_region(r, (2, 2), method="voodoo")
+    assert divisions_for_size(r, 1.0) == (10, 7)
