@@ -1,0 +1,90 @@
+"""``medax mesh`` and the mesh demo, in-process."""
+
+from __future__ import annotations
+
+import json
+
+import meshio
+import numpy as np
+import pytest
+
+from medax.cli.main import main
+from medax.geometry import sample_regions_path
+
+REGIONS = str(sample_regions_path())
+
+
+def test_mesh_vtu_report_plot(tmp_path, capsys):
+    out, rep, png = tmp_path / "m.vtu", tmp_path / "q.json", tmp_path / "m.png"
+    code = main(["mesh", REGIONS, "--region", "wavy", "--divisions", "7,12", "-o", str(out),
+                 "--report", str(rep), "--plot", str(png)])  # fmt: skip
+    assert code == 0
+    m = meshio.read(out)
+    assert len(m.points) == 8 * 13 and m.cells[0].data.shape == (84, 4)
+    r = json.loads(rep.read_text())
+    assert r["n_nodes"] == 104 and r["n_quads"] == 84 and r["time_s"] > 0
+    assert r["n_inverted"] == 0 and 0 < r["scaled_jacobian"]["min"] <= r["scaled_jacobian"]["p5"]
+    assert {"mean", "p5", "min"} <= set(r["min_angle"])
+    np.testing.assert_allclose(np.sort(m.cell_data["scaled_jacobian"][0])[0],
+                               r["scaled_jacobian"]["min"])  # fmt: skip
+    assert png.stat().st_size > 10_000
+    assert "wrote" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("ext", [".msh", ".inp", ".bdf"])
+def test_mesh_other_formats_and_size(tmp_path, ext):
+    out = tmp_path / f"m{ext}"
+    assert main(["mesh", REGIONS, "--region", "trapezoid", "--size", "1.0", "-o", str(out)]) == 0
+    m = meshio.read(out)
+    assert m.cells[0].data.shape == (70, 4)  # 10 x 7: longest sides 10 and 6.5
+
+
+def test_format_override(tmp_path):
+    out = tmp_path / "mesh.dat"
+    args = ["mesh", REGIONS, "--region", "arcs", "--divisions", "3", "-o", str(out)]
+    assert main([*args, "--format", "nastran"]) == 0
+    assert out.read_text().startswith("$ Nastran")
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--size", "0"], "must be positive"),
+        (["--size", "-2"], "must be positive"),
+        (["--size", "1000"], "larger than region"),
+        (["--divisions", "0,4"], "at least 1"),
+        (["--divisions", "a,b"], "integers"),
+        (["--divisions", "2,3,4"], "N1,N2"),
+        (["--divisions", "4", "--format", "stl"], "unknown mesh format"),
+    ],
+)
+def test_bad_input(tmp_path, capsys, extra, message):
+    out = tmp_path / "m.vtu"
+    code = main(["mesh", REGIONS, "--region", "trapezoid", *extra, "-o", str(out)])
+    assert code == 1
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_bad_paths(tmp_path, capsys):
+    base = ["mesh", REGIONS, "--region", "trapezoid", "--divisions", "4"]
+    assert main([*base, "-o", str(tmp_path / "m.stl")]) == 1
+    assert "unknown mesh file extension" in capsys.readouterr().err
+    assert main([*base, "-o", str(tmp_path / "no" / "m.vtu")]) == 1
+    assert "does not exist" in capsys.readouterr().err
+    assert main([*base, "-o", str(tmp_path / "m.vtu"), "--plot", str(tmp_path / "p.gif")]) == 1
+    assert main(["mesh", REGIONS, "--region", "nope", "--divisions", "4", "-o",
+                 str(tmp_path / "m.vtu")]) == 1  # fmt: skip
+    assert "no region named 'nope'" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_demo_mesh(tmp_path):
+    from medax.cli.demo_mesh import demo
+
+    written = demo(tmp_path)
+    assert sorted(p.suffix for p in written) == [".png", ".png", ".vtu", ".vtu"]
+    m = meshio.read(next(p for p in written if p.name.startswith("mesh-fig17")))
+    assert m.cells[0].data.shape == (16 * 17, 4)
+    assert np.all(m.cell_data["scaled_jacobian"][0] > 0)
