@@ -109,11 +109,12 @@ class FilletRecord:
 
     ``smooth_edges[k]`` is the chain of edges (usually one) of constraint side ``k`` in the
     face's wire order; these are tangent to ``supporting[k]`` (the supporting faces across
-    the constraint sides; the two may be the same face, e.g. a fillet inside a slot).
+    the constraint sides; the two may be the same face, e.g. a fillet inside a slot, and
+    one may itself be a blend when a fillet was rolled over an earlier fillet).
     ``cross_edges`` are the start and end sides (each one edge index; for a fillet closed
     around an axis, e.g. a torus around a boss, both are the seam edge and ``closed`` is
-    True). Following the face's outer wire: smooth side 0, cross edge 0 or 1, smooth side 1,
-    the other cross edge. ``radius`` is the rolling-ball radius where constant, else None.
+    True). Following the face's outer wire: smooth side 0, cross edge 0, smooth side 1,
+    cross edge 1. ``radius`` is the rolling-ball radius where constant, else None.
     """
 
     face: int

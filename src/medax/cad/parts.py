@@ -34,12 +34,19 @@ from medax.errors import CadError
 
 @dataclass(frozen=True)
 class BuiltPart:
-    """A solid and the blend faces its fillet builder generated (``TopoDS_Face`` list)."""
+    """A solid and the blend faces its fillet builder(s) generated (``TopoDS_Face`` list).
+
+    ``radii``: the constant radii used (empty for a variable-radius blend)."""
 
     name: str
     shape: Any
     blends: tuple[Any, ...]
-    radius: float
+    radii: tuple[float, ...]
+
+    @property
+    def radius(self) -> float:
+        """The (first) constant radius."""
+        return self.radii[0]
 
 
 def _solid(shape: Any) -> Any:
@@ -49,11 +56,21 @@ def _solid(shape: Any) -> Any:
     return TopoDS.Solid(exp.Current())
 
 
-def fillet(shape: Any, edges: list[Any], radius: float, name: str) -> BuiltPart:
-    """Fillet ``edges`` of ``shape`` with ``radius``; record the generated blend faces."""
+def fillet(
+    shape: Any,
+    edges: list[Any],
+    radius: float | tuple[float, float],
+    name: str,
+    previous: BuiltPart | None = None,
+) -> BuiltPart:
+    """Fillet ``edges`` of ``shape`` with ``radius`` (or a linear law ``(r1, r2)``); record
+    the generated blend faces, plus ``previous``'s blends carried through this operation."""
     mk = BRepFilletAPI_MakeFillet(shape)
     for e in edges:
-        mk.Add(radius, e)
+        if isinstance(radius, tuple):
+            mk.Add(radius[0], radius[1], e)
+        else:
+            mk.Add(radius, e)
     mk.Build()
     if not mk.IsDone():
         raise CadError(f"{name}: OCCT could not fillet {len(edges)} edges with r={radius}")
@@ -68,10 +85,16 @@ def fillet(shape: Any, edges: list[Any], radius: float, name: str) -> BuiltPart:
         for f in mk.Generated(s):
             if not any(f.IsSame(b) for b in blends):
                 blends.append(f)
+    radii: tuple[float, ...] = () if isinstance(radius, tuple) else (float(radius),)
+    if previous is not None:
+        radii = tuple(sorted(set(radii + previous.radii)))
+        for f in previous.blends:
+            mod = list(mk.Modified(f))
+            blends.extend(mod if mod else [] if mk.IsDeleted(f) else [f])
     solid = _solid(out)
     if not BRepCheck_Analyzer(solid).IsValid():
         raise CadError(f"{name}: the filleted solid is not valid")
-    return BuiltPart(name, solid, tuple(TopoDS.Face(f) for f in blends), radius)
+    return BuiltPart(name, solid, tuple(TopoDS.Face(f) for f in blends), radii)
 
 
 def _edges(shape: Any) -> list[Any]:
@@ -238,6 +261,35 @@ def boss_grid(n: int = 8, radius: float = 1.0) -> BuiltPart:
     return fillet(_solid(body), _select(body, boss_edge), radius, f"boss_grid_{n}")
 
 
+def variable_radius_box() -> BuiltPart:
+    """A box with one edge filleted by a radius growing linearly from 1 to 3 (a B-spline
+    blend surface)."""
+    box = BRepPrimAPI_MakeBox(30.0, 20.0, 10.0).Shape()
+    return fillet(box, [_edges(box)[0]], (1.0, 3.0), "variable_radius_box")
+
+
+def rounded_box_chain() -> BuiltPart:
+    """A box with its vertical edges rounded (r = 4), then its top loop of 8 tangent edges
+    filleted (r = 1.5): a chain of cylinders and tori meeting tangentially at cross edges."""
+    box = BRepPrimAPI_MakeBox(30.0, 20.0, 10.0).Shape()
+    vertical = fillet(box, _select(box, lambda m: abs(m[2] - 5.0) < 1e-6), 4.0, "vertical")
+    top = _select(vertical.shape, lambda m: abs(m[2] - 10.0) < 1e-6)
+    return fillet(vertical.shape, top, 1.5, "rounded_box_chain", previous=vertical)
+
+
+def slanted_boss(radius: float = 2.0) -> BuiltPart:
+    """A plate with a slanted cylinder through it; the root fillet is a B-spline
+    rolling-ball surface."""
+    plate = BRepPrimAPI_MakeBox(60.0, 60.0, 5.0).Shape()
+    axis = gp_Ax2(gp_Pnt(30.0, 30.0, -5.0), gp_Dir(0.3, 0.0, 1.0))
+    body = BRepAlgoAPI_Fuse(plate, BRepPrimAPI_MakeCylinder(axis, 8.0, 25.0).Shape()).Shape()
+
+    def root(m: np.ndarray) -> bool:
+        return abs(m[2] - 5.0) < 1e-6 and 1.0 < m[0] < 59.0 and 1.0 < m[1] < 59.0
+
+    return fillet(_solid(body), _select(body, root), radius, "slanted_boss")
+
+
 #: the catalogue used by tests and the demo (name -> builder without arguments)
 CATALOGUE = {
     "l_bracket": l_bracket,
@@ -245,6 +297,9 @@ CATALOGUE = {
     "stepped_shaft": stepped_shaft,
     "pocket": pocket,
     "slotted_plate": slotted_plate,
+    "variable_radius_box": variable_radius_box,
+    "rounded_box_chain": rounded_box_chain,
+    "slanted_boss": slanted_boss,
 }
 
 __all__ = ["CATALOGUE", "BuiltPart", "box_random", "boss_grid", "fillet"]
