@@ -141,3 +141,35 @@ def test_tangency_tolerance_is_used():
     assert len(crease) == 1
     assert not crease[0].tangent
     assert c2.edges[crease[0].index].tangent
+
+
+@pytest.mark.parametrize("radii", [(2.0, 3.0, 4.0), (2.0, 2.0, 4.0), (1.0, 3.0, 3.0)])
+def test_corner_of_unequal_radii(radii):
+    """Three edges at one vertex with different radii: OCCT's vertex patch is 4-sided (a
+    torus or B-spline); it must be found as a blend (it is classified as a fillet)."""
+    box = parts.BRepPrimAPI_MakeBox(30.0, 20.0, 10.0).Shape()
+    at_origin = [
+        e for e in parts._edges(box) if np.count_nonzero(np.abs(parts._edge_mid(e)) < 1e-9) == 2
+    ]
+    assert len(at_origin) == 3
+    mk = parts.BRepFilletAPI_MakeFillet(box)
+    for e, r in zip(at_origin, radii, strict=True):
+        mk.Add(r, e)
+    mk.Build()
+    blends = []
+    for s in at_origin + [parts.TopoDS.Vertex(v) for v in _vertices(box)]:
+        blends.extend(f for f in mk.Generated(s) if not any(f.IsSame(b) for b in blends))
+    built = parts.BuiltPart("corner", mk.Shape(), tuple(blends), tuple(sorted(set(radii))))
+    c = classify_solid(built.shape)
+    assert set(c.blends) == truth_indices(c, built)
+
+
+def _vertices(shape):
+    from OCP.TopAbs import TopAbs_VERTEX
+    from OCP.TopExp import TopExp_Explorer
+
+    out, exp = [], TopExp_Explorer(shape, TopAbs_VERTEX)
+    while exp.More():
+        out.append(exp.Current())
+        exp.Next()
+    return out

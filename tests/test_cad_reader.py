@@ -153,3 +153,34 @@ def test_closed_shell_is_made_a_solid(tmp_path):
     assert BRepTools.Write_s(exp.Current(), str(p))
     part = read_part(p)
     assert len(part.solids) == 1 and count(part.solids[0], TopAbs_FACE) == 6
+
+
+def test_loose_faces_are_sewn_into_a_solid(tmp_path):
+    """A closed set of faces without a shell (as IGES surface models are) is sewn."""
+    comp = TopoDS_Compound()
+    bld = BRep_Builder()
+    bld.MakeCompound(comp)
+    exp = TopExp_Explorer(parts.pocket().shape, TopAbs_FACE)
+    while exp.More():
+        bld.Add(comp, exp.Current())
+        exp.Next()
+    p = tmp_path / "faces.brep"
+    assert BRepTools.Write_s(comp, str(p))
+    part = read_part(p)
+    assert part.unit == "model" and len(part.solids) == 1
+    assert any("sewn" in n for n in part.notes)
+    (c,) = classify_file(str(p))
+    assert c.counts()["fillet"] == 4
+
+
+def test_loose_open_faces_are_refused(tmp_path):
+    comp = TopoDS_Compound()
+    bld = BRep_Builder()
+    bld.MakeCompound(comp)
+    exp = TopExp_Explorer(BRepPrimAPI_MakeBox(5.0, 5.0, 5.0).Shape(), TopAbs_FACE)
+    for _ in range(4):
+        bld.Add(comp, exp.Current())
+        exp.Next()
+    p = tmp_path / "four.brep"
+    assert BRepTools.Write_s(comp, str(p))
+    assert "not closed" in _err(p)

@@ -43,7 +43,8 @@ EXTENSIONS = {
 
 @dataclass(frozen=True)
 class Part:
-    """The solids of one file, healed, in ``unit`` (OCCT's mm for STEP/IGES).
+    """The solids of one file, healed, in ``unit``: ``"mm"`` for STEP/IGES (OCCT converts),
+    ``"model"`` for BRep (which stores no unit).
 
     ``solids`` are ``TopoDS_Solid`` objects; ``file_unit`` is the length unit the file
     declares (``""`` when it declares none, e.g. BRep); ``notes`` say what healing did.
@@ -87,8 +88,8 @@ def read_part(path: str | Path, unify: bool = True) -> Part:
         notes.append(f"{len(healed)} solids; each is classified separately")
     for n in notes:
         log.info("%s: %s", p, n)
-    unit = "mm" if fmt in ("step", "iges") else ""
-    return Part(str(p), healed, unit or "mm", file_unit, tuple(notes))
+    unit = "mm" if fmt in ("step", "iges") else "model"
+    return Part(str(p), healed, unit, file_unit, tuple(notes))
 
 
 @contextmanager
@@ -204,6 +205,9 @@ def _solids(shape: Any, p: Path, notes: list[str]) -> list[Any]:
     if solids:
         return solids
     shells = [TopoDS.Shell(s) for s in _all(shape, TopAbs_SHELL)]
+    if not shells and count(shape, TopAbs_FACE) > 0:
+        shells = _sew(shape, p)
+        notes.append(f"{count(shape, TopAbs_FACE)} loose faces sewn into {len(shells)} shells")
     if not shells:
         nf, ne, nv = (count(shape, k) for k in (TopAbs_FACE, TopAbs_EDGE, TopAbs_VERTEX))
         what = f"{nf} faces" if nf else (f"{ne} curves" if ne else f"{nv} points")
@@ -222,6 +226,21 @@ def _solids(shape: Any, p: Path, notes: list[str]) -> list[Any]:
         out.append(TopoDS.Solid(solid))
         notes.append(f"shell {k} made a solid")
     return out
+
+
+def _sew(shape: Any, p: Path) -> list[Any]:
+    """Sew the loose faces of ``shape`` (e.g. an IGES surface model) into shells."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing
+
+    sew = BRepBuilderAPI_Sewing(1e-6)
+    for f in _all(shape, TopAbs_FACE):  # never called with no face: sewing nothing crashes
+        sew.Add(f)
+    try:
+        sew.Perform()
+        sewn = sew.SewedShape()
+    except Exception as err:
+        raise CadError(f"{p}: sewing its loose faces failed ({err})") from err
+    return [TopoDS.Shell(s) for s in _all(sewn, TopAbs_SHELL)]
 
 
 def _free_edges(shell: Any) -> int:

@@ -87,7 +87,11 @@ def classify_part(
 
 def summary_lines(report: dict[str, Any]) -> list[str]:
     """Human-readable summary of a report (one line per solid, doubts, axis failures)."""
-    lines = []
+    lines = [f"{report['source']}: {n}" for n in report["notes"]]
+    if report["file_unit"]:
+        lines.append(
+            f"{report['source']}: file unit {report['file_unit']}, lengths in {report['unit']}"
+        )
     for sr in report["solids"]:
         s = sr["summary"]
         lines.append(
