@@ -53,14 +53,9 @@ def occt_distance(point: np.ndarray, shapes) -> float:
     return float(best)
 
 
-# slanted_boss: its smooth edges are degree-13 rational B-splines, which
-# medax.geometry.bspline (piecewise power basis + Horner) evaluates 6e-10 off OCCT's
-# de Boor (checked in 80-bit arithmetic), so |d1 - d2| by OCCT reaches 2e-9 ~ 1e-9 x r.
-_KNOWN = {
-    "slanted_boss": pytest.mark.xfail(
-        reason="geometry.bspline loses ~6e-10 on degree-13 NURBS (power basis)", strict=False
-    )
-}
+# slanted_boss has degree-13 rational B-spline smooth edges: geometry.bspline evaluates
+# degrees above 5 by de Boor (scipy), not the power basis, which lost 6e-10 there.
+_KNOWN: dict[str, pytest.MarkDecorator] = {}
 
 
 @pytest.mark.parametrize(

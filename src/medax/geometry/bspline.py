@@ -19,6 +19,11 @@ def clamped_uniform_knots(n_ctrl: int, degree: int) -> FloatArray:
     return np.concatenate((np.zeros(degree + 1), inner, np.ones(degree + 1)))
 
 
+#: above this degree the power basis loses digits (6e-10 seen on degree-13 NURBS from
+#: OCCT fillets): evaluate with scipy's de Boor instead
+POWER_BASIS_MAX_DEGREE = 5
+
+
 class BSpline(Curve):
     """B-spline ``C(t)`` with control points (m, dim), clamped knots (m + p + 1,) and optional
     positive weights (m,) (then a NURBS). The knot domain is mapped linearly onto ``[0, 1]``."""
@@ -85,8 +90,10 @@ class BSpline(Curve):
         return x, (c0, c1, c2)
 
     def _raw(self, t: FloatArray, nu: int) -> FloatArray:
-        x, coefs = self._pieces
         t = np.clip(np.asarray(t, dtype=np.float64), 0.0, 1.0)
+        if self.degree > POWER_BASIS_MAX_DEGREE:
+            return np.asarray(self._spl(t, nu))
+        x, coefs = self._pieces
         i = np.clip(np.searchsorted(x, t, side="right") - 1, 0, len(x) - 2)
         s = (t - x[i])[:, None]
         c = coefs[nu]
