@@ -72,8 +72,19 @@ def classify_solid(
     """Classify the faces and edges of ``solid`` (a healed ``TopoDS_Solid``).
 
     ``angle_tol`` (radians) is the tangency tolerance. Raises :class:`CadError` if OCCT
-    fails on a face (the message names the face index).
+    fails (the message names the file, and the face index where known).
     """
+    try:
+        return _classify(solid, angle_tol, source, unit, index)
+    except CadError:
+        raise
+    except Exception as err:  # OCCT Standard_Failure and friends, translated here
+        raise CadError(
+            f"{source or 'shape'}: solid {index}: classification failed ({err})"
+        ) from err
+
+
+def _classify(solid: Any, angle_tol: float, source: str, unit: str, index: int) -> Classification:
     topo = build_topology(solid)
     if topo.n_faces == 0:
         raise CadError(f"{source or 'shape'}: solid {index} has no faces")

@@ -68,6 +68,8 @@ def read_part(path: str | Path, unify: bool = True) -> Part:
     if fmt is None:
         known = ", ".join(sorted(EXTENSIONS))
         raise CadError(f"{p}: unknown extension '{p.suffix}' (expected one of {known})")
+    if p.is_dir():
+        raise CadError(f"{p}: is a folder, not a file")
     if not p.is_file():
         raise CadError(f"{p}: no such file")
     if p.stat().st_size == 0:
