@@ -40,6 +40,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         f"(default {tolerances.CURVE_TOL:g})",
     )
     p.add_argument("--no-axes", action="store_true", help="do not trace the fillet axes")
+    p.add_argument(
+        "--view",
+        default="28,-55",
+        help="PNG view direction as ELEVATION,AZIMUTH in degrees (default 28,-55)",
+    )
     p.set_defaults(run=run)
 
 
@@ -50,6 +55,10 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--angle and --tol must be positive, got {args.angle}, {args.tol}")
     if args.png and Path(args.png).suffix.lower() not in (".png", ".svg"):
         raise InputError(f"--png {args.png}: use a .png or .svg file name")
+    try:
+        elev, azim = (float(x) for x in args.view.split(","))
+    except ValueError as err:
+        raise InputError(f"--view must be ELEVATION,AZIMUTH in degrees, got '{args.view}'") from err
     for out in (args.report, args.png):
         if out:
             check_writable(out)
@@ -60,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
         write_json(args.report, report)
         print(f"wrote {args.report}")
     if args.png:
-        render_solids(solids, args.png, title=Path(args.part).name)
+        render_solids(solids, args.png, title=Path(args.part).name, view=(elev, azim))
         print(f"wrote {args.png}")
     return 0
 
@@ -107,7 +116,12 @@ def summary_lines(report: dict[str, Any]) -> list[str]:
     return lines
 
 
-def render_solids(solids: list[Any], path: str | Path, title: str = "") -> Path:
+def render_solids(
+    solids: list[Any],
+    path: str | Path,
+    title: str = "",
+    view: tuple[float, float] = (28.0, -55.0),
+) -> Path:
     """Shaded view of classified solids with their axes, written atomically to ``path``."""
     from collections import Counter
 
@@ -127,5 +141,5 @@ def render_solids(solids: list[Any], path: str | Path, title: str = "") -> Path:
         axes.extend(a.region.embedding.evaluate(a.spline.sample(80)) for a in cs.axes.values())
         counts.update(f.cls.value for f in c.faces)
     with atomic_path(path) as tmp:
-        render_part(faces, tmp, edges=edges, axes=axes, title=title, counts=dict(counts))
+        render_part(faces, tmp, edges=edges, axes=axes, title=title, counts=dict(counts), view=view)
     return Path(path)
