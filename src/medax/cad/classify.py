@@ -36,6 +36,7 @@ from medax.cad.face_geometry import (
     WireEdge,
     area_centroid,
     blend_radius,
+    curve_type,
     normal_sweep,
     outer_wire_edges,
     surface_type,
@@ -109,7 +110,7 @@ def _classify(solid: Any, angle_tol: float, source: str, unit: str, index: int) 
 
     corners = _corner_blends(topo, surfaces, wires, fillets, tangent)
     blend = set(fillets) | set(corners)
-    _near_misses(topo, surfaces, blend, tangent, doubts)
+    _near_misses(topo, surfaces, wires, blend, tangent, doubts)
     edge_cls = _edge_classes(topo, tangent, blend)
     faces = _faces(topo, surfaces, blend, fillets, corners, edge_cls)
     edges = tuple(
@@ -121,6 +122,7 @@ def _classify(solid: Any, angle_tol: float, source: str, unit: str, index: int) 
             tangent=bool(tangent[j]),
             max_angle=float(angles[j]),
             length=_edge_length(topo.edge(j)),
+            curve=curve_type(topo.edge(j)) if not topo.degenerate[j] else "degenerate",
             is_free=len(topo.edge_faces[j]) == 1 and angles[j] >= math.pi,
         )
         for j in range(topo.n_edges)
@@ -253,7 +255,12 @@ def _corner_blends(
 
 
 def _near_misses(
-    topo: Topology, surfaces: list[str], blend: set[int], tangent: np.ndarray, doubts: list[Doubt]
+    topo: Topology,
+    surfaces: list[str],
+    wires: dict[int, list[WireEdge]],
+    blend: set[int],
+    tangent: np.ndarray,
+    doubts: list[Doubt],
 ) -> None:
     """Doubt: curved non-blend faces tangent to non-blend neighbours (one-sided tangency,
     more than four sides): looked like blends, were not taken as such."""
@@ -271,11 +278,15 @@ def _near_misses(
             }
         )
         if nbrs:
+            n_edges = len(wires.get(i, ())) or len(topo.face_edges[i])
+            radius = blend_radius(topo.face(i))
+            r = "" if radius is None else f" r={radius:.6g}"
             doubts.append(
                 Doubt(
                     i,
-                    f"{surfaces[i]} face tangent to faces {nbrs} but not a 4-sided blend "
-                    f"tangent on both sides: not taken as a blend",
+                    f"{surfaces[i]}{r} face ({n_edges} wire edges) tangent to faces {nbrs}, but "
+                    f"not 4-sided with both spring sides tangent (notched or one-sided "
+                    f"blend?): not taken as a blend",
                 )
             )
 

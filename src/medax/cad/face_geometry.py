@@ -66,6 +66,15 @@ class WireEdge:
     mid_uv: tuple[float, float]
 
 
+def curve_type(edge: Any) -> str:
+    """Lower-case OCCT curve type of ``edge``: line, circle, ellipse, hyperbola, parabola,
+    bezier, bspline, offset or other."""
+    from OCP.BRepAdaptor import BRepAdaptor_Curve
+
+    name = str(BRepAdaptor_Curve(edge).GetType().name)  # e.g. GeomAbs_BSplineCurve
+    return name.removeprefix("GeomAbs_").removesuffix("Curve").lower() or "other"
+
+
 def surface_type(face: Any) -> str:
     """Lower-case OCCT surface type name of ``face`` (see :data:`SURFACE_NAMES`)."""
     return SURFACE_NAMES.get(BRepAdaptor_Surface(face, False).GetType(), "other")

@@ -8,6 +8,8 @@ Layout (all lengths in ``unit``)::
      "solids": [{"solid": k, "summary": {...},
                  "faces": [{"index", "class", "surface", "area", "centroid", "radius"?,
                             "neighbours", "edges", "edge_classes"? (supporting faces)}],
+                 "edges": [{"index", "class", "faces", "curve", "length", "tangent",
+                            "max_angle_deg"}],
                  "fillets": [{"face", "constraint_edges": [[...], [...]], "cross_edges",
                               "supporting", "radius", "closed",
                               "axis": {"points": [[x, y, z], ...], "max_point_error", ...}
@@ -21,6 +23,8 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 from typing import Any
+
+import numpy as np
 
 from medax import tolerances
 from medax.axis import MedialAxis
@@ -113,12 +117,25 @@ def solid_report(cs: ClassifiedSolid) -> dict[str, Any]:
         }
         for r in c.corners
     ]
+    edges = [
+        {
+            "index": e.index,
+            "class": e.cls.value,
+            "faces": list(e.faces),
+            "curve": e.curve,
+            "length": _r(e.length),
+            "tangent": e.tangent,
+            "max_angle_deg": _r(float(np.degrees(e.max_angle))),
+        }
+        for e in c.edges
+    ]
     summary = c.counts()
     summary["axes"] = len(cs.axes)
     return {
         "solid": c.solid,
         "summary": summary,
         "faces": faces,
+        "edges": edges,
         "fillets": fillets,
         "corner_blends": corners,
         "doubts": [{"face": d.face, "reason": d.reason} for d in c.doubts],
