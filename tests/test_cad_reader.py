@@ -184,3 +184,35 @@ def test_loose_open_faces_are_refused(tmp_path):
     p = tmp_path / "four.brep"
     assert BRepTools.Write_s(comp, str(p))
     assert "not closed" in _err(p)
+
+
+def test_inch_file_is_converted_to_mm(tmp_path):
+    """A file whose length unit is the inch reads back in mm (x 25.4); its unit is reported.
+
+    The file is the mm file with its length unit entity replaced by a conversion-based inch.
+    """
+    import re
+
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+
+    box = BRepPrimAPI_MakeBox(10.0, 20.0, 30.0).Shape()
+    text = write_step(box, tmp_path / "mm.step").read_text()
+    mm = re.search(
+        r"#(\d+) = \( LENGTH_UNIT\(\) NAMED_UNIT\(\*\) SI_UNIT\(\.MILLI\.,\.METRE\.\) \);", text
+    )
+    assert mm is not None
+    k = mm.group(1)
+    inch = (
+        f"#{k} = ( CONVERSION_BASED_UNIT('INCH',#9001) LENGTH_UNIT() NAMED_UNIT(#9002) );\n"
+        "#9000 = ( LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.) );\n"
+        "#9001 = LENGTH_MEASURE_WITH_UNIT(LENGTH_MEASURE(25.4),#9000);\n"
+        "#9002 = DIMENSIONAL_EXPONENTS(1.,0.,0.,0.,0.,0.,0.);"
+    )
+    path = tmp_path / "inch.step"
+    path.write_text(text.replace(mm.group(0), inch))
+    part = read_part(path)
+    assert part.unit == "mm" and part.file_unit == "inch"
+    props = GProp_GProps()
+    BRepGProp.VolumeProperties_s(part.solids[0], props)
+    assert props.Mass() == pytest.approx(6000.0 * 25.4**3, rel=1e-9)
