@@ -121,6 +121,7 @@ def outer_wire_edges(topo: Topology, i: int) -> list[WireEdge]:
     """
     face = topo.face(i)
     surf = BRepAdaptor_Surface(face, False)
+    metric = _iso_metric(surf)
     wire = BRepTools.OuterWire_s(face)
     out: list[WireEdge] = []
     exp = BRepTools_WireExplorer(wire, face)
@@ -131,7 +132,15 @@ def outer_wire_edges(topo: Topology, i: int) -> list[WireEdge]:
             continue
         j = topo.edge_index(e)
         t = edge_params(e, DIRECTION_SAMPLES)
-        uv, _ = edge_uv(e, face, t)
+        uv, duv = edge_uv(e, face, t)
+        mid = uv[len(uv) // 2]
+        if metric is not None:
+            # analytic surfaces: principal directions are the iso-lines (see _iso_metric)
+            su, sv, spring_is_v = metric(uv)
+            along_v = np.mean(np.abs(duv[:, 1]) * sv) > np.mean(np.abs(duv[:, 0]) * su)
+            kind = "spring" if along_v == spring_is_v else "cross"
+            out.append(WireEdge(j, kind, (float(mid[0]), float(mid[1]))))
+            continue
         _, tan = edge_points(e, t)
         _, _, dmax, dmin = curvature_frames(surf, uv)
         tan = tan / np.maximum(np.linalg.norm(tan, axis=1, keepdims=True), 1e-300)
@@ -142,9 +151,29 @@ def outer_wire_edges(topo: Topology, i: int) -> list[WireEdge]:
             kind = "unknown"
         else:
             kind = "cross" if float(np.mean(cmax[ok] - cmin[ok])) > 0.0 else "spring"
-        mid = uv[len(uv) // 2]
         out.append(WireEdge(j, kind, (float(mid[0]), float(mid[1]))))
     return out
+
+
+def _iso_metric(surf: Any) -> Any:
+    """For a cylinder, cone, or torus with ``R >= 2 r``: a function ``uv (n, 2) -> (|Su|,
+    |Sv|, spring_is_v)``. Their principal directions are the parameter iso-lines: the
+    least-curvature (spring) direction is ``v`` (the generator) on cylinders and cones and
+    ``u`` (the major circle) on such tori. None for other surfaces (use curvature)."""
+    kind = surf.GetType()
+    if kind == GeomAbs_Cylinder:
+        r = surf.Cylinder().Radius()
+        return lambda uv: (r, 1.0, True)
+    if kind == GeomAbs_Cone:
+        c = surf.Cone()
+        r0, a = c.RefRadius(), c.SemiAngle()
+        return lambda uv: (np.abs(r0 + uv[:, 1] * np.sin(a)), 1.0, True)
+    if kind == GeomAbs_Torus:
+        t = surf.Torus()
+        big, r = t.MajorRadius(), t.MinorRadius()
+        if big >= 2.0 * r:
+            return lambda uv: (np.abs(big + r * np.cos(uv[:, 1])), r, False)
+    return None
 
 
 def normal_sweep(face: Any, uv0: FloatArray, uv1: FloatArray) -> float:

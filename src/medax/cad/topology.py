@@ -195,6 +195,7 @@ def edge_angles(
     j: int,
     samples: int = TANGENCY_SAMPLES,
     plane_normals: dict[int, FloatArray] | None = None,
+    adaptors: dict[int, Any] | None = None,
 ) -> float:
     """Largest angle (radians) between the outward normals of the two faces of edge ``j``
     over ``samples`` interior points; 0 for a seam or degenerate edge, pi for a free edge.
@@ -220,7 +221,7 @@ def edge_angles(
             continue
         f = topo.face(i)
         uv, _ = edge_uv(e, f, t)
-        normals.append(face_normals(f, uv))
+        normals.append(face_normals(f, uv, None if adaptors is None else adaptors.get(i)))
     cosv = np.sum(normals[0] * normals[1], axis=1)
     ok = np.isfinite(cosv)
     if not np.any(ok):
@@ -235,12 +236,16 @@ def tangency(
     from OCP.GeomAbs import GeomAbs_Plane
 
     planes: dict[int, FloatArray] = {}
+    adaptors: dict[int, Any] = {}
     for i in range(topo.n_faces):
         f = topo.face(i)
         s = BRepAdaptor_Surface(f, False)
+        adaptors[i] = s
         if s.GetType() == GeomAbs_Plane:
             n = face_normals(f, np.zeros((1, 2)), s)[0]
             if np.all(np.isfinite(n)):
                 planes[i] = n
-    angles = np.array([edge_angles(topo, j, plane_normals=planes) for j in range(topo.n_edges)])
+    angles = np.array(
+        [edge_angles(topo, j, plane_normals=planes, adaptors=adaptors) for j in range(topo.n_edges)]
+    )
     return angles < angle_tol, angles
