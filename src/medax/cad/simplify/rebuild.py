@@ -71,14 +71,114 @@ def _surface_normal(surf: Any, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return n / np.linalg.norm(n), xyz(proj.NearestPoint())
 
 
+def _pcurve_error(pc: Any, c: Any, surf: Any, f: float, l: float, n: int = 41) -> float:
+    err = 0.0
+    for t in np.linspace(f, l, n):
+        uv = pc.Value(float(t))
+        err = max(err, surf.Value(uv.X(), uv.Y()).Distance(c.Value(float(t))))
+    return err
+
+
+def _fitted_pcurve(c: Any, surf: Any, f: float, l: float, tol: float) -> Any | None:
+    """pcurve by projecting samples and fitting a 2-D B-spline on the edge's own parameter,
+    span by span of the 3-D curve's knots (joined curves are only G1 at their joints); the
+    spans are concatenated with a C0 knot at each break so the parameter is kept."""
+    from OCP.collections import Array1_double, Array1_gp_Pnt2d
+    from OCP.Geom2dAPI import Geom2dAPI_PointsToBSpline
+    from OCP.GeomAbs import GeomAbs_C2
+    from OCP.gp import gp_Pnt2d
+
+    breaks = [f, l]
+    if hasattr(c, "NbKnots"):
+        knots = [c.Knot(i) for i in range(1, c.NbKnots() + 1)]
+        gap = 1e-6 * (l - f)
+        breaks = [f]
+        for k in sorted(knots):
+            if breaks[-1] + gap < k < l - gap:
+                breaks.append(k)
+        breaks.append(l)
+    proj = GeomAPI_ProjectPointOnSurf()
+    bounds = [min(max(float(x), -1e7), 1e7) for x in surf.Bounds()]
+    fits = []
+    prev_u = None
+    for a, b in zip(breaks[:-1], breaks[1:], strict=True):
+        ts = np.linspace(a, b, 25)
+        pts, pars = Array1_gp_Pnt2d(1, ts.size), Array1_double(1, ts.size)
+        for i, t in enumerate(ts):
+            proj.Init(c.Value(float(t)), surf, *bounds)
+            if proj.NbPoints() == 0:
+                return None
+            u, v = proj.LowerDistanceParameters()
+            if prev_u is not None and surf.IsUPeriodic():  # stay on one sheet
+                per = surf.UPeriod()
+                u += per * round((prev_u - u) / per)
+            prev_u = u
+            pts.SetValue(i + 1, gp_Pnt2d(u, v))
+            pars.SetValue(i + 1, float(t))
+        fit = Geom2dAPI_PointsToBSpline(pts, pars, 3, 8, GeomAbs_C2, 1e-3 * tol)
+        if not fit.IsDone():
+            return None
+        fits.append((fit.Curve(), a, b))
+    return _concat_c0(fits)
+
+
+def _concat_c0(curves: list[tuple[Any, float, float]]) -> Any:
+    """One 2-D B-spline from consecutive B-splines, each mapped affinely from its own knot
+    range onto ``[a, b]`` (the fitter normalises to [0, 1]), C0 at the joints."""
+    from OCP.collections import Array1_double, Array1_gp_Pnt2d, Array1_int
+    from OCP.Geom2d import Geom2d_BSplineCurve
+    from OCP.gp import gp_Pnt2d
+
+    deg = max(cv.Degree() for cv, _, _ in curves)
+    poles: list[tuple[float, float]] = []
+    knots: list[float] = []
+    mults: list[int] = []
+    for k, (cv, a, b) in enumerate(curves):
+        cv.IncreaseDegree(deg)
+        ps = [(cv.Pole(i).X(), cv.Pole(i).Y()) for i in range(1, cv.NbPoles() + 1)]
+        k0, k1 = cv.FirstParameter(), cv.LastParameter()
+        ks = [a + (b - a) * (cv.Knot(i) - k0) / (k1 - k0) for i in range(1, cv.NbKnots() + 1)]
+        ms = [cv.Multiplicity(i) for i in range(1, cv.NbKnots() + 1)]
+        if k == 0:
+            poles, knots, mults = ps, ks, ms
+            continue
+        joint = ((poles[-1][0] + ps[0][0]) / 2, (poles[-1][1] + ps[0][1]) / 2)
+        poles[-1] = joint
+        poles += ps[1:]
+        mults[-1] = deg
+        knots += ks[1:]
+        mults += ms[1:]
+    ap = Array1_gp_Pnt2d(1, len(poles))
+    for i, (x, y) in enumerate(poles):
+        ap.SetValue(i + 1, gp_Pnt2d(x, y))
+    ak, am = Array1_double(1, len(knots)), Array1_int(1, len(knots))
+    for i, (kv, m) in enumerate(zip(knots, mults, strict=True)):
+        ak.SetValue(i + 1, kv)
+        am.SetValue(i + 1, m)
+    return Geom2d_BSplineCurve(ap, ak, am, deg)
+
+
 def _add_pcurves(face: Any, surf: Any, tol: float) -> None:
+    """Explicit pcurves of every edge of ``face`` on ``surf``: OCCT's projection, replaced
+    by a fitted one when that is closer (checked at samples against the 3-D curve)."""
     builder = BRep_Builder()
     for e in edges_of(face):
         c, f, l = edge_curve(e)
         pc = GeomProjLib.Curve2d_s(c, f, l, surf, tol)
+        err = float("inf") if pc is None else _pcurve_error(pc, c, surf, f, l)
+        if err > 0.1 * tol:
+            alt = _fitted_pcurve(c, surf, f, l, tol)
+            if alt is not None and _pcurve_error(alt, c, surf, f, l) < err:
+                pc = alt
         if pc is None:
             raise CadError("projecting a boundary edge onto a new surface failed")
-        builder.UpdateEdge(TopoDS.Edge(e), pc, face, tol)
+        err = _pcurve_error(pc, c, surf, f, l)
+        edge = TopoDS.Edge(e)
+        builder.UpdateEdge(edge, pc, face, max(tol, 2 * err))
+        # the pcurve is on the edge's own parameter, its error measured: say so
+        builder.Range(edge, face, f, l)
+        builder.SameRange(edge, True)
+        builder.SameParameter(edge, True)
 
 
 def build_solid(
@@ -150,6 +250,13 @@ def build_solid(
     fix.SetMaxTolerance(1e3 * tol)
     fix.Perform()
     result = fix.Shape()
-    BRepLib.SameParameter_s(result, tol, True)
+    try:
+        BRepLib.SameParameter_s(result, tol, False)
+    except Exception:  # OCCT failure on one edge: do the edges one by one
+        for e in edges_of(result):
+            try:
+                BRepLib.SameParameter_s(e, tol)
+            except Exception as err:
+                log.info("SameParameter failed on an edge: %s", err)
     ctx = fix.Context()
     return result, [TopoDS.Face(ctx.Apply(f)) for f in faces]

@@ -22,7 +22,11 @@ import numpy as np
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.GC import GC_MakeArcOfCircle, GC_MakeSegment
-from OCP.Geom import Geom_SurfaceOfLinearExtrusion, Geom_SurfaceOfRevolution
+from OCP.Geom import (
+    Geom_RectangularTrimmedSurface,
+    Geom_SurfaceOfLinearExtrusion,
+    Geom_SurfaceOfRevolution,
+)
 from OCP.GeomAbs import GeomAbs_Cone, GeomAbs_Cylinder, GeomAbs_Plane, GeomAbs_Torus
 from OCP.GeomConvert import GeomConvert, GeomConvert_CompCurveToBSplineCurve
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt
@@ -190,7 +194,15 @@ def _extrusion(support: Any, halves: list[Half], hads: list[Any], tol: float) ->
     if isinstance(pieces, str):
         return pieces
     profile = _join(pieces, tol)
-    surf = Geom_SurfaceOfLinearExtrusion(profile, gp_Dir(*map(float, d)))
+    ext_surf = Geom_SurfaceOfLinearExtrusion(profile, gp_Dir(*map(float, d)))
+    # finite along d: the group's extent along d plus a margin (projections need bounds)
+    along = np.concatenate([(pts - o) @ d] + [(_boundary_samples(h.face) - o) @ d for h in halves])
+    o_v = float(_p(o).XYZ().Dot(gp_Dir(*map(float, d)).XYZ()))
+    lo, hi = float(along.min()), float(along.max())
+    margin = 0.1 * (hi - lo) + 10 * tol
+    v0 = lo - margin + o_v - float(xyz(profile.StartPoint()) @ d)
+    v1 = hi + margin + o_v - float(xyz(profile.StartPoint()) @ d)
+    surf = Geom_RectangularTrimmedSurface(ext_surf, v0, v1, False)
     return MergedSurface(surf, "extrusion", profile)
 
 
