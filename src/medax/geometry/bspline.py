@@ -90,17 +90,35 @@ class BSpline(Curve):
         return x, (c0, c1, c2)
 
     def _raw(self, t: FloatArray, nu: int) -> FloatArray:
-        t = np.clip(np.asarray(t, dtype=np.float64), 0.0, 1.0)
+        return self._raw_many(t, (nu,))[0]
+
+    def _raw_many(self, t: FloatArray, orders: tuple[int, ...]) -> list[FloatArray]:
+        """Homogeneous (or plain) derivatives of the given orders, sharing the span search."""
+        t = np.minimum(np.maximum(np.asarray(t, dtype=np.float64), 0.0), 1.0)
         if self.degree > POWER_BASIS_MAX_DEGREE:
-            return np.asarray(self._spl(t, nu))
+            return [np.asarray(self._spl(t, nu)) for nu in orders]
         x, coefs = self._pieces
-        i = np.clip(np.searchsorted(x, t, side="right") - 1, 0, len(x) - 2)
+        i = np.searchsorted(x, t, side="right") - 1
+        i = np.minimum(np.maximum(i, 0), len(x) - 2)
         s = (t - x[i])[:, None]
-        c = coefs[nu]
-        out = c[0, i]
-        for m in range(1, c.shape[0]):
-            out = out * s + c[m, i]
+        out = []
+        for nu in orders:
+            c = coefs[nu]
+            v = c[0, i]
+            for m in range(1, c.shape[0]):
+                v = v * s + c[m, i]
+            out.append(v)
         return out
+
+    def jet(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        h0, h1, h2 = self._raw_many(t, (0, 1, 2))
+        if self.weights is None:
+            return h0, h1, h2
+        w0, w1, w2 = h0[:, -1:], h1[:, -1:], h2[:, -1:]
+        c = h0[:, :-1] / w0
+        d1 = (h1[:, :-1] - w1 * c) / w0
+        d2 = (h2[:, :-1] - 2.0 * w1 * d1 - w2 * c) / w0
+        return c, d1, d2
 
     def evaluate(self, t: FloatArray) -> FloatArray:
         h = self._raw(t, 0)

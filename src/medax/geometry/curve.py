@@ -52,6 +52,11 @@ class Curve(ABC):
     def reversed(self) -> Curve:
         """The same point set traversed from end to start."""
 
+    def jet(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``C(t)``, ``C'(t)``, ``C''(t)`` together (each (n, dim)); kinds that can share
+        work between them override this."""
+        return self.evaluate(t), self.derivative(t), self.derivative(t, 2)
+
     def transformed(self, offset: FloatArray, scale: float) -> Curve:
         """The image under ``x -> (x - offset) / scale`` (a similarity; planar curves)."""
         raise NotImplementedError(f"{type(self).__name__} cannot be transformed")
@@ -200,9 +205,8 @@ def _bracketed_newton(
         if ia.size == 0:
             break
         sa = s[ia]
-        c = curve.evaluate(sa) - xi[ia]
-        c1 = curve.derivative(sa)
-        c2 = curve.derivative(sa, 2)
+        c0, c1, c2 = curve.jet(sa)
+        c = c0 - xi[ia]
         g = np.einsum("ij,ij->i", c, c1)
         dg = np.einsum("ij,ij->i", c1, c1) + np.einsum("ij,ij->i", c, c2)
         aa, bb = a[ia], b[ia]
