@@ -125,23 +125,28 @@ def build_groups(split: SplitResult, fillets: dict[int, tuple[int, int]]) -> lis
     for s, ks in halves.items():
         groups[group_of[split.pieces(s)[0]]].halves.extend(ks)
 
-    def edge_groups(e: Any) -> set[int]:
-        return {group_of[fmap.FindIndex(f) - 1] for f in e2f.FindFromKey(e)}
+    # integer adjacency, computed once: edge -> faces, vertex -> edges
+    edge_faces = {
+        emap.FindIndex(e2f.FindKey(j)) - 1: [fmap.FindIndex(f) - 1 for f in e2f.FindFromIndex(j)]
+        for j in range(1, e2f.Size() + 1)
+    }
+    inter = {i for i, fs in edge_faces.items() if len({group_of[k] for k in fs}) > 1}
+    vertex_degree = {
+        vmap.FindIndex(v2e.FindKey(j)): len(
+            {emap.FindIndex(e) - 1 for e in v2e.FindFromIndex(j)} & inter
+        )
+        for j in range(1, v2e.Size() + 1)
+    }
 
     def inter_group_degree(v: Any) -> int:
-        seen: set[int] = set()
-        for e in v2e.FindFromKey(v):
-            i = emap.FindIndex(e)
-            if i not in seen and len(edge_groups(e)) > 1:
-                seen.add(i)
-        return len(seen)
+        return vertex_degree[vmap.FindIndex(v)]
 
     for g in groups:
-        g.loops = _loops(g, group_of, fmap, emap, vmap, e2f, inter_group_degree)
+        g.loops = _loops(g, group_of, fmap, emap, vmap, edge_faces, inter_group_degree)
     return groups
 
 
-def _loops(g, group_of, fmap, emap, vmap, e2f, degree) -> list[list[Run]]:  # type: ignore[no-untyped-def]
+def _loops(g, group_of, fmap, emap, vmap, edge_faces, degree) -> list[list[Run]]:  # type: ignore[no-untyped-def]
     counts: dict[int, int] = {}
     oriented: dict[int, Any] = {}
     for k in g.members:
@@ -153,11 +158,7 @@ def _loops(g, group_of, fmap, emap, vmap, e2f, degree) -> list[list[Run]]:  # ty
     members = set(g.members)
     nbr: dict[int, int] = {}
     for i in free:
-        others = [
-            fmap.FindIndex(f) - 1
-            for f in e2f.FindFromKey(oriented[i])
-            if fmap.FindIndex(f) - 1 not in members
-        ]
+        others = [k for k in edge_faces[i] if k not in members]
         if len(others) != 1:
             raise CadError(f"group of face {g.members[0]}: boundary edge with {len(others)} faces")
         nbr[i] = group_of[others[0]]

@@ -284,7 +284,7 @@ def _attempt(work, sel, medials, surfaces, fmap, diag, vol0, tol) -> _Attempt | 
         if g.support is None:
             continue
         old = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
-        dev = max(dev, *deviation(old, face))
+        dev = max(dev, *deviation(old, face, enough=1e-3 * tol * diag))
     if dev > tol * diag:
         return f"surface deviation {dev / diag:.2e} x diagonal (> {tol:g})"
     halves_origin = {g.id: [split.origin[k] for k in g.halves] for g in groups}

@@ -161,8 +161,12 @@ def _concat_c0(curves: list[tuple[Any, float, float]]) -> Any:
 def _add_pcurves(face: Any, surf: Any, tol: float) -> None:
     """Explicit pcurves of every edge of ``face`` on ``surf``: OCCT's projection, replaced
     by a fitted one when that is closer (checked at samples against the 3-D curve)."""
+    from OCP.TopLoc import TopLoc_Location
+
     builder = BRep_Builder()
     for e in edges_of(face):
+        if BRep_Tool.CurveOnSurface_s(TopoDS.Edge(e), surf, TopLoc_Location(), 0.0, 0.0):
+            continue  # an original edge of an original surface: its pcurve is there
         c, f, l = edge_curve(e)
         pc = GeomProjLib.Curve2d_s(c, f, l, surf, tol)
         err = float("inf") if pc is None else _pcurve_error(pc, c, surf, f, l)

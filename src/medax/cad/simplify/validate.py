@@ -90,12 +90,14 @@ def _compound(faces: Sequence[Any]) -> Any:
     return c
 
 
-def max_distance(points: Array, faces: Sequence[Any]) -> float:
+def max_distance(points: Array, faces: Sequence[Any], enough: float = 0.0) -> float:
     """Largest distance from ``points`` (n, 3) to the union of ``faces``.
 
     Each point is projected on each face's surface (``GeomAPI_ProjectPointOnSurf``); a foot
     inside the face (face classifier) gives the distance. A point with no foot inside any
     face is measured exactly with ``BRepExtrema_DistShapeShape`` against all ``faces``.
+    A point whose distance to some face is ``<= enough`` is not tried on the others (the
+    result is then an upper bound, exact whenever it is above ``enough``).
     """
     from OCP.BRep import BRep_Tool
     from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
@@ -120,6 +122,8 @@ def max_distance(points: Array, faces: Sequence[Any]) -> float:
             u, v = proj.LowerDistanceParameters()
             if cls.Perform(gp_Pnt2d(u, v)) != TopAbs_OUT:
                 best = min(best, float(proj.LowerDistance()))
+                if best <= enough:
+                    break
         if best == float("inf"):
             if target is None:
                 target = _compound(faces)
@@ -132,8 +136,11 @@ def max_distance(points: Array, faces: Sequence[Any]) -> float:
     return worst
 
 
-def deviation(old_faces: Sequence[Any], new_face: Any, n: int = 8) -> tuple[float, float]:
-    """(old -> new, new -> old) largest distances between ``old_faces`` and ``new_face``."""
+def deviation(
+    old_faces: Sequence[Any], new_face: Any, n: int = 8, enough: float = 0.0
+) -> tuple[float, float]:
+    """(old -> new, new -> old) largest distances between ``old_faces`` and ``new_face``,
+    from ``n x n`` samples per face (``enough``: see :func:`max_distance`)."""
     old_pts = np.vstack([face_samples(f, n) for f in old_faces])
     new_pts = face_samples(new_face, n)
-    return max_distance(old_pts, [new_face]), max_distance(new_pts, old_faces)
+    return max_distance(old_pts, [new_face]), max_distance(new_pts, old_faces, enough)
