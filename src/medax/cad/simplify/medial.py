@@ -72,11 +72,17 @@ def medial_curve(face: Any, edge1: Any, edge2: Any, rel_tol: float = 1e-9) -> Me
         ends.append(uv)
     spread = [np.ptp(uv, axis=0) for uv in ends]
     if all(s[0] < 1e-9 for s in spread):  # smooth edges are u-iso lines: cross direction u
-        iso, mid, lo, hi, closed_dir = "u", 0.5 * (u0 + u1), v0, v1, ad.IsVPeriodic()
+        iso, k, lo, hi, closed_dir = "u", 0, v0, v1, ad.IsVPeriodic()
     elif all(s[1] < 1e-9 for s in spread):
-        iso, mid, lo, hi, closed_dir = "v", 0.5 * (v0 + v1), u0, u1, ad.IsUPeriodic()
+        iso, k, lo, hi, closed_dir = "v", 1, u0, u1, ad.IsUPeriodic()
     else:
         return "smooth edges are not iso-lines of the fillet surface: not supported"
+    # mid between the smooth edges' own parameters (the face may reach past them)
+    c1, c2 = float(ends[0][0, k]), float(ends[1][0, k])
+    periodic_cross = ad.IsUPeriodic() if k == 0 else ad.IsVPeriodic()
+    if periodic_cross and abs(c2 - c1) > math.pi:
+        c2 -= math.copysign(2 * math.pi, c2 - c1)
+    mid = 0.5 * (c1 + c2)
     period = 2 * math.pi
     full = closed_dir and abs((hi - lo) - period) < 1e-9
     if not full:
