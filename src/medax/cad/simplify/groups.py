@@ -19,7 +19,7 @@ from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX
 from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS
 
-from medax.cad.simplify.occ import edge_ends, edges_of, shape_map
+from medax.cad.simplify.occ import edge_ends, edges_of, shape_map, small_list
 from medax.cad.simplify.split import SplitResult
 from medax.errors import CadError
 
@@ -76,7 +76,6 @@ def build_groups(split: SplitResult, fillets: dict[int, tuple[int, int]]) -> lis
     emap = shape_map(shape, TopAbs_EDGE)
     vmap = shape_map(shape, TopAbs_VERTEX)
     e2f = _ancestors(shape, TopAbs_EDGE, TopAbs_FACE)
-    v2e = _ancestors(shape, TopAbs_VERTEX, TopAbs_EDGE)
     nface = fmap.Size()
     parent = list(range(nface))
 
@@ -89,7 +88,7 @@ def build_groups(split: SplitResult, fillets: dict[int, tuple[int, int]]) -> lis
     def face_nbrs(k: int) -> set[int]:
         out: set[int] = set()
         for e in edges_of(fmap.FindKey(k + 1)):
-            for f in e2f.FindFromKey(e):
+            for f in small_list(e2f.FindFromKey(e)):
                 j = fmap.FindIndex(f) - 1
                 if j != k:
                     out.add(j)
@@ -127,19 +126,21 @@ def build_groups(split: SplitResult, fillets: dict[int, tuple[int, int]]) -> lis
 
     # integer adjacency, computed once: edge -> faces, vertex -> edges
     edge_faces = {
-        emap.FindIndex(e2f.FindKey(j)) - 1: [fmap.FindIndex(f) - 1 for f in e2f.FindFromIndex(j)]
+        emap.FindIndex(e2f.FindKey(j)) - 1: [
+            fmap.FindIndex(f) - 1 for f in small_list(e2f.FindFromIndex(j))
+        ]
         for j in range(1, e2f.Size() + 1)
     }
     inter = {i for i, fs in edge_faces.items() if len({group_of[k] for k in fs}) > 1}
-    vertex_degree = {
-        vmap.FindIndex(v2e.FindKey(j)): len(
-            {emap.FindIndex(e) - 1 for e in v2e.FindFromIndex(j)} & inter
-        )
-        for j in range(1, v2e.Size() + 1)
-    }
+    vertex_degree: dict[int, int] = {}
+    for i in inter:
+        e = TopoDS.Edge(emap.FindKey(i + 1))
+        ends = {vmap.FindIndex(v) for v in edge_ends(e)}
+        for v in ends:
+            vertex_degree[v] = vertex_degree.get(v, 0) + 1
 
     def inter_group_degree(v: Any) -> int:
-        return vertex_degree[vmap.FindIndex(v)]
+        return vertex_degree.get(vmap.FindIndex(v), 0)
 
     for g in groups:
         g.loops = _loops(g, group_of, fmap, emap, vmap, edge_faces, inter_group_degree)

@@ -22,7 +22,7 @@ from OCP.TopoDS import TopoDS
 
 from medax.cad.simplify.groups import Group, build_groups
 from medax.cad.simplify.medial import Medial, medial_curve
-from medax.cad.simplify.occ import count, diagonal, shape_map
+from medax.cad.simplify.occ import count, diagonal, shape_map, small_list
 from medax.cad.simplify.rebuild import build_solid
 from medax.cad.simplify.specs import BlendInput, FilletSpec
 from medax.cad.simplify.split import split_along
@@ -217,7 +217,9 @@ def _keep_next_to_corners(shape, blends, medials, kept) -> None:  # type: ignore
         if spec.face not in medials:
             continue
         face = fmap.FindKey(spec.face + 1)
-        near = {fmap.FindIndex(g) - 1 for e in edges_of(face) for g in e2f.FindFromKey(e)} & refused
+        near = {
+            fmap.FindIndex(g) - 1 for e in edges_of(face) for g in small_list(e2f.FindFromKey(e))
+        } & refused
         if near:
             medials.pop(spec.face)
             kept[spec.face] = f"meets corner blend {min(near)} (kept): not supported"

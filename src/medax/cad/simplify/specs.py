@@ -19,7 +19,13 @@ from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
 from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS
 
-from medax.cad.simplify.occ import edge_points, edges_of, max_normal_angle, shape_map
+from medax.cad.simplify.occ import (
+    edge_points,
+    edges_of,
+    max_normal_angle,
+    shape_map,
+    small_list,
+)
 from medax.tolerances import TANGENT_ANGLE
 
 
@@ -77,7 +83,7 @@ def specs_from_blend_faces(shape: Any, blends: Iterable[int]) -> BlendInput:
             if ei in seen:
                 continue
             seen.add(ei)
-            for f in e2f.FindFromKey(e):
+            for f in small_list(e2f.FindFromKey(e)):
                 fi = fmap.FindIndex(f) - 1
                 if fi == b:
                     continue

@@ -14,7 +14,7 @@ from OCP.BRepAlgoAPI import BRepAlgoAPI_Splitter
 from OCP.collections import List_TopoDS_Shape
 from OCP.TopAbs import TopAbs_FACE
 
-from medax.cad.simplify.occ import shape_map
+from medax.cad.simplify.occ import shape_map, small_list
 from medax.errors import CadError
 
 
@@ -54,7 +54,7 @@ def split_along(shape: Any, tools: Sequence[Any], fuzzy: float = 0.0) -> SplitRe
     for i in range(1, omap.Size() + 1):
         f = omap.FindKey(i)
         mods = sp.Modified(f)
-        targets = list(mods) if mods.Size() > 0 else [f]
+        targets = small_list(mods) if mods.Size() > 0 else [f]
         for g in targets:
             k = rmap.FindIndex(g)
             if k > 0:
