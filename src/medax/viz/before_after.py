@@ -27,6 +27,22 @@ def _shade(tris: NDArray[np.float64], rgb: tuple[float, float, float]) -> NDArra
     return np.clip(np.outer(k, rgb), 0, 1)
 
 
+def refine(tris: NDArray[np.float64], max_len: float, levels: int = 5) -> NDArray[np.float64]:
+    """Split triangles (m, 3, 3) with an edge longer than ``max_len`` into 4 (repeatedly):
+    matplotlib depth-sorts whole triangles, so long slivers would paint over near faces."""
+    for _ in range(levels):
+        edge = np.linalg.norm(tris - np.roll(tris, 1, axis=1), axis=2).max(axis=1)
+        big = edge > max_len
+        if not big.any():
+            break
+        t = tris[big]
+        a, b, c = t[:, 0], t[:, 1], t[:, 2]
+        ab, bc, ca = (a + b) / 2, (b + c) / 2, (c + a) / 2
+        parts = [np.stack(x, axis=1) for x in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))]
+        tris = np.concatenate([tris[~big], *parts])
+    return tris
+
+
 def plot_before_after(
     before: Sequence[NDArray[np.float64]],
     after: Sequence[NDArray[np.float64]],
@@ -61,8 +77,9 @@ def plot_before_after(
             if not tris.size:
                 continue
             rgb = GREY if key == -1 else FILLET if key == -2 else cmap(key % 20)[:3]
-            polys.append(tris)
-            colours.append(_shade(tris, rgb))
+            fine = refine(tris, 2 * half / 25)
+            polys.append(fine)
+            colours.append(_shade(fine, rgb))
         # one collection, so matplotlib depth-sorts all triangles together
         pc = Poly3DCollection(np.vstack(polys), facecolors=np.vstack(colours), edgecolors="none")
         ax.add_collection3d(pc)
