@@ -146,3 +146,17 @@ def test_catalogue(name):
         assert r.faces_after == r.faces_before - len(cls.blends) and not r.blends_kept
     else:
         assert r.blends_kept and all(reason for _, reason in r.blends_kept)
+
+
+@pytest.mark.parametrize("root", [False, True])
+def test_boss_top_fillet_pole(root):
+    """A filleted boss top: the top disk and its half-torus become one revolution surface
+    whose profile starts on the axis (the face holds the pole)."""
+    part = P.boss_top_fillet(2.0, root=root)
+    r = _run(part)
+    assert r.faces_after == r.faces_before - len(part.blends) and not r.blends_kept
+    c = check(r.shape)
+    assert c.valid and c.shells == 1 and c.closed
+    assert abs(r.volume_rel_change) <= 1e-9
+    assert r.max_deviation <= 1e-7 * r.diagonal
+    assert {g.surface for g in r.face_groups if g.halves} == {"revolution"}

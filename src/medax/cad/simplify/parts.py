@@ -146,3 +146,26 @@ def vertex_positions(shape: Any) -> list[Any]:
     """All vertex positions of ``shape`` (for debugging)."""
     vmap = shape_map(shape, TopAbs_VERTEX)
     return [vertex_point(TopoDS.Vertex(vmap.FindKey(i))) for i in range(1, vmap.Size() + 1)]
+
+
+def boss_top_fillet(r: float = 2.0, root: bool = True) -> BuiltPart:
+    """Plate 80x60x10 with a boss (radius 12, top at z = 25) whose top edge is filleted
+    (the boss top disk then merges on a revolution surface through the axis); with ``root``
+    its root edge too. 9 faces (10 with ``root``)."""
+    plate = BRepPrimAPI_MakeBox(80.0, 60.0, 10.0).Shape()
+    boss = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(30, 30, 0), gp_Dir(0, 0, 1)), 12.0, 25.0)
+    shape = unify(BRepAlgoAPI_Fuse(plate, boss.Shape()).Shape())
+
+    def circle_at(z: float) -> Any:
+        def pred(p: Any) -> bool:
+            import numpy as np
+
+            d = np.hypot(p[:, 0] - 30, p[:, 1] - 30)
+            return bool(np.all(np.abs(p[:, 2] - z) < 1e-7) and np.all(np.abs(d - 12) < 1e-6))
+
+        return pred
+
+    edges = _edges_where(shape, circle_at(25.0))
+    if root:
+        edges += _edges_where(shape, circle_at(10.0))
+    return fillet(shape, edges, r, "plate with boss, top edge filleted")

@@ -63,12 +63,15 @@ def _joined_edge(run: Run, tol: float) -> Any:
     return mk.Edge()
 
 
-def _surface_normal(surf: Any, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _surface_normal(surf: Any, p: np.ndarray) -> np.ndarray | None:
+    """Unit normal of ``surf`` at the foot of ``p`` (3,); None where it is undefined."""
     proj = GeomAPI_ProjectPointOnSurf(gp_Pnt(*map(float, p)), surf)
+    if proj.NbPoints() == 0:
+        return None
     u, v = proj.LowerDistanceParameters()
-    d1u, d1v = surf.DN(u, v, 1, 0), surf.DN(u, v, 0, 1)
-    n = np.cross(xyz(d1u), xyz(d1v))
-    return n / np.linalg.norm(n), xyz(proj.NearestPoint())
+    n = np.cross(xyz(surf.DN(u, v, 1, 0)), xyz(surf.DN(u, v, 0, 1)))
+    size = float(np.linalg.norm(n))
+    return n / size if size > 1e-12 else None
 
 
 def _pcurve_error(pc: Any, c: Any, surf: Any, f: float, l: float, n: int = 41) -> float:
@@ -185,6 +188,76 @@ def _add_pcurves(face: Any, surf: Any, tol: float) -> None:
         builder.SameParameter(edge, True)
 
 
+def _pole_face(surf: Any, g: Group, tol: float) -> Any | None:
+    """The face of a revolution surface whose profile starts on the axis (a filleted boss
+    top): bounded by one closed edge, it contains the pole. Built on natural bounds (seam and
+    degenerated pole edge by ``BRepBuilderAPI_MakeFace``), its circle replaced by the shared
+    closed edge. None when ``g`` is not such a face."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+    from OCP.BRepTools import BRepTools_ReShape
+    from OCP.Geom import Geom_SurfaceOfRevolution
+    from OCP.Geom2d import Geom2d_Line
+    from OCP.gp import gp_Dir2d, gp_Pnt2d
+
+    if not isinstance(surf, Geom_SurfaceOfRevolution) or len(g.loops) != 1:
+        return None
+    (loop,) = g.loops
+    if len(loop) != 1 or len(loop[0].edges) != 1:
+        return None
+    edge = loop[0].edges[0]
+    v0, v1 = edge_ends(edge)
+    if not v0.IsSame(v1):
+        return None
+    prof = surf.BasisCurve()
+    ax = surf.Axis()
+    c, a = xyz(ax.Location()), xyz(ax.Direction())
+
+    def rho(t: float) -> float:
+        r = xyz(prof.Value(t)) - c
+        return float(np.linalg.norm(r - (r @ a) * a))
+
+    f0, f1 = prof.FirstParameter(), prof.LastParameter()
+    vpole = f0 if rho(f0) < rho(f1) else f1
+    if rho(vpole) > tol:
+        return None
+    proj = GeomAPI_ProjectPointOnSurf(BRep_Tool.Pnt_s(v0), surf)
+    u_v, vm = proj.LowerDistanceParameters()
+    if min(abs(u_v), abs(u_v - 2 * np.pi)) > 1e-7:
+        return None  # the closed edge's vertex is not on the seam
+    lo, hi = min(vpole, vm), max(vpole, vm)
+    mk = BRepBuilderAPI_MakeFace(surf, 0.0, 2 * np.pi, lo, hi, tol)
+    if not mk.IsDone():
+        return None
+    face = mk.Face()
+    circle = None
+    for e in edges_of(face):
+        if BRep_Tool.Degenerated_s(e) or BRep_Tool.IsClosed_s(e, face):
+            continue
+        circle = e
+    if circle is None:
+        return None
+    shared = TopoDS.Edge(edge)
+    # does the shared edge's parameter run the circle's way (+u)? Then traverse it the way
+    # the face traverses the circle.
+    tc = edge_points(circle, 3)
+    te = edge_points(shared, 3)
+    same = float((tc[1] - tc[0]) @ (te[1] - te[0])) > 0
+    fwd = shared.Oriented(circle.Orientation())
+    if not same:
+        fwd = fwd.Reversed()
+    reshape = BRepTools_ReShape()
+    reshape.Replace(circle, fwd)
+    reshape.Replace(edge_ends(circle)[0], v0)
+    new_face = TopoDS.Face(reshape.Apply(face))
+    e0 = TopoDS.Edge(edge)
+    c3, f, l = edge_curve(e0)
+    line = Geom2d_Line(gp_Pnt2d(0.0, vm), gp_Dir2d(1.0 if same else -1.0, 0.0))
+    if _pcurve_error(line, c3, surf, f, l) > tol:
+        line = GeomProjLib.Curve2d_s(c3, f, l, surf, tol)
+    BRep_Builder().UpdateEdge(e0, line, new_face, tol)
+    return new_face
+
+
 def build_solid(
     split: SplitResult, groups: list[Group], surfaces: dict[int, Any], tol: float
 ) -> tuple[Any, list[Any]]:
@@ -207,15 +280,26 @@ def build_solid(
                 for k in g.members
                 if split.origin[k] == g.support
             )
-            p = face_inside_point(ref)
-            if p is None:  # a boundary point serves too: the surfaces are smooth there
-                p = edge_points(next(edges_of(ref)), 3)[1]
-            n_out = face_normal_at(ref, p)
-            n_new, _ = _surface_normal(surf, p)
-            flip = n_out is None or float(n_out @ n_new) < 0
+            # an inside point, else a boundary point (smooth there); never a pole
+            candidates = [face_inside_point(ref), edge_points(next(edges_of(ref)), 3)[1]]
+            flip = None
+            for p in candidates:
+                if p is None:
+                    continue
+                n_out = face_normal_at(ref, p)
+                n_new = _surface_normal(surf, p)
+                if n_out is not None and n_new is not None:
+                    flip = float(n_out @ n_new) < 0
+                    break
+            if flip is None:
+                raise CadError(f"face {g.support}: no point with defined normals")
         else:  # the face's own surface: its orientation says it all
             surf = BRep_Tool.Surface_s(member)
             flip = member.Orientation() == TopAbs_REVERSED
+        pole = _pole_face(surf, g, tol)
+        if pole is not None:
+            faces.append(pole.Reversed() if flip else pole)
+            continue
         face = TopoDS_Face()
         builder.MakeFace(face, surf, tol)
         for loop in g.loops:

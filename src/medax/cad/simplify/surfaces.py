@@ -107,9 +107,12 @@ def _boundary_samples(face: Any, n: int = 17) -> Array:
     return np.vstack([edge_points(e, n) for e in edges_of(face)])
 
 
-def _chain(segment: tuple[Array, Array], arcs: list[Array], tol: float) -> list[Any] | str:
+def _chain(
+    segment: tuple[Array, Array], arcs: list[Array], tol: float, fixed: Array | None = None
+) -> list[Any] | str:
     """Profile pieces: line ``segment`` (p0, p1) with each arc (3 points, first on the line's
-    end) attached at the matching end; free line ends extended. Returns curves in order."""
+    end) attached at the matching end; free line ends extended, except an end at ``fixed``
+    (a point on the axis of revolution). Returns curves in order."""
     p0, p1 = segment
     at: dict[int, Array] = {}
     for arc in arcs:
@@ -124,8 +127,12 @@ def _chain(segment: tuple[Array, Array], arcs: list[Array], tol: float) -> list[
     if length < tol:
         return "degenerate section of the supporting face"
     t = (p1 - p0) / length
-    q0 = p0 if 0 in at else p0 - FREE_END_EXTENSION * length * t
-    q1 = p1 if 1 in at else p1 + FREE_END_EXTENSION * length * t
+
+    def stays(p: Array) -> bool:
+        return fixed is not None and float(np.linalg.norm(p - fixed)) <= tol
+
+    q0 = p0 if 0 in at or stays(p0) else p0 - FREE_END_EXTENSION * length * t
+    q1 = p1 if 1 in at or stays(p1) else p1 + FREE_END_EXTENSION * length * t
     pieces: list[Any] = []
     if 0 in at:
         a = at[0][::-1]
@@ -155,6 +162,14 @@ def _line_extent(points: Array, tol: float) -> tuple[Array, Array] | None:
         return None
     s_along = (points - c) @ vt[0]
     return points[np.argmin(s_along)], points[np.argmax(s_along)]
+
+
+def _point_in_face(face: Any, p: Array, tol: float) -> bool:
+    """True when ``p`` (3,) lies inside ``face`` (or on its boundary)."""
+    from OCP.BRepClass import BRepClass_FaceClassifier
+    from OCP.TopAbs import TopAbs_OUT
+
+    return BRepClass_FaceClassifier(face, _p(p), tol).State() != TopAbs_OUT
 
 
 def merged_surface(support: Any, halves: list[Half], tol: float) -> MergedSurface | str:
@@ -237,16 +252,27 @@ def _revolution(support: Any, halves: list[Half], hads: list[Any], tol: float) -
         return c + np.outer(rho, x0) + np.outer(z, a)
 
     pts = meridian(_boundary_samples(support))
-    if np.min(np.linalg.norm(pts - c - np.outer((pts - c) @ a, a), axis=1)) < 10 * tol:
+    rho = np.linalg.norm(pts - c - np.outer((pts - c) @ a, a), axis=1)
+    fixed = None
+    if sk == GeomAbs_Plane:
+        # a disk around the axis (a filleted boss top): the profile starts on the axis
+        z = float((pts[0] - c) @ a)
+        centre = c + z * a
+        inside = _point_in_face(support, centre, 10 * tol)
+        if inside:
+            pts = np.vstack([pts, centre])
+            fixed = centre
+        elif rho.min() < 10 * tol:
+            return "supporting face touches the axis of revolution: not supported"
+    elif rho.min() < 10 * tol:
         return "supporting face reaches the axis (pole): not supported"
     ext = _line_extent(pts, tol)
     if ext is None:
         return "supporting face's meridian section is not a line"
     arcs = [meridian(_half_points(h)) for h in halves]
-    pieces = _chain(ext, arcs, 10 * tol)
+    pieces = _chain(ext, arcs, 10 * tol, fixed)
     if isinstance(pieces, str):
         return pieces
-    # Keep the free ends of a plane's radial line away from the axis.
     profile = _join(pieces, tol)
     surf = Geom_SurfaceOfRevolution(profile, gp_Ax1(_p(c), gp_Dir(*map(float, a))))
     return MergedSurface(surf, "revolution", profile)
