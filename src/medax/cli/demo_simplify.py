@@ -1,8 +1,9 @@
 """Demo part: fillet simplification of two filleted parts built with OCCT at run time.
 
-A box with four filleted vertical edges (10 -> 6 faces, extrusion surfaces) and a plate with
-a filleted boss and a hole (10 -> 9 faces, revolution surfaces): the input STEP, the
-simplified STEP, the JSON report and the before/after picture of each.
+A box with four filleted vertical edges (10 -> 6 faces, extrusion surfaces), a plate with a
+filleted boss and a hole (10 -> 9 faces, revolution surfaces) and a boss filleted at its root
+and top (10 -> 8 faces; the top face holds the pole of its revolution surface): the input
+STEP, the simplified STEP, the JSON report and the before/after picture of each.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ def demo(outdir: Path) -> list[Path]:
     for name, part in (
         ("box", parts.box_vertical_fillets()),
         ("boss", parts.plate_with_boss()),
+        ("boss-top", parts.boss_top_fillet(2.0, root=True)),
     ):
         src = write_step(part.shape, outdir / f"simplify-{name}-input.step")
         out, rep, png = (outdir / f"simplify-{name}{ext}" for ext in (".step", ".json", ".png"))
