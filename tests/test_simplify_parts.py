@@ -160,3 +160,25 @@ def test_boss_top_fillet_pole(root):
     assert abs(r.volume_rel_change) <= 1e-9
     assert r.max_deviation <= 1e-7 * r.diagonal
     assert {g.surface for g in r.face_groups if g.halves} == {"revolution"}
+
+
+def test_deviation_measures_a_known_offset():
+    """The validator is not vacuous: a face moved by 0.01 along its normal is 0.01 away
+    both ways; a face of a box twice as wide is caught from the new side only."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.gp import gp_Trsf, gp_Vec
+
+    from medax.cad.simplify.validate import deviation
+
+    box = BRepPrimAPI_MakeBox(10.0, 20.0, 30.0).Shape()
+    bottom = next(f for f in faces_of(box) if abs(face_samples(f, 2)[:, 2]).max() < 1e-12)
+    t = gp_Trsf()
+    t.SetTranslation(gp_Vec(0.0, 0.0, 0.01))
+    moved = next(faces_of(BRepBuilderAPI_Transform(bottom, t, True).Shape()))
+    d_old_new, d_new_old = deviation([bottom], moved)
+    assert d_old_new == pytest.approx(0.01, abs=1e-12)
+    assert d_new_old == pytest.approx(0.01, abs=1e-12)
+    wide = BRepPrimAPI_MakeBox(20.0, 20.0, 30.0).Shape()
+    wide_bottom = next(f for f in faces_of(wide) if abs(face_samples(f, 2)[:, 2]).max() < 1e-12)
+    d1, d2 = deviation([bottom], wide_bottom)
+    assert d1 < 1e-12 and d2 > 4.0
