@@ -157,7 +157,7 @@ def simplify(
     say(f"{len(specs)} fillets with exact merged surfaces on {len(surfaces)} faces")
 
     def attempt(sel: dict[int, FilletSpec]) -> _Attempt | str:
-        return _attempt(work, sel, medials, surfaces, fmap, diag, vol0, tol)
+        return _attempt(work, sel, medials, surfaces, fmap, diag, vol0, tol, say)
 
     result = attempt(specs) if specs else None
     if isinstance(result, str):
@@ -263,16 +263,19 @@ def _surfaces(specs, medials, fmap, emap, kept, btol) -> dict[int, MergedSurface
             return surfaces
 
 
-def _attempt(work, sel, medials, surfaces, fmap, diag, vol0, tol) -> _Attempt | str:  # type: ignore[no-untyped-def]
+def _attempt(work, sel, medials, surfaces, fmap, diag, vol0, tol, say) -> _Attempt | str:  # type: ignore[no-untyped-def]
     try:
+        say(f"splitting {len(sel)} fillets along their medial curves")
         split = split_along(work, [medials[f].edge for f in sel])
         groups = build_groups(split, {f: s.supporting for f, s in sel.items()})
+        say(f"rebuilding: {len(groups)} faces")
         used = {g.support: surfaces[g.support].surface for g in groups if g.support is not None}
         shape, faces = build_solid(split, groups, used, BUILD_TOL * diag)
     except CadError as err:
         return str(err)
     except Exception as err:  # OCCT Standard_Failure subclasses, translated here
         return f"OCCT failed while rebuilding ({type(err).__name__}: {err})"
+    say("validating (analyzer, shell, volume, deviation both ways)")
     c = check(shape)
     if not c.valid:
         return "rebuilt solid not valid (BRepCheck_Analyzer)"
