@@ -36,6 +36,8 @@ log = logging.getLogger(__name__)
 DEVIATION_TOL = 1e-5
 #: Largest accepted relative volume change.
 VOLUME_TOL = 1e-6
+#: The deviation check samples an n x n UV grid on every old and new face (kept inside).
+DEVIATION_SAMPLES = 8
 #: Geometric tolerance of the construction, relative to the diagonal.
 BUILD_TOL = 1e-7
 
@@ -93,6 +95,7 @@ class SimplifyResult:
             },
             "diagonal": self.diagonal,
             "medial_equidistance_error": self.medial_error,
+            "deviation_samples_per_face": DEVIATION_SAMPLES**2,
             "face_groups": [
                 {
                     "new_face": g.new_face,
@@ -289,7 +292,7 @@ def _attempt(work, sel, medials, surfaces, fmap, diag, vol0, tol, say) -> _Attem
         if g.support is None:
             continue
         old = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
-        dev = max(dev, *deviation(old, face, enough=1e-3 * tol * diag))
+        dev = max(dev, *deviation(old, face, n=DEVIATION_SAMPLES, enough=1e-3 * tol * diag))
     if dev > tol * diag:
         return f"surface deviation {dev / diag:.2e} x diagonal (> {tol:g})"
     halves_origin = {g.id: [split.origin[k] for k in g.halves] for g in groups}
