@@ -102,3 +102,25 @@ def test_cli_truncated_step(box_step, tmp_path):
     out = tmp_path / "o.step"
     assert main(["simplify", str(bad), "-o", str(out)]) == 1
     assert not out.exists()
+
+
+def test_cli_two_solids(tmp_path):
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.gp import gp_Trsf, gp_Vec
+    from OCP.TopoDS import TopoDS_Compound
+
+    t = gp_Trsf()
+    t.SetTranslation(gp_Vec(200.0, 0.0, 0.0))
+    far = BRepBuilderAPI_Transform(P.plate_with_boss().shape, t, True).Shape()
+    comp = TopoDS_Compound()
+    b = BRep_Builder()
+    b.MakeCompound(comp)
+    b.Add(comp, P.box_vertical_fillets().shape)
+    b.Add(comp, far)
+    src, out, rep = tmp_path / "two.step", tmp_path / "o.step", tmp_path / "r.json"
+    write_step(comp, src)
+    assert main(["simplify", str(src), "-o", str(out), "--report", str(rep)]) == 0
+    report = json.loads(rep.read_text())
+    assert [(s["faces_before"], s["faces_after"]) for s in report["solids"]] == [(10, 6), (10, 9)]
+    assert (report["faces_before"], report["faces_after"]) == (20, 15) and report["valid"]

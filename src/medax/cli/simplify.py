@@ -73,23 +73,46 @@ def run(args: argparse.Namespace) -> int:
     shape = results[0].shape if len(results) == 1 else _compound([r.shape for r in results])
     write_step(shape, args.output)
     reports = [r.report() for r in results]
-    report: dict[str, Any] = dict(reports[0])
+    report = _combine(reports)
     report["input"] = str(args.part)
     report["output"] = str(args.output)
-    if len(reports) > 1:
-        report["solids"] = reports
     if args.report:
         write_json(args.report, report)
     if args.png:
         _png(classes[0].shape, results[0], args.png, Path(args.part).name)
-    r = results[0]
-    print(
-        f"{args.part}: faces {r.faces_before} -> {r.faces_after}, "
-        f"{len(r.blends_removed)} blends removed, {len(r.blends_kept)} kept, "
-        f"valid {r.valid}, volume change {r.volume_rel_change:.1e}, "
-        f"deviation {r.max_deviation / r.diagonal:.1e} x diagonal -> {args.output}"
-    )
+    for k, r in enumerate(results):
+        label = f"{args.part}" + (f" solid {k}" if len(results) > 1 else "")
+        print(
+            f"{label}: faces {r.faces_before} -> {r.faces_after}, "
+            f"{len(r.blends_removed)} blends removed, {len(r.blends_kept)} kept, "
+            f"valid {r.valid}, volume change {r.volume_rel_change:.1e}, "
+            f"deviation {r.max_deviation / r.diagonal:.1e} x diagonal"
+        )
+    print(f"wrote {args.output}")
     return 0
+
+
+def _combine(reports: list[dict[str, Any]]) -> dict[str, Any]:
+    """One report: the solid's own for one solid; for several, totals (faces, time), the
+    worst values (validity, volume change, deviation) and each solid's report in
+    ``solids`` (face indices are per solid)."""
+    if len(reports) == 1:
+        return dict(reports[0])
+    worst_dv = max((r["volume_rel_change"] for r in reports), key=abs)
+    worst_dev = max(reports, key=lambda r: r["max_deviation"]["relative_to_diagonal"])
+    return {
+        "faces_before": sum(r["faces_before"] for r in reports),
+        "faces_after": sum(r["faces_after"] for r in reports),
+        "blends_removed": [[k, f] for k, r in enumerate(reports) for f in r["blends_removed"]],
+        "blends_kept": [dict(b, solid=k) for k, r in enumerate(reports) for b in r["blends_kept"]],
+        "valid": all(r["valid"] for r in reports),
+        "volume_rel_change": worst_dv,
+        "max_deviation": worst_dev["max_deviation"],
+        "face_groups": [dict(g, solid=k) for k, r in enumerate(reports) for g in r["face_groups"]],
+        "time_s": sum(r["time_s"] for r in reports),
+        "notes": [f"{len(reports)} solids: face indices are per solid (see 'solids')"],
+        "solids": reports,
+    }
 
 
 def _compound(shapes: list[Any]) -> Any:
