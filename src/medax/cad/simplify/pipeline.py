@@ -27,7 +27,7 @@ from medax.cad.simplify.rebuild import build_solid
 from medax.cad.simplify.specs import BlendInput, FilletSpec
 from medax.cad.simplify.split import split_along
 from medax.cad.simplify.surfaces import Half, MergedSurface, merged_surface
-from medax.cad.simplify.validate import check, deviation, volume
+from medax.cad.simplify.validate import check, deviation, volume, volume_change
 from medax.errors import CadError
 
 log = logging.getLogger(__name__)
@@ -284,9 +284,9 @@ def _attempt(work, sel, medials, surfaces, fmap, diag, vol0, tol, say) -> _Attem
         return "rebuilt solid not valid (BRepCheck_Analyzer)"
     if c.shells != 1 or not c.closed:
         return f"rebuilt solid has {c.shells} shells / free edges"
-    dv = abs(c.volume - vol0) / abs(vol0)
-    if dv > VOLUME_TOL:
-        return f"volume changed by {dv:.2e} (> {VOLUME_TOL:g})"
+    dv, why = volume_change(shape, vol0, VOLUME_TOL)
+    if why:
+        return why
     dev = 0.0
     for g, face in zip(groups, faces, strict=True):
         if g.support is None:
@@ -297,7 +297,7 @@ def _attempt(work, sel, medials, surfaces, fmap, diag, vol0, tol, say) -> _Attem
         return f"surface deviation {dev / diag:.2e} x diagonal (> {tol:g})"
     halves_origin = {g.id: [split.origin[k] for k in g.halves] for g in groups}
     kinds = {g.id: surfaces[g.support].kind for g in groups if g.support is not None}
-    return _Attempt(shape, groups, faces, dev, c.volume, split.origin, halves_origin, kinds)
+    return _Attempt(shape, groups, faces, dev, vol0 * (1 + dv), split.origin, halves_origin, kinds)
 
 
 def _clusters(specs: dict[int, FilletSpec]) -> list[list[int]]:
