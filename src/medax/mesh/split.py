@@ -14,10 +14,51 @@ from dataclasses import dataclass
 from medax import tolerances
 from medax.axis import trace_axis
 from medax.errors import InputError
+from medax.geometry._types import FloatArray
 from medax.geometry.curve import Curve, sub_curve
 from medax.geometry.region import Region, pair_roles
 
 log = logging.getLogger(__name__)
+
+
+#: sampling pieces assumed for a traced axis used as a side (its spans are many and short)
+AXIS_SIDE_PIECES = 12
+
+
+class AxisSide(Curve):
+    """A traced axis spline used as the side of a sub-region.
+
+    Identical geometry (evaluation and derivatives delegate to the spline); only
+    :meth:`complexity`, which sets how densely the global closest-point search samples the
+    curve, is capped: the tracer's spline has one span per point (hundreds), all smooth, and
+    sampling every span 48 times makes each distance query cost ``O(points x spans)``."""
+
+    def __init__(self, spline: Curve, pieces: int = AXIS_SIDE_PIECES) -> None:
+        self.spline = spline
+        self.pieces = int(min(pieces, spline.complexity()))
+
+    @property
+    def dim(self) -> int:
+        return self.spline.dim
+
+    @property
+    def kind(self) -> str:
+        return "axis"
+
+    def complexity(self) -> int:
+        return self.pieces
+
+    def evaluate(self, t: FloatArray) -> FloatArray:
+        return self.spline.evaluate(t)
+
+    def derivative(self, t: FloatArray, order: int = 1) -> FloatArray:
+        return self.spline.derivative(t, order)
+
+    def reversed(self) -> Curve:
+        return AxisSide(self.spline.reversed(), self.pieces)
+
+    def transformed(self, offset: FloatArray, scale: float) -> Curve:
+        return AxisSide(self.spline.transformed(offset, scale), self.pieces)
 
 
 @dataclass(frozen=True)
@@ -102,12 +143,13 @@ def axis_family(
             ratio = 0.5
         axis = trace_axis(piece.region, pair, tol=tol, method=trace_method, ratio=ratio,
                           point_tol=min(tolerances.POINT_TOL, tol))  # fmt: skip
-        r1, r2 = split_region(piece.region, pair, axis.spline, axis.t_start, axis.t_end)
+        side = AxisSide(axis.spline)
+        r1, r2 = split_region(piece.region, pair, side, axis.t_start, axis.t_end)
         t1, t2 = _lerp(piece.b1, axis.t_start), _lerp(piece.b2, axis.t_end)
         p1 = Piece(r1, (t1, piece.b1[1]), (piece.b2[0], t2))
         p2 = Piece(r2, (piece.b1[0], t1), (t2, piece.b2[1]))
         rec(p1, None if n is None else k, depth + 1)
-        out.append(FamilyCurve(axis.spline, t1, t2))
+        out.append(FamilyCurve(side, t1, t2))
         rec(p2, None if n is None else n - k, depth + 1)
 
     rec(Piece(region, (0.0, 1.0), (0.0, 1.0)), divisions, 0)

@@ -1,0 +1,196 @@
+"""Benchmark: medax quad meshes vs gmsh transfinite + recombine on every shared region.
+
+For each region of ``regions.json`` and each size N x N (16, 32, 128, 512 by default), the
+same run meshes the region with medax (``method="ratio"``), with gmsh transfinite + recombine
+(the same boundary division counts, exact geometry: lines, circle arcs and the same B-splines)
+and with gmsh transfinite + ``Mesh.Smoothing = 100``. It prints the quality side by side
+(scaled Jacobian min / 5th percentile, min angle min / 5th percentile, inverted count, all by
+medax's Verdict code on both meshes) and the time ratio medax / gmsh transfinite. Finally the
+peak memory of a medax 512 x 512 mesh (largest region) is measured in a fresh subprocess
+(``ru_maxrss``, and ``tracemalloc`` for the Python heap).
+
+    python benchmarks/bench_mesh.py [--sizes 16,32,128,512] [--regions a,b] [--paper]
+
+``--paper`` adds the paper's recursion (``method="paper"``) at the sizes up to 32.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from medax.geometry import Arc, BSpline, Line, Region, read_regions, sample_regions_path
+from medax.geometry.curve import Curve
+from medax.mesh import mesh_region, quad_quality
+
+ROOT = Path(__file__).resolve().parent.parent
+SHARED = ROOT.parent / "shared" / "bench" / "regions.json"
+
+
+def regions_file() -> Path:
+    return SHARED if SHARED.is_file() else sample_regions_path()
+
+
+def _gmsh_curve(gmsh, side: Curve, p0: int, p1: int) -> int:
+    occ = gmsh.model.occ
+    if isinstance(side, Line):
+        return occ.addLine(p0, p1)
+    if isinstance(side, Arc):
+        c = occ.addPoint(*side.center, 0.0)
+        return occ.addCircleArc(p0, c, p1)
+    if isinstance(side, BSpline) and side.weights is None:
+        ctrl = side.control_points
+        tags = [p0] + [occ.addPoint(x, y, 0.0) for x, y in ctrl[1:-1]] + [p1]
+        knots, mult = np.unique(side.knots, return_counts=True)
+        return occ.addBSpline(tags, degree=side.degree, knots=knots.tolist(),
+                              multiplicities=mult.tolist())  # fmt: skip
+    pts = side.sample(401)  # other kinds: interpolating spline through dense samples
+    tags = [p0] + [occ.addPoint(x, y, 0.0) for x, y in pts[1:-1]] + [p1]
+    return occ.addSpline(tags)
+
+
+def gmsh_mesh(region: Region, n1: int, n2: int, smoothing: int) -> tuple[np.ndarray, np.ndarray,
+                                                                        float, float]:  # fmt: skip
+    """gmsh transfinite + recombine: (points, quads, seconds, boundary deviation)."""
+    import gmsh
+
+    t0 = time.perf_counter()
+    gmsh.clear()
+    gmsh.model.add(region.name)
+    occ = gmsh.model.occ
+    corners = [occ.addPoint(x, y, 0.0) for x, y in region.corners]
+    curves = [_gmsh_curve(gmsh, region.sides[k], corners[k], corners[(k + 1) % 4])
+              for k in range(4)]  # fmt: skip
+    loop = occ.addCurveLoop(curves)
+    surf = occ.addPlaneSurface([loop])
+    occ.synchronize()
+    for k, c in enumerate(curves):
+        gmsh.model.mesh.setTransfiniteCurve(c, (n1 if k % 2 == 0 else n2) + 1)
+    gmsh.model.mesh.setTransfiniteSurface(surf, cornerTags=corners)
+    gmsh.model.mesh.setRecombine(2, surf)
+    gmsh.option.setNumber("Mesh.Smoothing", smoothing)
+    gmsh.model.mesh.generate(2)
+    tags, xyz, _ = gmsh.model.mesh.getNodes()
+    etypes, _, enodes = gmsh.model.mesh.getElements(2)
+    dt = time.perf_counter() - t0
+    pts = np.zeros((int(tags.max()) + 1, 2))
+    pts[tags.astype(np.int64)] = xyz.reshape(-1, 3)[:, :2]
+    quads = np.asarray(enodes[list(etypes).index(3)], dtype=np.int64).reshape(-1, 4)
+    # geometry check: gmsh's sides against ours
+    dev = 0.0
+    for k, c in enumerate(curves):
+        lo, hi = gmsh.model.getParametrizationBounds(1, c)
+        par = np.linspace(lo[0], hi[0], 50)
+        g = np.asarray(gmsh.model.getValue(1, c, par)).reshape(-1, 3)[:, :2]
+        dev = max(dev, float(region.sides[k].closest(g).distance.max()))
+    return pts, quads, dt, dev
+
+
+def orient(pts: np.ndarray, quads: np.ndarray) -> np.ndarray:
+    """Quads made counter-clockwise when gmsh's surface normal points to -z."""
+    p = pts[quads]
+    area = np.sum(p[:, :, 0] * np.roll(p[:, :, 1], -1, 1) - np.roll(p[:, :, 0], -1, 1) * p[:, :, 1],
+                  axis=1)  # fmt: skip
+    return quads[:, ::-1] if np.median(area) < 0 else quads
+
+
+def stats(pts: np.ndarray, quads: np.ndarray) -> dict[str, float]:
+    s = quad_quality(pts, quads).summary()
+    return {"sj_min": s["scaled_jacobian"]["min"], "sj_p5": s["scaled_jacobian"]["p5"],
+            "ang_min": s["min_angle"]["min"], "ang_p5": s["min_angle"]["p5"],
+            "inv": s["n_inverted"]}  # fmt: skip
+
+
+def memory_child(name: str, n: int) -> None:
+    """Run in a subprocess: one medax n x n mesh; print peak RSS and Python heap (MiB)."""
+    import tracemalloc
+
+    region = read_regions(regions_file())[name]
+    base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    tracemalloc.start()
+    t0 = time.perf_counter()
+    mesh = mesh_region(region, (n, n))
+    mesh.quality()
+    dt = time.perf_counter() - t0
+    _, peak = tracemalloc.get_traced_memory()
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    print(json.dumps({"rss_mib": rss / 1024, "rss_before_mib": base / 1024,
+                      "heap_peak_mib": peak / 2**20, "time_s": dt}))  # fmt: skip
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", default="16,32,128,512")
+    ap.add_argument("--regions", default="")
+    ap.add_argument("--paper", action="store_true", help="add method='paper' at N <= 32")
+    ap.add_argument("--memory-child", nargs=2, metavar=("REGION", "N"), help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.memory_child:
+        memory_child(args.memory_child[0], int(args.memory_child[1]))
+        return 0
+    import gmsh
+
+    regions = read_regions(regions_file())
+    names = [s for s in args.regions.split(",") if s] or list(regions)
+    sizes = [int(s) for s in args.sizes.split(",")]
+    gmsh.initialize(readConfigFiles=False)
+    gmsh.option.setNumber("General.Terminal", 0)
+    head = (f"{'region':15s} {'N':>4s} {'mesher':12s} {'time s':>8s} {'sj min':>7s} {'sj p5':>7s}"
+            f" {'ang min':>7s} {'ang p5':>7s} {'inv':>4s}  {'t/gmsh':>7s}")  # fmt: skip
+    print(f"regions: {regions_file()}")
+    print(head)
+    print("-" * len(head))
+    verdict = []
+    for name in names:
+        region = regions[name]
+        for n in sizes:
+            t0 = time.perf_counter()
+            m = mesh_region(region, (n, n))
+            t_medax = time.perf_counter() - t0
+            rows = [("medax ratio", m.points, m.quads, t_medax)]
+            if args.paper and n <= 32:
+                t0 = time.perf_counter()
+                mp = mesh_region(region, (n, n), method="paper", tol=1e-7)
+                rows.append(("medax paper", mp.points, mp.quads, time.perf_counter() - t0))
+            gp, gq, t_gmsh, dev = gmsh_mesh(region, n, n, 0)
+            rows.append(("gmsh TFI", gp, orient(gp, gq), t_gmsh))
+            sp, sq, t_sm, _ = gmsh_mesh(region, n, n, 100)
+            rows.append(("gmsh TFI+sm", sp, orient(sp, sq), t_sm))
+            res = {}
+            for label, pts, quads, t in rows:
+                s = stats(pts, quads)
+                res[label] = s
+                print(f"{name:15s} {n:4d} {label:12s} {t:8.3f} {s['sj_min']:7.3f} {s['sj_p5']:7.3f}"
+                      f" {s['ang_min']:7.2f} {s['ang_p5']:7.2f} {s['inv']:4d}  "
+                      f"{t / t_gmsh:7.2f}")  # fmt: skip
+            a, g = res["medax ratio"], res["gmsh TFI"]
+            ok = a["sj_p5"] >= g["sj_p5"] - 1e-12 and a["ang_min"] >= g["ang_min"] - 1e-9
+            verdict.append((name, n, ok, t_medax / t_gmsh, dev))
+    gmsh.finalize()
+    print("\nquality target (medax sj p5 and min angle >= gmsh TFI), time ratio, gmsh geometry "
+          "deviation from ours:")  # fmt: skip
+    for name, n, ok, ratio, dev in verdict:
+        print(f"  {name:15s} {n:4d}  quality {'met' if ok else 'MISSED'}  time x{ratio:.1f}  "
+              f"(gmsh sides within {dev:.1e})")  # fmt: skip
+    big = max(sizes)
+    worst = "wavy" if "wavy" in names else names[0]
+    out = subprocess.run([sys.executable, __file__, "--memory-child", worst, str(big)],
+                         capture_output=True, text=True, check=True)  # fmt: skip
+    mem = json.loads(out.stdout.strip().splitlines()[-1])
+    print(
+        f"\nmemory, medax {big}x{big} on {worst} in a fresh process: peak RSS "
+        f"{mem['rss_mib']:.0f} MiB (interpreter + imports {mem['rss_before_mib']:.0f} MiB), "
+        f"Python heap peak {mem['heap_peak_mib']:.0f} MiB, {mem['time_s']:.1f} s"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
