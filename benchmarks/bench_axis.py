@@ -65,8 +65,9 @@ class DenseDistance:
     The nearest of ``COARSE`` evenly spread samples and the nearest outside its
     neighbourhood (brute force; two basins, so a foot point that jumps between distant parts
     of a wavy curve is found), then the nearest of the 200k samples around each candidate,
-    then Newton on ``(C(t) - x) . C'(t) = 0`` bracketed by the neighbouring samples. (A k-d tree of the 200k samples is avoided: it
-    degenerates for points far from a nearly straight sample set.)
+    then Newton on ``(C(t) - x) . C'(t) = 0`` bracketed by the neighbouring samples. (A k-d
+    tree of the 200k samples is avoided: it degenerates for points far from a nearly straight
+    sample set.)
     """
 
     COARSE, CHUNK = 4_001, 4096
