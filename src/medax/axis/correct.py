@@ -21,7 +21,8 @@ def correct_newton(
     """
     p = np.array(p, dtype=np.float64, copy=True)
     s = field(p)
-    g, grad = s.g.copy(), s.grad.copy()
+    cols = {f: getattr(s, f).copy() for f in FieldSample.__dataclass_fields__}
+    g, grad = cols["g"], cols["grad"]
     lam = np.ones(len(p))
     goal = target * tol
     done = 2.0 * np.abs(g) <= goal
@@ -36,13 +37,15 @@ def correct_newton(
         st = field(trial)
         better = np.abs(st.g) < np.abs(g[act])
         idx = act[better]
-        p[idx], g[idx], grad[idx] = trial[better], st.g[better], st.grad[better]
+        p[idx] = trial[better]
+        for f, col in cols.items():  # the accepted points' field (g and grad among them)
+            col[idx] = getattr(st, f)[better]
         lam[idx] = 1.0
         lam[act[~better]] *= 0.5
         done[idx] = 2.0 * np.abs(g[idx]) <= goal
         stuck = act[~better][lam[act[~better]] < 1e-12]
         done[stuck] = True  # no further progress possible (round-off floor)
-    final = field(p)
+    final = FieldSample(**cols)
     return p, final, 2.0 * np.abs(final.g) <= tol, it
 
 

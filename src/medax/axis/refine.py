@@ -64,6 +64,7 @@ def fit_and_refine(
     spline: BSpline | None = None
     u = np.zeros(0)
     rounds = 0
+    checked: _Checked | None = None
     for rounds in range(1, MAX_ROUNDS + 1):  # noqa: B007
         # 1. pieces between breaks need DEGREE + 1 points: insert chord midpoints where short
         cuts = [0, *sorted(breaks), len(pts) - 1]
@@ -96,9 +97,7 @@ def fit_and_refine(
             tried = set()
             continue
         # 3. check the curve between the points
-        frac = np.arange(1, CHECK_SAMPLES) / CHECK_SAMPLES
-        uu = (u[:-1, None] + frac[None, :] * np.diff(u)[:, None]).ravel()
-        err = field(spline.evaluate(uu)).error.reshape(len(u) - 1, -1).max(axis=1)
+        err, checked = _check(field, spline, u, pts, checked, tol_curve)
         curve_error = float(err.max())
         bad = np.nonzero(err > tol_curve)[0]
         if bad.size == 0:
@@ -109,6 +108,52 @@ def fit_and_refine(
         iters += it
     assert spline is not None
     return Fitted(pts, s, sorted(breaks), spline, u, curve_error, rounds, iters)
+
+
+@dataclass
+class _Checked:
+    """Check samples of the last round: per-interval endpoint keys, space points
+    (n_int, m, dim) and equidistance errors (n_int, m) (measured or bounded)."""
+
+    keys: dict[bytes, int]
+    x: FloatArray
+    err: FloatArray
+
+
+def _check(
+    field: DistanceField,
+    spline: BSpline,
+    u: FloatArray,
+    pts: FloatArray,
+    prev: _Checked | None,
+    tol_curve: float,
+) -> tuple[FloatArray, _Checked]:
+    """Equidistance error of ``spline`` at ``CHECK_SAMPLES - 1`` samples inside each interval
+    of ``u`` (n,), max per interval (n - 1,).
+
+    ``2|g|`` is 2-Lipschitz in space (each distance is 1-Lipschitz), so where an interval
+    between the same two points was checked in the previous round, ``err_old + 2 |x - x_old|``
+    bounds the new error at each sample; samples whose bound is within half the tolerance
+    are not re-measured (after a refit only the intervals near inserted points move by more
+    than round-off), the others are measured with the field.
+    """
+    frac = np.arange(1, CHECK_SAMPLES) / CHECK_SAMPLES
+    m = CHECK_SAMPLES - 1
+    uu = (u[:-1, None] + frac[None, :] * np.diff(u)[:, None]).ravel()
+    y = spline.evaluate(uu)
+    x = field.region.embedding.evaluate(y).reshape(len(u) - 1, m, -1)
+    ends = [pts[i].tobytes() + pts[i + 1].tobytes() for i in range(len(pts) - 1)]
+    err = np.full((len(u) - 1, m), np.inf)
+    if prev is not None:
+        j = np.array([prev.keys.get(k, -1) for k in ends], dtype=np.int64)
+        same = np.nonzero(j >= 0)[0]
+        moved = np.linalg.norm(x[same] - prev.x[j[same]], axis=2)
+        err[same] = prev.err[j[same]] + 2.0 * moved
+    need = ~(err <= 0.5 * tol_curve)
+    if np.any(need):
+        err[need] = field(y.reshape(len(u) - 1, m, 2)[need]).error
+    keys = {k: i for i, k in enumerate(ends)}
+    return err.max(axis=1), _Checked(keys, x, err)
 
 
 def _insert(

@@ -72,11 +72,13 @@ class BSpline(Curve):
         return max(1, int(np.unique(self.knots).size - 1))
 
     @cached_property
-    def _pieces(self) -> tuple[FloatArray, tuple[FloatArray, FloatArray, FloatArray]]:
+    def _pieces(self) -> tuple[FloatArray, FloatArray]:
         """Break points (m+1,) and polynomial coefficients of value, first and second
-        derivative, each (degree+1, m, dim[+1]) in powers of ``t - x_i`` (scipy's PPoly
-        layout). Evaluating them by Horner's rule costs a few numpy operations for all
-        points, where scipy's BSpline call pays its overhead once per call and derivative."""
+        derivative, stacked as (3, degree+1, m, dim[+1]) in powers of ``t - x_i``, highest
+        first (scipy's PPoly layout; the derivatives' missing top powers are zero).
+        Evaluating them by Horner's rule costs a few numpy operations for all points and
+        orders at once, where scipy's BSpline call pays its overhead once per call and
+        derivative."""
         x = np.unique(self.knots)
         k = self.degree
         # Taylor coefficients at each interval start (right limits: scipy evaluates a knot
@@ -85,15 +87,20 @@ class BSpline(Curve):
         fact = np.array([float(np.prod(np.arange(1, nu + 1))) for nu in range(k + 1)])
         c0 = (taylor / fact[:, None, None])[::-1]  # highest power first
         powers = np.arange(k, -1, -1, dtype=np.float64)[:, None, None]
+        coefs = np.zeros((3, *c0.shape))
+        coefs[0] = c0
         c1 = (c0 * powers)[:-1]
-        c2 = (c1 * (powers[1:] if k >= 1 else powers))[:-1] if k >= 2 else np.zeros_like(c0[:1])
-        return x, (c0, c1, c2)
+        coefs[1, 1:] = c1
+        if k >= 2:
+            coefs[2, 2:] = (c1 * powers[1:])[:-1]
+        return x, coefs
 
     def _raw(self, t: FloatArray, nu: int) -> FloatArray:
         return self._raw_many(t, (nu,))[0]
 
     def _raw_many(self, t: FloatArray, orders: tuple[int, ...]) -> list[FloatArray]:
-        """Homogeneous (or plain) derivatives of the given orders, sharing the span search."""
+        """Homogeneous (or plain) derivatives of the given orders, sharing the span search
+        and the coefficient gather."""
         t = np.minimum(np.maximum(np.asarray(t, dtype=np.float64), 0.0), 1.0)
         if self.degree > POWER_BASIS_MAX_DEGREE:
             return [np.asarray(self._spl(t, nu)) for nu in orders]
@@ -101,14 +108,11 @@ class BSpline(Curve):
         i = np.searchsorted(x, t, side="right") - 1
         i = np.minimum(np.maximum(i, 0), len(x) - 2)
         s = (t - x[i])[:, None]
-        out = []
-        for nu in orders:
-            c = coefs[nu]
-            v = c[0, i]
-            for m in range(1, c.shape[0]):
-                v = v * s + c[m, i]
-            out.append(v)
-        return out
+        c = coefs[: max(orders) + 1, :, i]  # (orders, degree+1, n, dim)
+        v = c[:, 0]
+        for m in range(1, c.shape[1]):
+            v = v * s + c[:, m]
+        return [v[nu] for nu in orders]
 
     def jet(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         h0, h1, h2 = self._raw_many(t, (0, 1, 2))

@@ -159,19 +159,25 @@ def _candidate_samples(curve: Curve, points: FloatArray, k: int) -> np.ndarray:
         return np.asarray(idx)[:, ::4][:, :k]
     out = np.empty((n, k), dtype=np.int64)
     rows = max(1, _BLOCK // m)
+    pp = np.einsum("mj,mj->m", pts, pts)
     for s in range(0, n, rows):
         x = points[s : s + rows]
-        d2 = np.einsum("nmj,nmj->nm", x[:, None, :] - pts[None], x[:, None, :] - pts[None])
-        pad = np.pad(d2, ((0, 0), (1, 1)), constant_values=np.inf)
-        is_min = (d2 <= pad[:, :-2]) & (d2 <= pad[:, 2:])
+        # |x - p|^2 up to the per-row constant |x|^2 (which does not change the minima)
+        d2 = pp[None, :] - 2.0 * (x @ pts.T)
+        is_min = np.ones(d2.shape, dtype=bool)
+        is_min[:, 1:] &= d2[:, 1:] <= d2[:, :-1]
+        is_min[:, :-1] &= d2[:, :-1] <= d2[:, 1:]
         score = np.where(is_min, d2, np.inf)
-        if k < m:
-            part = np.argpartition(score, k - 1, axis=1)[:, :k]
-        else:
-            part = np.tile(np.arange(m), (len(x), 1))[:, :k]
+        # the k best local minima by repeated argmin (faster than argpartition for small k);
         # rows with fewer than k local minima repeat their best one
+        rr = np.arange(len(x))
         best = np.argmin(score, axis=1)
-        part = np.where(np.isfinite(np.take_along_axis(score, part, 1)), part, best[:, None])
+        part = np.empty((len(x), k), dtype=np.int64)
+        part[:, 0] = best
+        for j in range(1, k):
+            score[rr, part[:, j - 1]] = np.inf
+            nxt = np.argmin(score, axis=1)
+            part[:, j] = np.where(np.isfinite(score[rr, nxt]), nxt, best)
         out[s : s + rows] = part
     return out
 
@@ -183,27 +189,25 @@ def _bracketed_newton(
 
     ``g(t) = (C - x) . C'`` is the half derivative of the squared distance. Where ``g`` has
     the same sign at both bracket ends the minimum is at an end; otherwise Newton steps are
-    kept inside a shrinking sign-change bracket (bisection when a step leaves it).
+    kept inside a shrinking sign-change bracket (bisection when a step leaves it), starting
+    from the linear interpolation of ``g`` between the bracket ends.
     """
-
-    def g_of(t: FloatArray) -> FloatArray:
-        return np.einsum("ij,ij->i", curve.evaluate(t) - x, curve.derivative(t))
-
-    g_lo, g_hi = g_of(lo), g_of(hi)
+    n = x.shape[0]
+    c0, c1, _ = curve.jet(np.concatenate((lo, hi)))
+    c = c0 - np.concatenate((x, x))
+    g_ends = np.einsum("ij,ij->i", c, c1)
+    d_ends = np.einsum("ij,ij->i", c, c)
+    g_lo, g_hi, d_lo, d_hi = g_ends[:n], g_ends[n:], d_ends[:n], d_ends[n:]
     interior = (g_lo < 0.0) & (g_hi > 0.0)
     # no interior minimum: the smaller end distance wins
-    d_lo = np.linalg.norm(curve.evaluate(lo) - x, axis=1)
-    d_hi = np.linalg.norm(curve.evaluate(hi) - x, axis=1)
     t = np.where(d_lo <= d_hi, lo, hi)
     if not np.any(interior):
         return t
     a, b, xi = lo[interior].copy(), hi[interior].copy(), x[interior]
-    s = 0.5 * (a + b)
-    active = np.ones(s.size, dtype=bool)
+    ga, gb = g_lo[interior], g_hi[interior]
+    s = a + (b - a) * ga / (ga - gb)  # regula falsi start: g < 0 at a, > 0 at b
+    ia = np.arange(s.size)
     for _ in range(iters):
-        ia = np.nonzero(active)[0]
-        if ia.size == 0:
-            break
         sa = s[ia]
         c0, c1, c2 = curve.jet(sa)
         c = c0 - xi[ia]
@@ -221,7 +225,9 @@ def _bracketed_newton(
         new = np.where(small, np.clip(new, aa, bb), np.where(bad, 0.5 * (aa + bb), new))
         done = small | (bb - aa <= 4e-16) | (g == 0.0)
         a[ia], b[ia], s[ia] = aa, bb, new
-        active[ia[done]] = False
+        ia = ia[~done]
+        if ia.size == 0:
+            break
     t[interior] = s
     return t
 
