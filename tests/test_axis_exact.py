@@ -50,6 +50,16 @@ def test_trapezoid_02_line_and_parabolic_ends(regions):
     assert np.sum(a.points[:, 0] < 2.5) >= 3 and np.sum(a.points[:, 0] > 7.5) >= 3
 
 
+def test_trapezoid_02_transitions_are_exact_points(regions):
+    """The line-to-parabola transitions (x = 2.5 and 7.5, y = 3) are axis points exactly,
+    and the fit does not pile points up around them."""
+    a = trace_axis(regions["trapezoid"], (0, 2))
+    d = a.diagonal
+    for x in (2.5, 7.5):
+        assert np.min(np.linalg.norm(a.points - [x, 3.0], axis=1)) <= 1e-12 * d
+    assert a.n_points <= 30
+
+
 def test_annulus_13_is_the_arc_of_radius_7(regions):
     a = trace_axis(regions["annulus_sector"], (1, 3))
     d = a.diagonal

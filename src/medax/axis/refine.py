@@ -15,6 +15,7 @@ import numpy as np
 from medax.axis.correct import correct_newton
 from medax.axis.field import DistanceField, FieldSample
 from medax.axis.kinks import kink_intervals, locate_kink
+from medax.axis.transitions import locate_transitions, transition_intervals
 from medax.geometry._types import FloatArray
 from medax.geometry.bspline import BSpline
 from medax.geometry.fitting import interpolate
@@ -59,6 +60,7 @@ def fit_and_refine(
     s = field(pts)
     breaks: set[int] = set()  # indices into pts of C0 break points
     tried: set[int] = set()  # kink intervals Newton did not confirm (refined instead)
+    tried_t: set[tuple[int, int, float]] = set()  # transitions not confirmed
     iters = 0
     curve_error = np.inf
     spline: BSpline | None = None
@@ -80,8 +82,8 @@ def fit_and_refine(
             )
             iters += it
             continue
-        spline, u = interpolate(pts, sorted(breaks), DEGREE)
-        # 2. kinks: foot jumps not yet at a break
+        # 2. breaks where the axis is not smooth: kinks (a foot jumps between branches of a
+        # constraint) and transitions (a foot reaches its constraint's end)
         kinks = [
             i
             for i in kink_intervals(s, scale)
@@ -89,13 +91,23 @@ def fit_and_refine(
         ]
         found = [(i, locate_kink(field, s, pts, i, tol_point)) for i in kinks]
         tried |= set(kinks)
-        hits = [(i, q) for i, q in found if q is not None]
-        if hits:
-            idx = np.array([i for i, _ in hits], dtype=np.int64)
-            kp = np.array([q for _, q in hits])
+        trans = [
+            f
+            for f in transition_intervals(s)
+            if f not in tried_t and f[0] not in breaks and f[0] + 1 not in breaks
+        ]
+        tried_t |= set(trans)
+        ti, tq = locate_transitions(field, pts, s, trans, tol_point)
+        # one new break per interval and round, kinks first
+        new_breaks = {i: q for i, q in zip(ti.tolist(), tq, strict=True)}
+        new_breaks |= {i: q for i, q in found if q is not None}
+        if new_breaks:
+            idx = np.array(sorted(new_breaks), dtype=np.int64)
+            kp = np.array([new_breaks[i] for i in idx])
             pts, s, breaks = _insert_at(pts, s, breaks, idx, kp, field(kp), as_break=True)
-            tried = set()
+            tried, tried_t = set(), set()
             continue
+        spline, u = interpolate(pts, sorted(breaks), DEGREE)
         # 3. check the curve between the points
         err, checked = _check(field, spline, u, pts, checked, tol_curve)
         curve_error = float(err.max())
@@ -106,7 +118,8 @@ def fit_and_refine(
         pieces = np.clip(np.ceil(1.3 * (err[bad] / tol_curve) ** 0.25), 2, 8).astype(np.int64)
         pts, s, breaks, it = _insert(field, pts, s, breaks, bad, spline, u, tol_point, pieces)
         iters += it
-    assert spline is not None
+    if spline is None or len(u) != len(pts):  # rounds ran out while inserting breaks
+        spline, u = interpolate(pts, sorted(breaks), DEGREE)
     return Fitted(pts, s, sorted(breaks), spline, u, curve_error, rounds, iters)
 
 

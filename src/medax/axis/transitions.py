@@ -1,0 +1,79 @@
+"""Transitions of the axis: points where a foot point reaches an end of its constraint.
+
+Past a constraint's end the nearest point of that constraint stays at the end, and the axis
+changes from one kind of curve to another (e.g. from a line to a parabola): it is only C1
+there. A cubic spline through points on both sides converges slowly across such a point, so
+the refinement would pile points up around it. Locating it exactly and making it a break of
+the fit keeps each piece smooth.
+
+The transition at the end ``c = C(e)`` (``e`` = 0 or 1) of a constraint ``C`` is where the
+axis crosses the plane through ``c`` normal to the tangent ``C'(e)``: the root of
+
+    g(p) = 0,   h(p) = (E(p) - c) . C'(e) = 0,
+
+solved by Newton's method on both equations at once for all transitions of a round.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from medax.axis.field import DistanceField, FieldSample
+from medax.geometry._types import FloatArray
+
+
+def transition_intervals(s: FieldSample) -> list[tuple[int, int, float]]:
+    """``(i, constraint, end)``: the foot on constraint 1 or 2 reaches its end ``end``
+    (0.0 or 1.0) between points ``i`` and ``i + 1``."""
+    out = []
+    for k, t in ((1, s.t1), (2, s.t2)):
+        for end in (0.0, 1.0):
+            at = t == end
+            out += [(int(i), k, end) for i in np.nonzero(at[:-1] != at[1:])[0]]
+    return out
+
+
+def locate_transitions(
+    field: DistanceField,
+    pts: FloatArray,
+    s: FieldSample,
+    found: list[tuple[int, int, float]],
+    tol: float,
+    iters: int = 30,
+) -> tuple[np.ndarray, FloatArray]:
+    """Transition points for the intervals ``found`` (from :func:`transition_intervals`):
+    indices ``i`` (m,) of the intervals where one was confirmed and the points (m, 2) in the
+    parameter plane (equidistance within ``tol`` and strictly between the interval's ends)."""
+    if not found:
+        return np.zeros(0, dtype=np.int64), np.zeros((0, 2))
+    idx = np.array([f[0] for f in found], dtype=np.int64)
+    curves = [field.a1 if k == 1 else field.a2 for _, k, _ in found]
+    ends = [np.array([e]) for _, _, e in found]
+    c = np.array([cv.evaluate(e)[0] for cv, e in zip(curves, ends, strict=True)])
+    d = np.array([cv.derivative(e)[0] for cv, e in zip(curves, ends, strict=True)])
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    emb = field.region.embedding
+    a, b = pts[idx], pts[idx + 1]
+    ha = np.einsum("ij,ij->i", s.x[idx] - c, d)
+    hb = np.einsum("ij,ij->i", s.x[idx + 1] - c, d)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = np.clip(np.nan_to_num(ha / (ha - hb), nan=0.5), 0.0, 1.0)
+    q = a + w[:, None] * (b - a)
+    for _ in range(iters):
+        fs = field(q)
+        h = np.einsum("ij,ij->i", fs.x - c, d)
+        grad_h = np.einsum("nij,ni->nj", emb.jacobian(q), d)
+        m = np.stack((fs.grad, grad_h), axis=1)  # (n, 2, 2)
+        det = m[:, 0, 0] * m[:, 1, 1] - m[:, 0, 1] * m[:, 1, 0]
+        ok = np.abs(det) > 1e-300
+        rhs = np.column_stack((fs.g, h))
+        step = np.zeros_like(q)
+        step[ok] = np.linalg.solve(m[ok], rhs[ok][:, :, None])[:, :, 0]
+        q = q - step
+        if np.all(np.linalg.norm(step, axis=1) <= 1e-15 * field.region.diagonal):
+            break
+    fs = field(q)
+    # strictly inside the interval (projection onto the chord) and on the axis
+    along = np.einsum("ij,ij->i", q - a, b - a) / np.einsum("ij,ij->i", b - a, b - a)
+    good = (fs.error <= tol) & (along > 1e-9) & (along < 1.0 - 1e-9) & np.all(np.isfinite(q), 1)
+    return idx[good], q[good]
