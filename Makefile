@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint typecheck unit bench clean
+.PHONY: demo test lint typecheck unit bench bench-axis bench-classify bench-mesh bench-simplify clean
 
 $(BIN)/python:
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found (medax needs Python 3.11)"; exit 1; }
@@ -32,8 +32,20 @@ unit: $(STAMP)
 
 test: lint typecheck unit
 
-bench: $(STAMP)
+# benchmarks print ratios against peers measured in the same run (not part of `make test`)
+bench: bench-axis bench-classify bench-mesh bench-simplify
+
+bench-axis: $(STAMP)
 	$(BIN)/python benchmarks/bench_axis.py
+
+bench-classify: $(STAMP)
+	$(BIN)/python benchmarks/bench_classify.py
+
+bench-mesh: $(STAMP)
+	$(BIN)/python benchmarks/bench_mesh.py
+
+bench-simplify: $(STAMP)
+	$(BIN)/python benchmarks/bench_simplify.py
 
 clean:
 	rm -rf $(VENV) medax-demo .pytest_cache .mypy_cache .ruff_cache
