@@ -89,17 +89,17 @@ def fit_and_refine(
             continue
         # 2. breaks where the axis is not smooth: kinks (a foot jumps between branches of a
         # constraint) and transitions (a foot reaches its constraint's end)
-        kinks = [
-            i
-            for i in kink_intervals(s, scale)
-            if i not in tried and i not in breaks and i + 1 not in breaks
-        ]
+        jumps = kink_intervals(s, scale)
+        kinks = [i for i in jumps if i not in tried and i not in breaks and i + 1 not in breaks]
         found = [(i, locate_kink(field, s, pts, i, tol_point)) for i in kinks]
         tried |= set(kinks)
         trans = [
             f
             for f in transition_intervals(s)
-            if f not in tried_t and f[0] not in breaks and f[0] + 1 not in breaks
+            if f not in tried_t
+            and f[0] not in breaks
+            and f[0] + 1 not in breaks
+            and f[0] not in jumps  # a foot jumping onto an end is a kink, not a transition
         ]
         tried_t |= set(trans)
         ti, tq = locate_transitions(field, pts, s, trans, tol_point)

@@ -39,7 +39,7 @@ def locate_transitions(
     s: FieldSample,
     found: list[tuple[int, int, float]],
     tol: float,
-    iters: int = 30,
+    iters: int = 12,
 ) -> tuple[np.ndarray, FloatArray]:
     """Transition points for the intervals ``found`` (from :func:`transition_intervals`):
     indices ``i`` (m,) of the intervals where one was confirmed and the points (m, 2) in the
@@ -59,18 +59,22 @@ def locate_transitions(
     with np.errstate(divide="ignore", invalid="ignore"):
         w = np.clip(np.nan_to_num(ha / (ha - hb), nan=0.5), 0.0, 1.0)
     q = a + w[:, None] * (b - a)
+    active = np.arange(len(q))
     for _ in range(iters):
-        fs = field(q)
-        h = np.einsum("ij,ij->i", fs.x - c, d)
-        grad_h = np.einsum("nij,ni->nj", emb.jacobian(q), d)
+        qa, ca, da = q[active], c[active], d[active]
+        fs = field(qa)
+        h = np.einsum("ij,ij->i", fs.x - ca, da)
+        grad_h = np.einsum("nij,ni->nj", emb.jacobian(qa), da)
         m = np.stack((fs.grad, grad_h), axis=1)  # (n, 2, 2)
         det = m[:, 0, 0] * m[:, 1, 1] - m[:, 0, 1] * m[:, 1, 0]
         ok = np.abs(det) > 1e-300
         rhs = np.column_stack((fs.g, h))
-        step = np.zeros_like(q)
+        step = np.zeros_like(qa)
         step[ok] = np.linalg.solve(m[ok], rhs[ok][:, :, None])[:, :, 0]
-        q = q - step
-        if np.all(np.linalg.norm(step, axis=1) <= 1e-15 * field.region.diagonal):
+        q[active] = qa - step
+        # quadratic convergence: a step at round-off level leaves the point exact
+        active = active[ok & (np.linalg.norm(step, axis=1) > 1e-14 * field.region.diagonal)]
+        if active.size == 0:
             break
     fs = field(q)
     # strictly inside the interval (projection onto the chord) and on the axis
