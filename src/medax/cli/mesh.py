@@ -19,8 +19,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "mesh",
         help="structured quad mesh of a 4-sided region",
         description="Mesh a 4-sided region with quads whose node lines are curves of constant "
-        "distance ratio between opposite sides (default) or the paper's recursive medial "
-        "axes. Writes .msh (Gmsh 4.1), .vtu, .inp (Abaqus) or .bdf (Nastran), a quality "
+        "distance ratio between opposite sides, the middle one the medial axis (default; "
+        "rays of equal angle between two lines facing concentric arcs, so an annulus sector "
+        "gets the exact polar grid), angle-weighted ratio curves on all line/arc pairs "
+        "(angle), or the paper's recursive medial axes (paper). "
+        "Writes .msh (Gmsh 4.1), .vtu, .inp (Abaqus) or .bdf (Nastran), a quality "
         "report and a plot.",
         epilog="example: medax mesh regions.json --region wavy --divisions 16,16 -o wavy.vtu "
         "--report quality.json --plot wavy.png",
@@ -30,7 +33,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g = p.add_mutually_exclusive_group(required=True)
     g.add_argument("--size", type=float, help="target edge length (region units)")
     g.add_argument("--divisions", help="quads along S0 and along S1: N1,N2 (or N for both)")
-    p.add_argument("--method", choices=("ratio", "paper"), default="ratio", help="(ratio)")
+    p.add_argument("--method", choices=("ratio", "angle", "paper"), default="ratio", help="(ratio)")
     p.add_argument("-o", "--output", required=True, help="mesh file: .msh .vtu .inp .bdf")
     p.add_argument("--format", help="override the format: msh, vtu, abaqus, nastran")
     p.add_argument("--report", help="quality report (JSON)")

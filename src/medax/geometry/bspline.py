@@ -74,8 +74,9 @@ class BSpline(Curve):
     @cached_property
     def _pieces(self) -> tuple[FloatArray, FloatArray]:
         """Break points (m+1,) and polynomial coefficients of value, first and second
-        derivative, stacked as (3, degree+1, m, dim[+1]) in powers of ``t - x_i``, highest
-        first (scipy's PPoly layout; the derivatives' missing top powers are zero).
+        derivative, stacked as (m, degree+1, 3, dim[+1]) in powers of ``t - x_i``, highest
+        first (the derivatives' missing top powers are zero), so that one row gather per
+        point fetches all it needs.
         Evaluating them by Horner's rule costs a few numpy operations for all points and
         orders at once, where scipy's BSpline call pays its overhead once per call and
         derivative."""
@@ -93,7 +94,7 @@ class BSpline(Curve):
         coefs[1, 1:] = c1
         if k >= 2:
             coefs[2, 2:] = (c1 * powers[1:])[:-1]
-        return x, coefs
+        return x, np.ascontiguousarray(coefs.transpose(2, 1, 0, 3))
 
     def _raw(self, t: FloatArray, nu: int) -> FloatArray:
         return self._raw_many(t, (nu,))[0]
@@ -101,18 +102,19 @@ class BSpline(Curve):
     def _raw_many(self, t: FloatArray, orders: tuple[int, ...]) -> list[FloatArray]:
         """Homogeneous (or plain) derivatives of the given orders, sharing the span search
         and the coefficient gather."""
-        t = np.minimum(np.maximum(np.asarray(t, dtype=np.float64), 0.0), 1.0)
+        t = np.clip(np.asarray(t, dtype=np.float64), 0.0, 1.0)
         if self.degree > POWER_BASIS_MAX_DEGREE:
             return [np.asarray(self._spl(t, nu)) for nu in orders]
         x, coefs = self._pieces
         i = np.searchsorted(x, t, side="right") - 1
-        i = np.minimum(np.maximum(i, 0), len(x) - 2)
-        s = (t - x[i])[:, None]
-        c = coefs[: max(orders) + 1, :, i]  # (orders, degree+1, n, dim)
-        v = c[:, 0]
+        np.clip(i, 0, len(x) - 2, out=i)
+        s = (t - x[i])[:, None, None]
+        c = coefs[i, :, : max(orders) + 1]  # (n, degree+1, orders, dim)
+        v = c[:, 0].copy()
         for m in range(1, c.shape[1]):
-            v = v * s + c[:, m]
-        return [v[nu] for nu in orders]
+            v *= s
+            v += c[:, m]
+        return [v[:, nu] for nu in orders]
 
     def jet(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         h0, h1, h2 = self._raw_many(t, (0, 1, 2))

@@ -123,6 +123,75 @@ def closest_near(curve: Curve, points: FloatArray, t0: FloatArray, width: float)
     return Closest(t=t, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
 
 
+def has_closed_form_closest(curve: Curve) -> bool:
+    """True where ``curve`` answers closest-point queries in closed form (lines, arcs,
+    polylines): cheap and global, so nothing is gained by warm starts."""
+    return type(curve).closest not in (Curve.closest, SubCurve.closest)
+
+
+def closest_from(curve: Curve, points: FloatArray, t0: FloatArray, iters: int = 8) -> Closest:
+    """Local closest points by Newton steps on ``(C(t) - x) . C'(t)`` from ``t0`` (n,).
+
+    A warm start for points that moved little since their feet ``t0`` were found: each row
+    stops when its step is below ``1e-12``. Not global (a foot that should jump to another
+    part of the curve is not found): callers check the result with :meth:`Curve.closest`.
+    """
+    x = np.asarray(points, dtype=np.float64)
+    t = np.clip(np.asarray(t0, dtype=np.float64), 0.0, 1.0).copy()
+    rows = np.arange(t.size)
+    for _ in range(iters):
+        c0, c1, c2 = curve.jet(t[rows])
+        c = c0 - x[rows]
+        g = np.einsum("ij,ij->i", c, c1)
+        speed2 = np.einsum("ij,ij->i", c1, c1)
+        dg = speed2 + np.einsum("ij,ij->i", c, c2)
+        # away from a local minimum (dg <= 0) a gradient step scaled by the speed
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = np.where(dg > 0.0, g / dg, g / np.maximum(speed2, 1e-300))
+        step = np.where(np.isfinite(step), step, 0.0)
+        new = np.clip(t[rows] - step, 0.0, 1.0)
+        moved = np.abs(new - t[rows]) > 1e-12
+        t[rows] = new
+        rows = rows[moved]
+        if rows.size == 0:
+            break
+    foot = curve.evaluate(t)
+    return Closest(t=t, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
+
+
+def certify_closest(
+    curve: Curve, points: FloatArray, t: FloatArray, distance: FloatArray, slack: float
+) -> np.ndarray:
+    """Rows (bool (n,)) where the local foot ``t`` (n,) at ``distance`` (n,) is certainly
+    global: no other part of the curve is nearer than ``distance - slack``.
+
+    Each other part of the curve is represented by a local minimum of the distance over the
+    dense samples (outside one sample spacing of ``t``); the curve between samples is at
+    most half a spacing ``h`` from one, so a part whose best sample is at ``s`` has no point
+    nearer than ``s - h / 2``. Cheaper than :meth:`Curve.closest` (no refinement); rows not
+    certified need the full query.
+    """
+    ts, pts, _ = curve._search
+    x = np.asarray(points, dtype=np.float64)
+    n, m = x.shape[0], pts.shape[0]
+    half = 0.55 * float(np.max(np.linalg.norm(np.diff(pts, axis=0), axis=1)))
+    dt = ts[1] - ts[0]
+    pp = np.einsum("mj,mj->m", pts, pts)
+    ok = np.empty(n, dtype=bool)
+    rows = max(1, _BLOCK // m)
+    for s in range(0, n, rows):
+        xs = x[s : s + rows]
+        d2 = pp[None, :] - 2.0 * (xs @ pts.T)  # |x - p|^2 - |x|^2
+        is_min = np.ones(d2.shape, dtype=bool)
+        is_min[:, 1:] &= d2[:, 1:] <= d2[:, :-1]
+        is_min[:, :-1] &= d2[:, :-1] <= d2[:, 1:]
+        is_min &= np.abs(ts[None, :] - t[s : s + rows, None]) > 1.5 * dt
+        other = np.where(is_min, d2, np.inf).min(axis=1)
+        nearest = np.sqrt(np.maximum(other + np.einsum("ij,ij->i", xs, xs), 0.0))
+        ok[s : s + rows] = nearest - half >= distance[s : s + rows] - slack
+    return ok
+
+
 def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
     """Generic global closest-point query (see :meth:`Curve.closest`).
 

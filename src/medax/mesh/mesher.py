@@ -4,8 +4,13 @@ Two methods build the same kind of grid: ``n1`` strips across the pair ``(S1, S3
 ``n2`` across ``(S0, S2)``, node ``(i, j)`` the crossing of curve ``i`` of one family with
 curve ``j`` of the other (numbering in :mod:`medax.mesh.grid`).
 
-- ``"ratio"`` (default): the curves ``d_a / (d_a + d_b) = k / n`` of each pair, the tracer's
-  ``ratio`` curves, crossed directly (:mod:`medax.mesh.ratio_grid`). Any division counts.
+- ``"ratio"`` (default): the curves ``d_a / (d_a + d_b) = k / n`` of each pair (the
+  tracer's ``ratio`` curves; ``k / n = 1/2`` is the medial axis), crossed directly
+  (:mod:`medax.mesh.ratio_grid`). Any division counts. A pair of lines whose opposite sides
+  are arcs centred where the lines meet (an annulus sector) takes rays of equal angle
+  instead: the exact polar grid.
+- ``"angle"``: angle-weighted ratio curves on every pair of lines and arcs (rays of equal
+  angle between lines that meet), the distance ratio elsewhere; kept for comparison.
 - ``"paper"``: the paper's recursion (:mod:`medax.mesh.split`): split along the medial axis,
   recurse on both halves; the families' traced splines are then crossed
   (:mod:`medax.mesh.crossings`). Division counts that are not powers of two split unequally
@@ -32,7 +37,7 @@ from medax.mesh.split import FamilyCurve, axis_family
 
 log = logging.getLogger(__name__)
 
-METHODS = ("ratio", "paper")
+METHODS = ("ratio", "angle", "paper")
 #: largest division count accepted per direction
 MAX_DIVISIONS = 4096
 
@@ -77,18 +82,35 @@ def mesh_region(
         raise InputError(f"divisions {n1},{n2} exceed the limit {MAX_DIVISIONS} per direction")
     t0 = time.perf_counter()
     info: dict = {}
-    if method == "ratio":
-        params, info = ratio_grid(region, n1, n2, point_tol=min(tol, tolerances.POINT_TOL))
+    if method in ("angle", "ratio"):
+        weighting = "angle" if method == "angle" else "auto"
+        params, info = ratio_grid(
+            region, n1, n2, point_tol=min(tol, tolerances.POINT_TOL), weighting=weighting
+        )
     else:
         params, n1, n2 = _paper_grid(region, n1, n2, size, tol)
     info["time_s"] = time.perf_counter() - t0
     points = region.embedding.evaluate(params)
     mesh = QuadMesh(region, params, points, n1, n2, method, info)
-    q = mesh.quality()
-    bad = int(np.count_nonzero(q.scaled_jacobian <= 0.0))
+    bad = _inverted_count(mesh)
     if bad:
         log.warning("region '%s': %d inverted quads", region.name, bad)
     return mesh
+
+
+def _inverted_count(mesh: QuadMesh) -> int:
+    """Quads with a corner that is not counter-clockwise (planar: four cross products over
+    the grid; in space: the scaled Jacobian of the full quality metrics)."""
+    if mesh.points.shape[1] != 2:
+        return int(np.count_nonzero(mesh.quality().scaled_jacobian <= 0.0))
+    g = mesh.grid()
+    ring = (g[:-1, :-1], g[:-1, 1:], g[1:, 1:], g[1:, :-1])  # CCW corners of each quad
+    bad = np.zeros(g[:-1, :-1].shape[:2], dtype=bool)
+    for k in range(4):
+        prev, cur, nxt = ring[k - 1], ring[k], ring[(k + 1) % 4]
+        a, b = nxt - cur, prev - cur
+        bad |= a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0] <= 0.0
+    return int(np.count_nonzero(bad))
 
 
 def _paper_grid(

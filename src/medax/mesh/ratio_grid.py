@@ -1,17 +1,32 @@
-"""Nodes as crossings of constant-distance-ratio curves, solved directly (``method="ratio"``).
+"""Nodes as crossings of two families of ratio curves, solved directly.
 
-For the pair ``(S0, S2)`` the curve ``d0 / (d0 + d2) = j / n2`` is the one the tracer follows
-with ``ratio = j / n2`` (``j = n2 / 2``: the medial axis); for ``(S1, S3)`` the curve
-``d1 / (d1 + d3) = 1 - i / n1``. Node ``(i, j)`` is the crossing of the two, i.e. the root of
+For a pair of opposite sides ``(a, b)`` and a ratio ``r`` in ``[0, 1]`` the curve of the
+family is the zero set of
 
-    g_a(p) = (1 - r_a) d0(p) - r_a d2(p) = 0,   g_b(p) = (1 - r_b) d1(p) - r_b d3(p) = 0,
+    g(p) = (1 - r) S((1 - r) T) d_a(p) - r S(r T) d_b(p),    S(x) = sin(x) / x,
 
-with ``d_k`` the distance in space from ``E(p)`` to side ``k``. Boundary nodes are the curves'
-end points: the root of one equation along the side (1-D, bracketed, vectorised), so they lie
-on the sides exactly. Interior nodes are solved all at once by a damped 2-D Newton iteration
-(gradient of a distance = the unit vector from its foot point), started from the transfinite
-interpolation of the boundary nodes. This gives the crossings of the tracer's curves without
-tracing and fitting them, to ``point_tol x diagonal``.
+with ``d_k`` the distance in space from ``E(p)`` to side ``k`` and ``T`` the angle between the
+tangent lines of the two sides at the feet of ``p`` (``T = arccos(-u_a . u_b)``, ``u_k`` the
+unit vector from the foot on side ``k`` to the point). Two kinds (``weighting``):
+
+- ``"angle"``: ``T`` as defined. Between two lines meeting at an angle the curves are the
+  rays of equal angle (``T`` is the lines' angle; the ray at angle ``r T`` from ``a`` solves
+  ``g = 0`` exactly); between parallel lines and concentric arcs (``u_a = -u_b``, ``T = 0``)
+  they are the curves of constant distance ratio. So an annulus sector gets the exact polar
+  grid for any division counts.
+- ``"distance"``: ``T = 0`` everywhere, the curves ``d_a / (d_a + d_b) = r``.
+
+Both give the medial axis at ``r = 1/2`` (``g`` is then a positive multiple of
+``d_a - d_b``), the tracer's object. For ``(S0, S2)`` the ratio of node row ``j`` is
+``j / n2``; for ``(S1, S3)`` the ratio of column ``i`` is ``1 - i / n1``. Node ``(i, j)`` is
+the root of both ``g``. Boundary nodes are the curves' end points: the root of one equation
+along the side (1-D, bracketed, vectorised), so they lie on the sides exactly. Interior
+nodes are solved all at once by a damped 2-D Newton iteration started from the transfinite
+interpolation of the boundary nodes, with ``T`` frozen in the Jacobian. Feet on sides
+without a closed-form closest point (B-splines, curves on surfaces) are tracked locally
+from one iteration to the next (:func:`~medax.geometry.curve.closest_from`) and checked by
+one global query at the end; nodes whose foot was on the wrong part of a side are solved
+again from the global feet.
 """
 
 from __future__ import annotations
@@ -19,61 +34,248 @@ from __future__ import annotations
 import logging
 
 import numpy as np
+from scipy.interpolate import RectBivariateSpline
 
 from medax import tolerances
 from medax.errors import MeshError
 from medax.geometry._types import FloatArray
-from medax.geometry.curve import Curve
+from medax.geometry.arc import Arc
+from medax.geometry.curve import (
+    Closest,
+    Curve,
+    certify_closest,
+    closest_from,
+    has_closed_form_closest,
+)
+from medax.geometry.line import Line
 from medax.geometry.region import Region
 from medax.mesh.grid import boundary_indices
 
 log = logging.getLogger(__name__)
+WEIGHTINGS = ("auto", "angle", "distance")
 _SCAN = 513  # samples per side when bracketing boundary nodes
 _NEWTON_ITERS = 40
+_GLOBAL_ROUNDS = 3  # re-solves after the global foot check
+_COARSE_MIN = 12  # grids with both counts >= 4x this start from a coarser grid
+_FOOT_JUMP = 0.05  # coarse-cell spread of foot parameters taken as a jump
+_TRACK_STEP = 1e-3  # Newton moves (x diagonal) below which feet are tracked, not searched
+_TINY = np.finfo(float).tiny
 
 
-def _dist(region: Region, k: int, x: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Distances (n,) from space points ``x`` (n, dim) to side ``k`` and unit vectors (n, dim)."""
-    c = region.space_curve(k).closest(x)
-    u = (x - c.foot) / np.maximum(c.distance, np.finfo(float).tiny)[:, None]
-    return c.distance, u
+def _sinc(x: FloatArray) -> FloatArray:
+    """``sin(x) / x`` (1 at 0)."""
+    return np.sinc(x / np.pi)
+
+
+def pair_weighting(region: Region, a: int, b: int, weighting: str) -> str:
+    """The weighting used for the pair ``(a, b)`` (``"angle"`` or ``"distance"``).
+
+    ``"angle"`` applies only in the plane and between lines and arcs, where feet move
+    continuously (on free-form sides the nearest point can jump, ``T`` would jump with it
+    and the curves would break). ``"auto"`` (the default mesher's) takes ``"angle"`` only for
+    a polar pair: two lines whose opposite sides are arcs centred where the lines meet
+    (there it gives the exact polar grid; elsewhere the distance ratio measured better).
+    """
+    sides = region.sides
+    simple = all(isinstance(sides[k], (Line, Arc)) for k in (a, b))
+    if not (region.embedding.is_identity and simple) or weighting == "distance":
+        return "distance"
+    if weighting == "angle":
+        return "angle"
+    return "angle" if _is_polar_pair(region, a, b) else "distance"
+
+
+def _is_polar_pair(region: Region, a: int, b: int) -> bool:
+    """Sides ``a``, ``b`` are lines meeting at a point where both other sides are centred."""
+    la, lb = region.sides[a], region.sides[b]
+    others = [region.sides[k] for k in range(4) if k not in (a, b)]
+    if not (isinstance(la, Line) and isinstance(lb, Line)):
+        return False
+    if not all(isinstance(o, Arc) for o in others):
+        return False
+    da, db = la.b - la.a, lb.b - lb.a
+    cross = da[0] * db[1] - da[1] * db[0]
+    if abs(cross) <= 1e-12 * float(np.linalg.norm(da) * np.linalg.norm(db)):
+        return False
+    s = ((lb.a[0] - la.a[0]) * db[1] - (lb.a[1] - la.a[1]) * db[0]) / cross
+    apex = la.a + s * da
+    tol = tolerances.CORNER_TOL * region.diagonal
+    return all(float(np.linalg.norm(o.center - apex)) <= tol for o in others)  # type: ignore[attr-defined]
+
+
+def _theta(ua: FloatArray, ub: FloatArray, weighting: str) -> FloatArray:
+    """Angle (n,) between the tangent lines at the two feet, from the unit vectors (n, dim)."""
+    if weighting == "distance":
+        return np.zeros(ua.shape[0])
+    return np.arccos(np.clip(-np.einsum("ij,ij->i", ua, ub), -1.0, 1.0))
+
+
+def _weights(r: FloatArray, theta: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """``(1 - r) S((1 - r) T)`` and ``r S(r T)`` (each (n,))."""
+    return (1.0 - r) * _sinc((1.0 - r) * theta), r * _sinc(r * theta)
+
+
+def angular_ratio(da: FloatArray, db: FloatArray, theta: FloatArray) -> FloatArray:
+    """The ratio ``r`` (n,) whose curve passes through a point with distances ``da``, ``db``
+    and foot angle ``theta``: ``atan2(da sin T, db + da cos T) / T`` (``da / (da + db)`` at
+    ``T = 0``)."""
+    small = theta < 1e-8
+    t = np.where(small, 1.0, theta)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lin = da / np.maximum(da + db, _TINY)
+    return np.where(small, lin, np.arctan2(da * np.sin(t), db + da * np.cos(t)) / t)
+
+
+def _line_closest(curve: Line, x: FloatArray) -> Closest:
+    """Closest points on the supporting (infinite) line of a line side: the parameter is not
+    clamped to ``[0, 1]``."""
+    d = curve.b - curve.a
+    t = ((x - curve.a) @ d) / float(d @ d)
+    foot = curve.evaluate(t)
+    return Closest(t=t, foot=foot, distance=np.linalg.norm(x - foot, axis=1))
+
+
+class _Sides:
+    """Distances to the four sides with feet tracked between calls (per node row).
+
+    Line sides of a pair weighted by angle are measured to their supporting lines
+    (``extended``): the equal-angle rays of a sector are exact only for the whole lines (a
+    foot clamped to a segment's end would bend them).
+    """
+
+    def __init__(self, region: Region, n: int, kinds: tuple[str, str]) -> None:
+        self.region = region
+        self.curves: list[Curve] = [region.space_curve(k) for k in range(4)]
+        self.extended = [
+            kinds[k % 2] == "angle" and isinstance(c, Line) for k, c in enumerate(self.curves)
+        ]
+        self.tracked = [
+            not (ext or has_closed_form_closest(c))
+            for c, ext in zip(self.curves, self.extended, strict=True)
+        ]
+        self.t = [np.full(n, np.nan) for _ in range(4)]  # accepted feet (tracked sides)
+        self.d = [np.full(n, np.nan) for _ in range(4)]  # accepted distances
+
+    def dist(
+        self, k: int, x: FloatArray, rows: np.ndarray | None
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Distances (n,), unit vectors (n, dim) and foot parameters (n,) of space points
+        ``x`` to side ``k``; warm-started from the accepted feet of ``rows`` if given."""
+        curve = self.curves[k]
+        if self.extended[k]:
+            assert isinstance(curve, Line)
+            c = _line_closest(curve, x)
+        elif rows is None or not self.tracked[k]:
+            c = curve.closest(x)
+        else:
+            c = closest_from(curve, x, self.t[k][rows])
+        u = (x - c.foot) / np.maximum(c.distance, _TINY)[:, None]
+        return c.distance, u, c.t
 
 
 def _g(
-    region: Region, a: int, b: int, r: FloatArray, p: FloatArray, grad: bool = True
-) -> tuple[FloatArray, FloatArray | None]:
-    """``g = (1 - r) d_a - r d_b`` at parameter points ``p`` (n, 2), and its gradient (n, 2)."""
+    sides: _Sides,
+    a: int,
+    b: int,
+    r: FloatArray,
+    p: FloatArray,
+    weighting: str,
+    rows: np.ndarray | None = None,
+) -> tuple[FloatArray, FloatArray, tuple[FloatArray, ...]]:
+    """``g`` at parameter points ``p`` (n, 2), its gradient (n, 2) and the feet
+    ``(t_a, t_b, d_a, d_b)`` (each (n,))."""
+    region = sides.region
     x = region.embedding.evaluate(p)
-    da, ua = _dist(region, a, x)
-    db, ub = _dist(region, b, x)
-    g = (1.0 - r) * da - r * db
-    if not grad:
-        return g, None
-    gx = (1.0 - r)[:, None] * ua - r[:, None] * ub
+    da, ua, ta = sides.dist(a, x, rows)
+    db, ub, tb = sides.dist(b, x, rows)
+    theta = _theta(ua, ub, weighting)
+    wa, wb = _weights(r, theta)
+    g = wa * da - wb * db
+    gx = wa[:, None] * ua - wb[:, None] * ub
+    if weighting == "angle" and not (sides.extended[a] and sides.extended[b]):
+        # (between two whole lines the foot angle is constant)
+        gx += _dg_dtheta(r, theta, da, db)[:, None] * _grad_theta(sides, a, b, x, theta, (
+            (ta, da, ua), (tb, db, ub)))  # fmt: skip
     if not region.embedding.is_identity:
         gx = np.einsum("nij,ni->nj", region.embedding.jacobian(p), gx)
-    return g, gx
+    return g, gx, (ta, tb, da, db)
+
+
+def _dsinc(x: FloatArray) -> FloatArray:
+    """Derivative of ``sin(x) / x``: ``(x cos x - sin x) / x^2`` (``-x / 3`` near 0)."""
+    small = np.abs(x) < 1e-4
+    xs = np.where(small, 1.0, x)
+    return np.where(small, -x / 3.0, (xs * np.cos(xs) - np.sin(xs)) / (xs * xs))
+
+
+def _dg_dtheta(r: FloatArray, theta: FloatArray, da: FloatArray, db: FloatArray) -> FloatArray:
+    """``dg / dT`` (n,) at fixed distances."""
+    return (1.0 - r) ** 2 * _dsinc((1.0 - r) * theta) * da - r**2 * _dsinc(r * theta) * db
+
+
+def _unit_jacobian(
+    curve: Curve, t: FloatArray, d: FloatArray, u: FloatArray, extended: bool
+) -> FloatArray:
+    """``du / dx`` (n, dim, dim) of the unit vector from the foot ``C(t)`` to ``x``:
+    ``(I - u u^T - C' C'^T / D) / d`` with ``D = |C'|^2 - d u . C''`` (the foot's own motion,
+    absent when the foot is at an end of the curve). Symmetric."""
+    _, c1, c2 = curve.jet(t)
+    dim = u.shape[1]
+    den = np.einsum("ij,ij->i", c1, c1) - d * np.einsum("ij,ij->i", u, c2)
+    interior = den > 0.0
+    if not extended:
+        interior &= (t > 0.0) & (t < 1.0)
+    m = np.where(interior, 1.0 / np.where(interior, den, 1.0), 0.0)
+    jac = np.eye(dim)[None] - u[:, :, None] * u[:, None, :]
+    jac -= m[:, None, None] * c1[:, :, None] * c1[:, None, :]
+    return jac / np.maximum(d, _TINY)[:, None, None]
+
+
+def _grad_theta(
+    sides: _Sides,
+    a: int,
+    b: int,
+    x: FloatArray,
+    theta: FloatArray,
+    feet: tuple[tuple[FloatArray, FloatArray, FloatArray], ...],
+) -> FloatArray:
+    """Gradient (n, dim) in space of ``T = arccos(-u_a . u_b)``; zero where ``T`` is 0 or
+    ``pi`` (there ``dg / dT`` vanishes or the foot angle is undefined)."""
+    (ta, da, ua), (tb, db, ub) = feet
+    ja = _unit_jacobian(sides.curves[a], ta, da, ua, sides.extended[a])
+    jb = _unit_jacobian(sides.curves[b], tb, db, ub, sides.extended[b])
+    dc = np.einsum("nij,nj->ni", ja, ub) + np.einsum("nij,nj->ni", jb, ua)
+    s = np.sin(theta)
+    ok = s > 1e-8
+    return np.where(ok, 1.0 / np.where(ok, s, 1.0), 0.0)[:, None] * dc
 
 
 def side_nodes(
-    region: Region, side: int, a: int, b: int, ratios: FloatArray, tol: float
+    region: Region,
+    side: int,
+    a: int,
+    b: int,
+    ratios: FloatArray,
+    tol: float,
+    weighting: str = "auto",
 ) -> FloatArray:
-    """Parameters ``t`` (len(ratios),) on ``side`` where ``d_a / (d_a + d_b) = ratio``.
+    """Parameters ``t`` (len(ratios),) on ``side`` where the ratio curve of ``(a, b)`` ends.
 
     Ratios 0 and 1 are the side's end points on ``a`` and on ``b``. Each ratio is bracketed
     on a scan of the side (the first sign change from the ``a`` end) and solved by the
-    Illinois variant of regula falsi, all ratios at once, to ``|t1 - t0| <= 1e-15``.
+    Illinois variant of regula falsi, all ratios at once, to ``|t1 - t0| <= 4e-16``.
     """
     curve: Curve = region.sides[side]
+    weighting = pair_weighting(region, a, b, weighting)
+    sides = _Sides(region, 0, (weighting, weighting))
     r = np.asarray(ratios, dtype=np.float64)
     s = np.linspace(0.0, 1.0, _SCAN)
     x = region.embedding.evaluate(curve.evaluate(s))
-    da, _ = _dist(region, a, x)
-    db, _ = _dist(region, b, x)
-    phi = da / np.maximum(da + db, np.finfo(float).tiny)
+    da, ua, _ = sides.dist(a, x, None)
+    db, ub, _ = sides.dist(b, x, None)
+    phi = angular_ratio(da, db, _theta(ua, ub, weighting))
     # orient the scan so that phi runs from the a end (0) to the b end (1)
-    a_at_start = phi[0] <= phi[-1]
-    if not a_at_start:
+    if phi[0] > phi[-1]:
         s, phi = s[::-1], phi[::-1]
     out = np.empty(r.size)
     inner = (r > 0.0) & (r < 1.0)
@@ -89,15 +291,12 @@ def side_nodes(
             f"region '{region.name}': a ratio curve of sides ({a}, {b}) does not meet side {side}"
         )
     if np.any(np.diff(phi) < -1e-12):
-        log.warning("region '%s': distance ratio is not monotone along side %d", region.name, side)
+        log.warning("region '%s': the ratio is not monotone along side %d", region.name, side)
     lo, hi = s[first - 1], s[first]
 
     def f(t: FloatArray) -> FloatArray:
-        """``(1 - r) d_a - r d_b`` on the side: the sign of ``phi - r``."""
-        xx = region.embedding.evaluate(curve.evaluate(t))
-        d1, _ = _dist(region, a, xx)
-        d2, _ = _dist(region, b, xx)
-        return (1.0 - ri) * d1 - ri * d2
+        """``g`` on the side: the sign of ``phi - r``."""
+        return _g(sides, a, b, ri, curve.evaluate(t), weighting)[0]
 
     flo, fhi = f(lo), f(hi)
     moved = np.zeros(ri.size, dtype=np.int8)  # -1: lo moved last, +1: hi moved last
@@ -120,54 +319,248 @@ def side_nodes(
 
 
 def ratio_grid(
-    region: Region, n1: int, n2: int, point_tol: float = tolerances.POINT_TOL
+    region: Region,
+    n1: int,
+    n2: int,
+    point_tol: float = tolerances.POINT_TOL,
+    weighting: str = "auto",
 ) -> tuple[FloatArray, dict[str, float]]:
     """Parameter-plane nodes (``(n1 + 1) * (n2 + 1)``, 2) of the ratio grid; and counts."""
-    diag = region.diagonal
-    tol = point_tol * diag
+    if weighting not in WEIGHTINGS:
+        raise ValueError(f"unknown weighting '{weighting}'")
+    kinds = (pair_weighting(region, 0, 2, weighting), pair_weighting(region, 1, 3, weighting))
+    grid, _, counts = _grid(region, n1, n2, point_tol * region.diagonal, kinds)
+    counts["max_residual"] /= region.diagonal
+    return grid.reshape(-1, 2), counts
+
+
+def _grid(
+    region: Region, n1: int, n2: int, tol: float, kinds: tuple[str, str]
+) -> tuple[FloatArray, list[FloatArray], dict[str, float]]:
+    """Nodes (n2 + 1, n1 + 1, 2), feet on the tracked sides (each (n2 + 1, n1 + 1)) and counts.
+
+    Large grids start from a coarser one (about a quarter of the divisions, solved the same
+    way) interpolated by bicubic splines in the ratios, with feet interpolated too: Newton
+    then takes small steps with tracked feet, and one global query per side checks them.
+    """
     ri = 1.0 - np.arange(n1 + 1) / n1  # pair (S1, S3): ratio 1 on S3 (i = 0), 0 on S1
     rj = np.arange(n2 + 1) / n2  # pair (S0, S2): ratio 0 on S0 (j = 0), 1 on S2
     idx = boundary_indices(n1, n2)
     params = np.full(((n1 + 1) * (n2 + 1), 2), np.nan)
     # side k carries the end points of the curves of the other pair; in side direction
-    specs = ((0, 1, 3, ri), (1, 0, 2, rj), (2, 1, 3, ri[::-1]), (3, 0, 2, rj[::-1]))
-    for side, a, b, r in specs:
-        t = side_nodes(region, side, a, b, r, tol)
+    specs = ((0, 1, 3, ri, 1), (1, 0, 2, rj, 0), (2, 1, 3, ri[::-1], 1), (3, 0, 2, rj[::-1], 0))
+    for side, a, b, r, kind in specs:
+        t = side_nodes(region, side, a, b, r, tol, kinds[kind])
         params[idx[side]] = region.sides[side].evaluate(t)
     params[idx[0][[0, -1]]] = region.corners[[0, 1]]
     params[idx[2][[0, -1]]] = region.corners[[2, 3]]
     grid = params.reshape(n2 + 1, n1 + 1, 2)
-    # transfinite (Coons) interpolation of the boundary nodes as the initial guess
+    ra = np.broadcast_to(rj[1:-1, None], (n2 - 1, n1 - 1)).ravel()
+    rb = np.broadcast_to(ri[None, 1:-1], (n2 - 1, n1 - 1)).ravel()
+    feet0: list[FloatArray] | None = None
+    coarse_counts: dict[str, float] = {}
+    if min(n1, n2) >= 4 * _COARSE_MIN:
+        c1, c2 = max(_COARSE_MIN, -(-n1 // 4)), max(_COARSE_MIN, -(-n2 // 4))
+        cgrid, cfeet, coarse_counts = _grid(region, c1, c2, tol, kinds)
+        inner, feet0 = _refine_guess(cgrid, cfeet, n1, n2)
+    else:
+        inner = _coons(grid, n1, n2)[1:-1, 1:-1].reshape(-1, 2)
+    solved, feet, counts = _solve(region, inner, ra, rb, 1e-3 * tol, kinds, feet0)
+    grid[1:-1, 1:-1] = solved.reshape(n2 - 1, n1 - 1, 2)
+    for key in ("newton_iterations", "global_resolved"):
+        counts[f"coarse_{key}"] = coarse_counts.get(key, 0) + coarse_counts.get(f"coarse_{key}", 0)
+    return grid, _full_feet(region, grid, feet, kinds), counts
+
+
+def _full_feet(
+    region: Region, grid: FloatArray, inner: list[FloatArray], kinds: tuple[str, str]
+) -> list[FloatArray]:
+    """Feet (n2 + 1, n1 + 1) on each tracked side: interior ones from the solve, boundary
+    ones by a global query (few points); empty arrays for untracked sides."""
+    n2, n1 = grid.shape[0] - 1, grid.shape[1] - 1
+    sides = _Sides(region, 0, kinds)
+    out: list[FloatArray] = []
+    ring = np.ones((n2 + 1, n1 + 1), dtype=bool)
+    ring[1:-1, 1:-1] = False
+    x = region.embedding.evaluate(grid[ring])
+    for k in range(4):
+        if not sides.tracked[k]:
+            out.append(np.empty(0))
+            continue
+        t = np.empty((n2 + 1, n1 + 1))
+        t[1:-1, 1:-1] = inner[k].reshape(n2 - 1, n1 - 1)
+        t[ring] = sides.curves[k].closest(x).t
+        out.append(t)
+    return out
+
+
+def _refine_guess(
+    cgrid: FloatArray, cfeet: list[FloatArray], n1: int, n2: int
+) -> tuple[FloatArray, list[FloatArray]]:
+    """Interior nodes ((n1 - 1) * (n2 - 1), 2) and feet of an ``n1 x n2`` grid interpolated
+    from a coarse grid: bicubic splines of the nodes over the ratios (uniform on both
+    grids), bilinear for the feet (which may jump)."""
+    c2, c1 = cgrid.shape[0] - 1, cgrid.shape[1] - 1
+    uc, vc = np.arange(c1 + 1) / c1, np.arange(c2 + 1) / c2
+    uf, vf = np.arange(1, n1) / n1, np.arange(1, n2) / n2
+    nodes = np.stack(
+        [RectBivariateSpline(vc, uc, cgrid[..., d], kx=3, ky=3)(vf, uf) for d in range(2)],
+        axis=-1,
+    )
+    feet = [f if f.size == 0 else _interpolate_feet(f, uf, vf) for f in cfeet]
+    return nodes.reshape(-1, 2), feet
+
+
+def _interpolate_feet(t: FloatArray, uf: FloatArray, vf: FloatArray) -> FloatArray:
+    """Feet ((len(vf) * len(uf),)) interpolated bilinearly from a coarse grid of feet ``t``
+    (c2 + 1, c1 + 1); NaN in cells whose corners' feet differ by more than ``_FOOT_JUMP``
+    (a foot jumps to another part of the side there: such nodes start from a global query)."""
+    c2, c1 = t.shape[0] - 1, t.shape[1] - 1
+    corners = np.stack((t[:-1, :-1], t[:-1, 1:], t[1:, :-1], t[1:, 1:]))
+    spread = corners.max(axis=0) - corners.min(axis=0)  # (c2, c1) per coarse cell
+    ci = np.minimum((uf * c1).astype(np.int64), c1 - 1)
+    cj = np.minimum((vf * c2).astype(np.int64), c2 - 1)
+    fu, fv = uf * c1 - ci, vf * c2 - cj
+    a = t[cj][:, ci] * (1 - fu)[None] + t[cj][:, ci + 1] * fu[None]
+    b = t[cj + 1][:, ci] * (1 - fu)[None] + t[cj + 1][:, ci + 1] * fu[None]
+    out = a * (1 - fv)[:, None] + b * fv[:, None]
+    out[spread[cj][:, ci] > _FOOT_JUMP] = np.nan
+    return out.ravel()
+
+
+def _coons(grid: FloatArray, n1: int, n2: int) -> FloatArray:
+    """Transfinite (Coons) interpolation (n2 + 1, n1 + 1, 2) of the boundary of ``grid``."""
     u = (np.arange(n1 + 1) / n1)[None, :, None]
     v = (np.arange(n2 + 1) / n2)[:, None, None]
     bottom, top = grid[0][None], grid[-1][None]
     left, right = grid[:, 0][:, None], grid[:, -1][:, None]
     c00, c10, c11, c01 = grid[0, 0], grid[0, -1], grid[-1, -1], grid[-1, 0]
-    coons = (
+    return (
         (1 - v) * bottom + v * top + (1 - u) * left + u * right
         - ((1 - u) * (1 - v) * c00 + u * (1 - v) * c10 + u * v * c11 + (1 - u) * v * c01)
     )  # fmt: skip
-    inner = coons[1:-1, 1:-1].reshape(-1, 2)
-    ra = np.broadcast_to(rj[1:-1, None], (n2 - 1, n1 - 1)).ravel()
-    rb = np.broadcast_to(ri[None, 1:-1], (n2 - 1, n1 - 1)).ravel()
-    solved, iters, resid = _newton(region, inner, ra, rb, 1e-3 * tol, diag)
-    grid[1:-1, 1:-1] = solved.reshape(n2 - 1, n1 - 1, 2)
-    return grid.reshape(-1, 2), {"newton_iterations": iters, "max_residual": resid / diag}
+
+
+def _solve(
+    region: Region,
+    p: FloatArray,
+    ra: FloatArray,
+    rb: FloatArray,
+    tol: float,
+    kinds: tuple[str, str],
+    feet0: list[FloatArray] | None = None,
+) -> tuple[FloatArray, list[FloatArray], dict[str, float]]:
+    """Solve ``g_a = g_b = 0`` for all rows of ``p`` (n, 2): Newton with tracked feet
+    (starting from ``feet0`` if given, else from global ones), then a global check of the
+    feet and a re-solve of the rows whose feet were wrong. Returns nodes, feet, counts."""
+    n = p.shape[0]
+    counts = {"newton_iterations": 0, "global_resolved": 0, "max_residual": 0.0}
+    sides = _Sides(region, n, kinds)
+    if n == 0:
+        return p, sides.t, counts
+    if feet0 is not None:
+        for k in range(4):
+            if sides.tracked[k]:
+                sides.t[k] = np.clip(feet0[k], 0.0, 1.0)  # NaN stays: start from a global query
+    p = p.copy()
+    res = np.zeros(n)
+    rows = np.arange(n)
+    for round_ in range(_GLOBAL_ROUNDS + 1):
+        p[rows], it, res[rows] = _newton(sides, p[rows], ra, rb, rows, tol, kinds)
+        counts["newton_iterations"] += it
+        rows = _wrong_feet(sides, p, tol, rows)
+        if rows.size == 0:
+            break
+        if round_ == _GLOBAL_ROUNDS:
+            res[rows] = np.inf
+            break
+        counts["global_resolved"] += int(rows.size)
+        log.debug("region '%s': %d nodes re-solved from global feet", region.name, rows.size)
+    # the feet of every row are now the global ones (to tol): res is the true residual
+    worst = float(res.max())
+    counts["max_residual"] = worst
+    if worst > 1e3 * tol or not np.isfinite(worst):
+        bad = int(np.argmax(res))
+        diag = region.diagonal
+        raise MeshError(
+            f"region '{region.name}': ratio curves {ra[bad]:.4g} of (S0, S2) and "
+            f"{rb[bad]:.4g} of (S1, S3) do not cross (Newton residual {worst / diag:.2e} x "
+            "diagonal); the region is too distorted for a structured grid"
+        )
+    return p, sides.t, counts
+
+
+def _wrong_feet(sides: _Sides, p: FloatArray, tol: float, rows: np.ndarray) -> np.ndarray:
+    """Those of ``rows`` whose tracked foot is not the global one; their feet are reset to
+    the global ones."""
+    x = sides.region.embedding.evaluate(p[rows])
+    wrong = np.zeros(rows.size, dtype=bool)
+    for k in range(4):
+        if not sides.tracked[k]:
+            continue
+        curve, tk, dk = sides.curves[k], sides.t[k][rows], sides.d[k][rows]
+        doubt = np.flatnonzero(~certify_closest(curve, x, tk, dk, tol))
+        if doubt.size == 0:
+            continue
+        c = curve.closest(x[doubt])
+        bad = c.distance < dk[doubt] - tol
+        sides.t[k][rows[doubt[bad]]] = c.t[bad]
+        wrong[doubt[bad]] = True
+    return rows[wrong]
 
 
 def _newton(
-    region: Region, p: FloatArray, ra: FloatArray, rb: FloatArray, tol: float, diag: float
-) -> tuple[FloatArray, int, float]:
-    """Solve ``g_a = g_b = 0`` for all rows of ``p`` (n, 2) at once, damped by backtracking."""
-    if p.shape[0] == 0:
-        return p, 0, 0.0
+    sides: _Sides,
+    p: FloatArray,
+    ra_all: FloatArray,
+    rb_all: FloatArray,
+    rows: np.ndarray,
+    tol: float,
+    kinds: tuple[str, str],
+) -> tuple[FloatArray, int, FloatArray]:
+    """Damped Newton on ``g_a = g_b = 0`` for the node ``rows`` (p: (len(rows), 2))."""
     p = p.copy()
-    active = np.arange(p.shape[0])
-    ga, Ga = _g(region, 0, 2, ra, p)
-    gb, Gb = _g(region, 1, 3, rb, p)
-    assert Ga is not None and Gb is not None
+    ra, rb = ra_all[rows], rb_all[rows]
+    # rows whose feet are known (interpolated or reset to global ones) start tracked
+    known = np.ones(rows.size, dtype=bool)
+    for k, tracked in enumerate(sides.tracked):
+        if tracked:
+            known &= np.isfinite(sides.t[k][rows])
+
+    def evaluate_part(q: FloatArray, sel: np.ndarray, warm: bool) -> list:  # type: ignore[type-arg]
+        gr = rows[sel] if warm else None
+        ga, Ga, fa = _g(sides, 0, 2, ra[sel], q, kinds[0], gr)
+        gb, Gb, fb = _g(sides, 1, 3, rb[sel], q, kinds[1], gr)
+        return [ga, Ga, gb, Gb, *fa, *fb]
+
+    def evaluate(q: FloatArray, sel: np.ndarray, warm: np.ndarray) -> tuple:  # type: ignore[type-arg]
+        """Values at ``q`` for rows ``sel``: feet tracked where ``warm``, global elsewhere."""
+        if warm.all() or not warm.any():
+            out = evaluate_part(q, sel, bool(warm.all()))
+        else:
+            hot, cold = (
+                evaluate_part(q[warm], sel[warm], True),
+                evaluate_part(q[~warm], sel[~warm], False),
+            )
+            out = []
+            for h, c in zip(hot, cold, strict=True):
+                m = np.empty((sel.size, *h.shape[1:]))
+                m[warm], m[~warm] = h, c
+                out.append(m)
+        return out[0], out[1], out[2], out[3], tuple(out[4:8]), tuple(out[8:])
+
+    def accept(sel: np.ndarray, fa: tuple, fb: tuple) -> None:  # type: ignore[type-arg]
+        g = rows[sel]
+        sides.t[0][g], sides.t[2][g], sides.d[0][g], sides.d[2][g] = fa
+        sides.t[1][g], sides.t[3][g], sides.d[1][g], sides.d[3][g] = fb
+
+    all_rows = np.arange(rows.size)
+    ga, Ga, gb, Gb, fa, fb = evaluate(p, all_rows, known)
+    accept(all_rows, fa, fb)
     res = np.hypot(ga, gb)
+    diag = sides.region.diagonal
     max_step = 0.1 * diag
+    active = all_rows
     it = 0
     while it < _NEWTON_ITERS:
         active = active[res[active] > tol]
@@ -177,9 +570,9 @@ def _newton(
         A, B = Ga[active], Gb[active]
         det = A[:, 0] * B[:, 1] - A[:, 1] * B[:, 0]
         safe = np.where(np.abs(det) > 1e-300, det, 1e-300)
-        fa, fb = ga[active], gb[active]
+        fa_, fb_ = ga[active], gb[active]
         step = (
-            -np.column_stack((B[:, 1] * fa - A[:, 1] * fb, -B[:, 0] * fa + A[:, 0] * fb))
+            -np.column_stack((B[:, 1] * fa_ - A[:, 1] * fb_, -B[:, 0] * fa_ + A[:, 0] * fb_))
             / safe[:, None]
         )
         norm = np.linalg.norm(step, axis=1)
@@ -187,26 +580,20 @@ def _newton(
         lam = np.ones(active.size)
         todo = np.arange(active.size)
         for _ in range(12):  # backtracking on the residual
-            rows = active[todo]
-            q = p[rows] + lam[todo, None] * step[todo]
-            na, nGa = _g(region, 0, 2, ra[rows], q)
-            nb, nGb = _g(region, 1, 3, rb[rows], q)
+            sel = active[todo]
+            q = p[sel] + lam[todo, None] * step[todo]
+            # feet are tracked for small moves only: a long step may cross the place where a
+            # foot jumps to another part of its side, which only a global query sees
+            warm = lam[todo] * norm[todo] <= _TRACK_STEP * diag
+            na, nGa, nb, nGb, nfa, nfb = evaluate(q, sel, warm)
             nres = np.hypot(na, nb)
-            ok = nres < res[rows] * (1.0 - 1e-4 * lam[todo]) + tol
-            acc = rows[ok]
+            ok = nres < res[sel] * (1.0 - 1e-4 * lam[todo]) + tol
+            acc = sel[ok]
             p[acc], ga[acc], gb[acc], res[acc] = q[ok], na[ok], nb[ok], nres[ok]
-            assert nGa is not None and nGb is not None
             Ga[acc], Gb[acc] = nGa[ok], nGb[ok]
+            accept(acc, tuple(f[ok] for f in nfa), tuple(f[ok] for f in nfb))
             todo = todo[~ok]
             if todo.size == 0:
                 break
             lam[todo] *= 0.5
-    worst = float(res.max())
-    if worst > 1e3 * tol or not np.isfinite(worst):
-        bad = int(np.argmax(res))
-        raise MeshError(
-            f"region '{region.name}': ratio curves d0/(d0+d2)={ra[bad]:.4g} and "
-            f"d1/(d1+d3)={rb[bad]:.4g} do not cross (Newton residual {worst / diag:.2e} x "
-            "diagonal); the region is too distorted for a structured grid"
-        )
-    return p, it, worst
+    return p, it, res

@@ -1,0 +1,141 @@
+"""The ratio-curve mesher's field, warm-started feet and their global certification."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from medax.geometry import Arc, Line, Region, read_regions, sample_regions_path
+from medax.geometry.curve import certify_closest, closest_from
+from medax.mesh import ratio_grid as rg
+from medax.mesh.grid import boundary_indices
+from medax.mesh.mesher import mesh_region
+
+REGIONS = read_regions(sample_regions_path())
+
+
+def sector(r0: float, r1: float, degrees: float) -> Region:
+    """Annulus sector: S0 ray at 0, S1 outer arc, S2 ray at ``degrees``, S3 inner arc."""
+    a = np.radians(degrees)
+    u0, u1 = np.array([1.0, 0.0]), np.array([np.cos(a), np.sin(a)])
+    sides = [
+        Line(r0 * u0, r1 * u0),
+        Arc(np.zeros(2), r1, 0.0, a),
+        Line(r1 * u1, r0 * u1),
+        Arc(np.zeros(2), r0, a, -a),
+    ]
+    return Region.build(sides, name=f"sector{degrees:g}")
+
+
+def polar(r0: float, r1: float, degrees: float, n1: int, n2: int) -> np.ndarray:
+    """The exact polar grid (n2 + 1, n1 + 1, 2): radius along S0, angle along S1."""
+    rad = r0 + (r1 - r0) * np.arange(n1 + 1) / n1
+    ang = np.radians(degrees) * np.arange(n2 + 1) / n2
+    return np.stack((rad[None] * np.cos(ang[:, None]), rad[None] * np.sin(ang[:, None])), -1)
+
+
+@pytest.mark.parametrize("div", [(7, 12), (5, 3), (16, 16)])
+def test_shared_annulus_sector_is_exact_polar_grid(div):
+    """The default mesher gives concentric arcs and equal-angle rays for any counts."""
+    r = REGIONS["annulus_sector"]
+    m = mesh_region(r, div)
+    assert np.abs(m.grid() - polar(5.0, 9.0, 120.0, *div)).max() <= 1e-9 * r.diagonal
+
+
+@pytest.mark.parametrize("degrees", [30.0, 150.0])
+def test_sector_of_any_angle_is_polar_grid(degrees):
+    """Beyond 90 degrees the feet on the segment rays clamp at their ends; the angle field
+    measures to the whole lines, so the rays stay exact."""
+    r = sector(2.0, 7.0, degrees)
+    m = mesh_region(r, (6, 9))
+    assert np.abs(m.grid() - polar(2.0, 7.0, degrees, 6, 9)).max() <= 1e-9 * r.diagonal
+
+
+def test_distance_ratio_is_kept_where_it_measured_better():
+    """Only the polar pair of the annulus takes the angle weighting by default."""
+    pw = rg.pair_weighting
+    assert pw(REGIONS["annulus_sector"], 0, 2, "auto") == "angle"
+    assert pw(REGIONS["annulus_sector"], 1, 3, "auto") == "distance"
+    for name in ("trapezoid", "arcs", "wavy"):
+        assert {pw(REGIONS[name], a, a + 2, "auto") for a in (0, 1)} == {"distance"}
+    assert pw(REGIONS["wavy"], 0, 2, "angle") == "distance"  # free-form sides: never
+    assert pw(REGIONS["arcs"], 0, 2, "angle") == "angle"
+
+
+def test_angle_field_gradient_matches_finite_differences():
+    r = REGIONS["arcs"]
+    sides = rg._Sides(r, 0, ("angle", "angle"))
+    p = np.random.default_rng(3).uniform(2.0, 8.0, (20, 2))
+    ratio = np.linspace(0.1, 0.9, 20)
+    h = 1e-6
+    for a, b in ((0, 2), (1, 3)):
+        _, grad, _ = rg._g(sides, a, b, ratio, p, "angle")
+        fd = np.column_stack(
+            [
+                (rg._g(sides, a, b, ratio, p + h * e, "angle")[0]
+                 - rg._g(sides, a, b, ratio, p - h * e, "angle")[0]) / (2 * h)
+                for e in np.eye(2)
+            ]
+        )  # fmt: skip
+        np.testing.assert_allclose(grad, fd, atol=1e-7)
+
+
+@pytest.mark.parametrize("name", sorted(REGIONS))
+def test_angle_method_valid_grid(name):
+    r = REGIONS[name]
+    m = mesh_region(r, (9, 14), method="angle")
+    assert np.all(m.quality().scaled_jacobian > 0.0)
+    for k, idx in enumerate(boundary_indices(9, 14)):
+        assert r.sides[k].closest(m.params[idx]).distance.max() <= 1e-9 * r.diagonal
+
+
+def test_coarse_start_gives_the_same_nodes(monkeypatch):
+    """Large grids start from an interpolated coarse grid with tracked feet; the nodes must
+    be those of the direct solve from the transfinite guess with global feet."""
+    r = REGIONS["wavy"]
+    fast = mesh_region(r, (60, 52))
+    assert fast.info["coarse_newton_iterations"] > 0
+    monkeypatch.setattr(rg, "_COARSE_MIN", 10**6)
+    monkeypatch.setattr(rg, "_TRACK_STEP", 0.0)  # every evaluation global
+    slow = mesh_region(r, (60, 52))
+    assert slow.info["coarse_newton_iterations"] == 0
+    assert np.abs(fast.params - slow.params).max() <= 1e-9 * r.diagonal
+
+
+def _brute_distance(curve, x: np.ndarray, n: int = 400001) -> np.ndarray:
+    """Distances (len(x),) to dense samples: an independent global answer."""
+    s = curve.sample(n)
+    out = np.empty(len(x))
+    for i in range(0, len(x), 50):
+        out[i : i + 50] = np.min(np.linalg.norm(x[i : i + 50, None] - s[None], axis=2), axis=1)
+    return out
+
+
+def test_closest_from_converges_to_the_nearby_foot():
+    c = REGIONS["wavy"].sides[0]
+    rng = np.random.default_rng(5)
+    t = rng.uniform(0.05, 0.95, 200)
+    normal = c.derivative(t)[:, ::-1] * np.array([1.0, -1.0])
+    x = c.evaluate(t) + 0.05 * normal / np.linalg.norm(normal, axis=1)[:, None]
+    local = closest_from(c, x, t + rng.uniform(-0.01, 0.01, t.size))
+    np.testing.assert_allclose(local.t, t, atol=1e-9)
+    np.testing.assert_allclose(local.distance, 0.05, atol=1e-12)
+
+
+def test_certify_closest_never_certifies_a_wrong_foot():
+    """Feet on the wrong part of a wavy side are never certified; true ones mostly are."""
+    r = REGIONS["wavy"]
+    c = r.sides[0]
+    lo, hi = r.corners.min(axis=0), r.corners.max(axis=0)
+    x = np.random.default_rng(7).uniform(lo, hi, (600, 2))
+    truth = _brute_distance(c, x)
+    g = c.closest(x)
+    np.testing.assert_allclose(g.distance, truth, atol=1e-9)
+    slack = 1e-12 * r.diagonal
+    ok = certify_closest(c, x, g.t, g.distance, slack)
+    assert ok.mean() > 0.9
+    # local minima started from the far end of the curve: wrong wherever they are farther
+    far = closest_from(c, x, np.where(g.t < 0.5, 1.0, 0.0), iters=60)
+    wrong = far.distance > truth + 1e-9
+    assert wrong.sum() > 50
+    assert not np.any(certify_closest(c, x, far.t, far.distance, slack)[wrong])
