@@ -7,6 +7,7 @@ import pytest
 
 from medax.geometry import Arc, Line, Region, read_regions, sample_regions_path
 from medax.geometry.curve import certify_closest, closest_from
+from medax.mesh import ratio_field as rf
 from medax.mesh import ratio_grid as rg
 from medax.mesh.grid import boundary_indices
 from medax.mesh.mesher import mesh_region
@@ -53,7 +54,7 @@ def test_sector_of_any_angle_is_polar_grid(degrees):
 
 def test_distance_ratio_is_kept_where_it_measured_better():
     """Only the polar pair of the annulus takes the angle weighting by default."""
-    pw = rg.pair_weighting
+    pw = rf.pair_weighting
     assert pw(REGIONS["annulus_sector"], 0, 2, "auto") == "angle"
     assert pw(REGIONS["annulus_sector"], 1, 3, "auto") == "distance"
     for name in ("trapezoid", "arcs", "wavy"):
@@ -64,16 +65,16 @@ def test_distance_ratio_is_kept_where_it_measured_better():
 
 def test_angle_field_gradient_matches_finite_differences():
     r = REGIONS["arcs"]
-    sides = rg._Sides(r, 0, ("angle", "angle"))
+    sides = rf.SideDistances(r, 0, ("angle", "angle"))
     p = np.random.default_rng(3).uniform(2.0, 8.0, (20, 2))
     ratio = np.linspace(0.1, 0.9, 20)
     h = 1e-6
     for a, b in ((0, 2), (1, 3)):
-        _, grad, _ = rg._g(sides, a, b, ratio, p, "angle")
+        _, grad, _ = rf.evaluate_field(sides, a, b, ratio, p, "angle")
         fd = np.column_stack(
             [
-                (rg._g(sides, a, b, ratio, p + h * e, "angle")[0]
-                 - rg._g(sides, a, b, ratio, p - h * e, "angle")[0]) / (2 * h)
+                (rf.evaluate_field(sides, a, b, ratio, p + h * e, "angle")[0]
+                 - rf.evaluate_field(sides, a, b, ratio, p - h * e, "angle")[0]) / (2 * h)
                 for e in np.eye(2)
             ]
         )  # fmt: skip

@@ -1,32 +1,17 @@
 """Nodes as crossings of two families of ratio curves, solved directly.
 
-For a pair of opposite sides ``(a, b)`` and a ratio ``r`` in ``[0, 1]`` the curve of the
-family is the zero set of
-
-    g(p) = (1 - r) S((1 - r) T) d_a(p) - r S(r T) d_b(p),    S(x) = sin(x) / x,
-
-with ``d_k`` the distance in space from ``E(p)`` to side ``k`` and ``T`` the angle between the
-tangent lines of the two sides at the feet of ``p`` (``T = arccos(-u_a . u_b)``, ``u_k`` the
-unit vector from the foot on side ``k`` to the point). Two kinds (``weighting``):
-
-- ``"angle"``: ``T`` as defined. Between two lines meeting at an angle the curves are the
-  rays of equal angle (``T`` is the lines' angle; the ray at angle ``r T`` from ``a`` solves
-  ``g = 0`` exactly); between parallel lines and concentric arcs (``u_a = -u_b``, ``T = 0``)
-  they are the curves of constant distance ratio. So an annulus sector gets the exact polar
-  grid for any division counts.
-- ``"distance"``: ``T = 0`` everywhere, the curves ``d_a / (d_a + d_b) = r``.
-
-Both give the medial axis at ``r = 1/2`` (``g`` is then a positive multiple of
-``d_a - d_b``), the tracer's object. For ``(S0, S2)`` the ratio of node row ``j`` is
-``j / n2``; for ``(S1, S3)`` the ratio of column ``i`` is ``1 - i / n1``. Node ``(i, j)`` is
-the root of both ``g``. Boundary nodes are the curves' end points: the root of one equation
-along the side (1-D, bracketed, vectorised), so they lie on the sides exactly. Interior
-nodes are solved all at once by a damped 2-D Newton iteration started from the transfinite
-interpolation of the boundary nodes, with ``T`` frozen in the Jacobian. Feet on sides
-without a closed-form closest point (B-splines, curves on surfaces) are tracked locally
-from one iteration to the next (:func:`~medax.geometry.curve.closest_from`) and checked by
-one global query at the end; nodes whose foot was on the wrong part of a side are solved
-again from the global feet.
+The curves are level sets of the field of :mod:`medax.mesh.ratio_field`: for ``(S0, S2)``
+the ratio of node row ``j`` is ``j / n2``; for ``(S1, S3)`` the ratio of column ``i`` is
+``1 - i / n1``. Node ``(i, j)`` is the root of both. Boundary nodes are the curves' end
+points: the root of one equation along the side (1-D, bracketed, vectorised), so they lie on
+the sides exactly. Interior nodes are solved all at once by a damped 2-D Newton iteration,
+started from the transfinite interpolation of the boundary nodes or, for large grids, from
+a coarser grid interpolated. Feet on sides without a closed-form closest point (B-splines,
+curves on surfaces) are tracked locally from one iteration to the next
+(:func:`~medax.geometry.curve.closest_from`) once steps are small, and certified global at
+the end (:func:`~medax.geometry.curve.certify_closest`, a full query where that is not
+conclusive); nodes whose foot was on the wrong part of a side are solved again from the
+global feet.
 """
 
 from __future__ import annotations
@@ -39,215 +24,25 @@ from scipy.interpolate import RectBivariateSpline
 from medax import tolerances
 from medax.errors import MeshError
 from medax.geometry._types import FloatArray
-from medax.geometry.arc import Arc
-from medax.geometry.curve import (
-    Closest,
-    Curve,
-    certify_closest,
-    closest_from,
-    has_closed_form_closest,
-)
-from medax.geometry.line import Line
+from medax.geometry.curve import Curve, certify_closest
 from medax.geometry.region import Region
 from medax.mesh.grid import boundary_indices
+from medax.mesh.ratio_field import (
+    WEIGHTINGS,
+    SideDistances,
+    angular_ratio,
+    evaluate_field,
+    foot_angle,
+    pair_weighting,
+)
 
 log = logging.getLogger(__name__)
-WEIGHTINGS = ("auto", "angle", "distance")
 _SCAN = 513  # samples per side when bracketing boundary nodes
 _NEWTON_ITERS = 40
 _GLOBAL_ROUNDS = 3  # re-solves after the global foot check
 _COARSE_MIN = 12  # grids with both counts >= 4x this start from a coarser grid
 _FOOT_JUMP = 0.05  # coarse-cell spread of foot parameters taken as a jump
 _TRACK_STEP = 1e-3  # Newton moves (x diagonal) below which feet are tracked, not searched
-_TINY = np.finfo(float).tiny
-
-
-def _sinc(x: FloatArray) -> FloatArray:
-    """``sin(x) / x`` (1 at 0)."""
-    return np.sinc(x / np.pi)
-
-
-def pair_weighting(region: Region, a: int, b: int, weighting: str) -> str:
-    """The weighting used for the pair ``(a, b)`` (``"angle"`` or ``"distance"``).
-
-    ``"angle"`` applies only in the plane and between lines and arcs, where feet move
-    continuously (on free-form sides the nearest point can jump, ``T`` would jump with it
-    and the curves would break). ``"auto"`` (the default mesher's) takes ``"angle"`` only for
-    a polar pair: two lines whose opposite sides are arcs centred where the lines meet
-    (there it gives the exact polar grid; elsewhere the distance ratio measured better).
-    """
-    sides = region.sides
-    simple = all(isinstance(sides[k], (Line, Arc)) for k in (a, b))
-    if not (region.embedding.is_identity and simple) or weighting == "distance":
-        return "distance"
-    if weighting == "angle":
-        return "angle"
-    return "angle" if _is_polar_pair(region, a, b) else "distance"
-
-
-def _is_polar_pair(region: Region, a: int, b: int) -> bool:
-    """Sides ``a``, ``b`` are lines meeting at a point where both other sides are centred."""
-    la, lb = region.sides[a], region.sides[b]
-    others = [region.sides[k] for k in range(4) if k not in (a, b)]
-    if not (isinstance(la, Line) and isinstance(lb, Line)):
-        return False
-    if not all(isinstance(o, Arc) for o in others):
-        return False
-    da, db = la.b - la.a, lb.b - lb.a
-    cross = da[0] * db[1] - da[1] * db[0]
-    if abs(cross) <= 1e-12 * float(np.linalg.norm(da) * np.linalg.norm(db)):
-        return False
-    s = ((lb.a[0] - la.a[0]) * db[1] - (lb.a[1] - la.a[1]) * db[0]) / cross
-    apex = la.a + s * da
-    tol = tolerances.CORNER_TOL * region.diagonal
-    return all(float(np.linalg.norm(o.center - apex)) <= tol for o in others)  # type: ignore[attr-defined]
-
-
-def _theta(ua: FloatArray, ub: FloatArray, weighting: str) -> FloatArray:
-    """Angle (n,) between the tangent lines at the two feet, from the unit vectors (n, dim)."""
-    if weighting == "distance":
-        return np.zeros(ua.shape[0])
-    return np.arccos(np.clip(-np.einsum("ij,ij->i", ua, ub), -1.0, 1.0))
-
-
-def _weights(r: FloatArray, theta: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """``(1 - r) S((1 - r) T)`` and ``r S(r T)`` (each (n,))."""
-    return (1.0 - r) * _sinc((1.0 - r) * theta), r * _sinc(r * theta)
-
-
-def angular_ratio(da: FloatArray, db: FloatArray, theta: FloatArray) -> FloatArray:
-    """The ratio ``r`` (n,) whose curve passes through a point with distances ``da``, ``db``
-    and foot angle ``theta``: ``atan2(da sin T, db + da cos T) / T`` (``da / (da + db)`` at
-    ``T = 0``)."""
-    small = theta < 1e-8
-    t = np.where(small, 1.0, theta)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        lin = da / np.maximum(da + db, _TINY)
-    return np.where(small, lin, np.arctan2(da * np.sin(t), db + da * np.cos(t)) / t)
-
-
-def _line_closest(curve: Line, x: FloatArray) -> Closest:
-    """Closest points on the supporting (infinite) line of a line side: the parameter is not
-    clamped to ``[0, 1]``."""
-    d = curve.b - curve.a
-    t = ((x - curve.a) @ d) / float(d @ d)
-    foot = curve.evaluate(t)
-    return Closest(t=t, foot=foot, distance=np.linalg.norm(x - foot, axis=1))
-
-
-class _Sides:
-    """Distances to the four sides with feet tracked between calls (per node row).
-
-    Line sides of a pair weighted by angle are measured to their supporting lines
-    (``extended``): the equal-angle rays of a sector are exact only for the whole lines (a
-    foot clamped to a segment's end would bend them).
-    """
-
-    def __init__(self, region: Region, n: int, kinds: tuple[str, str]) -> None:
-        self.region = region
-        self.curves: list[Curve] = [region.space_curve(k) for k in range(4)]
-        self.extended = [
-            kinds[k % 2] == "angle" and isinstance(c, Line) for k, c in enumerate(self.curves)
-        ]
-        self.tracked = [
-            not (ext or has_closed_form_closest(c))
-            for c, ext in zip(self.curves, self.extended, strict=True)
-        ]
-        self.t = [np.full(n, np.nan) for _ in range(4)]  # accepted feet (tracked sides)
-        self.d = [np.full(n, np.nan) for _ in range(4)]  # accepted distances
-
-    def dist(
-        self, k: int, x: FloatArray, rows: np.ndarray | None
-    ) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Distances (n,), unit vectors (n, dim) and foot parameters (n,) of space points
-        ``x`` to side ``k``; warm-started from the accepted feet of ``rows`` if given."""
-        curve = self.curves[k]
-        if self.extended[k]:
-            assert isinstance(curve, Line)
-            c = _line_closest(curve, x)
-        elif rows is None or not self.tracked[k]:
-            c = curve.closest(x)
-        else:
-            c = closest_from(curve, x, self.t[k][rows])
-        u = (x - c.foot) / np.maximum(c.distance, _TINY)[:, None]
-        return c.distance, u, c.t
-
-
-def _g(
-    sides: _Sides,
-    a: int,
-    b: int,
-    r: FloatArray,
-    p: FloatArray,
-    weighting: str,
-    rows: np.ndarray | None = None,
-) -> tuple[FloatArray, FloatArray, tuple[FloatArray, ...]]:
-    """``g`` at parameter points ``p`` (n, 2), its gradient (n, 2) and the feet
-    ``(t_a, t_b, d_a, d_b)`` (each (n,))."""
-    region = sides.region
-    x = region.embedding.evaluate(p)
-    da, ua, ta = sides.dist(a, x, rows)
-    db, ub, tb = sides.dist(b, x, rows)
-    theta = _theta(ua, ub, weighting)
-    wa, wb = _weights(r, theta)
-    g = wa * da - wb * db
-    gx = wa[:, None] * ua - wb[:, None] * ub
-    if weighting == "angle" and not (sides.extended[a] and sides.extended[b]):
-        # (between two whole lines the foot angle is constant)
-        gx += _dg_dtheta(r, theta, da, db)[:, None] * _grad_theta(sides, a, b, x, theta, (
-            (ta, da, ua), (tb, db, ub)))  # fmt: skip
-    if not region.embedding.is_identity:
-        gx = np.einsum("nij,ni->nj", region.embedding.jacobian(p), gx)
-    return g, gx, (ta, tb, da, db)
-
-
-def _dsinc(x: FloatArray) -> FloatArray:
-    """Derivative of ``sin(x) / x``: ``(x cos x - sin x) / x^2`` (``-x / 3`` near 0)."""
-    small = np.abs(x) < 1e-4
-    xs = np.where(small, 1.0, x)
-    return np.where(small, -x / 3.0, (xs * np.cos(xs) - np.sin(xs)) / (xs * xs))
-
-
-def _dg_dtheta(r: FloatArray, theta: FloatArray, da: FloatArray, db: FloatArray) -> FloatArray:
-    """``dg / dT`` (n,) at fixed distances."""
-    return (1.0 - r) ** 2 * _dsinc((1.0 - r) * theta) * da - r**2 * _dsinc(r * theta) * db
-
-
-def _unit_jacobian(
-    curve: Curve, t: FloatArray, d: FloatArray, u: FloatArray, extended: bool
-) -> FloatArray:
-    """``du / dx`` (n, dim, dim) of the unit vector from the foot ``C(t)`` to ``x``:
-    ``(I - u u^T - C' C'^T / D) / d`` with ``D = |C'|^2 - d u . C''`` (the foot's own motion,
-    absent when the foot is at an end of the curve). Symmetric."""
-    _, c1, c2 = curve.jet(t)
-    dim = u.shape[1]
-    den = np.einsum("ij,ij->i", c1, c1) - d * np.einsum("ij,ij->i", u, c2)
-    interior = den > 0.0
-    if not extended:
-        interior &= (t > 0.0) & (t < 1.0)
-    m = np.where(interior, 1.0 / np.where(interior, den, 1.0), 0.0)
-    jac = np.eye(dim)[None] - u[:, :, None] * u[:, None, :]
-    jac -= m[:, None, None] * c1[:, :, None] * c1[:, None, :]
-    return jac / np.maximum(d, _TINY)[:, None, None]
-
-
-def _grad_theta(
-    sides: _Sides,
-    a: int,
-    b: int,
-    x: FloatArray,
-    theta: FloatArray,
-    feet: tuple[tuple[FloatArray, FloatArray, FloatArray], ...],
-) -> FloatArray:
-    """Gradient (n, dim) in space of ``T = arccos(-u_a . u_b)``; zero where ``T`` is 0 or
-    ``pi`` (there ``dg / dT`` vanishes or the foot angle is undefined)."""
-    (ta, da, ua), (tb, db, ub) = feet
-    ja = _unit_jacobian(sides.curves[a], ta, da, ua, sides.extended[a])
-    jb = _unit_jacobian(sides.curves[b], tb, db, ub, sides.extended[b])
-    dc = np.einsum("nij,nj->ni", ja, ub) + np.einsum("nij,nj->ni", jb, ua)
-    s = np.sin(theta)
-    ok = s > 1e-8
-    return np.where(ok, 1.0 / np.where(ok, s, 1.0), 0.0)[:, None] * dc
 
 
 def side_nodes(
@@ -267,13 +62,13 @@ def side_nodes(
     """
     curve: Curve = region.sides[side]
     weighting = pair_weighting(region, a, b, weighting)
-    sides = _Sides(region, 0, (weighting, weighting))
+    sides = SideDistances(region, 0, (weighting, weighting))
     r = np.asarray(ratios, dtype=np.float64)
     s = np.linspace(0.0, 1.0, _SCAN)
     x = region.embedding.evaluate(curve.evaluate(s))
     da, ua, _ = sides.dist(a, x, None)
     db, ub, _ = sides.dist(b, x, None)
-    phi = angular_ratio(da, db, _theta(ua, ub, weighting))
+    phi = angular_ratio(da, db, foot_angle(ua, ub, weighting))
     # orient the scan so that phi runs from the a end (0) to the b end (1)
     if phi[0] > phi[-1]:
         s, phi = s[::-1], phi[::-1]
@@ -296,7 +91,7 @@ def side_nodes(
 
     def f(t: FloatArray) -> FloatArray:
         """``g`` on the side: the sign of ``phi - r``."""
-        return _g(sides, a, b, ri, curve.evaluate(t), weighting)[0]
+        return evaluate_field(sides, a, b, ri, curve.evaluate(t), weighting)[0]
 
     flo, fhi = f(lo), f(hi)
     moved = np.zeros(ri.size, dtype=np.int8)  # -1: lo moved last, +1: hi moved last
@@ -378,7 +173,7 @@ def _full_feet(
     """Feet (n2 + 1, n1 + 1) on each tracked side: interior ones from the solve, boundary
     ones by a global query (few points); empty arrays for untracked sides."""
     n2, n1 = grid.shape[0] - 1, grid.shape[1] - 1
-    sides = _Sides(region, 0, kinds)
+    sides = SideDistances(region, 0, kinds)
     out: list[FloatArray] = []
     ring = np.ones((n2 + 1, n1 + 1), dtype=bool)
     ring[1:-1, 1:-1] = False
@@ -455,7 +250,7 @@ def _solve(
     feet and a re-solve of the rows whose feet were wrong. Returns nodes, feet, counts."""
     n = p.shape[0]
     counts = {"newton_iterations": 0, "global_resolved": 0, "max_residual": 0.0}
-    sides = _Sides(region, n, kinds)
+    sides = SideDistances(region, n, kinds)
     if n == 0:
         return p, sides.t, counts
     if feet0 is not None:
@@ -490,7 +285,7 @@ def _solve(
     return p, sides.t, counts
 
 
-def _wrong_feet(sides: _Sides, p: FloatArray, tol: float, rows: np.ndarray) -> np.ndarray:
+def _wrong_feet(sides: SideDistances, p: FloatArray, tol: float, rows: np.ndarray) -> np.ndarray:
     """Those of ``rows`` whose tracked foot is not the global one; their feet are reset to
     the global ones."""
     x = sides.region.embedding.evaluate(p[rows])
@@ -510,7 +305,7 @@ def _wrong_feet(sides: _Sides, p: FloatArray, tol: float, rows: np.ndarray) -> n
 
 
 def _newton(
-    sides: _Sides,
+    sides: SideDistances,
     p: FloatArray,
     ra_all: FloatArray,
     rb_all: FloatArray,
@@ -529,8 +324,8 @@ def _newton(
 
     def evaluate_part(q: FloatArray, sel: np.ndarray, warm: bool) -> list:  # type: ignore[type-arg]
         gr = rows[sel] if warm else None
-        ga, Ga, fa = _g(sides, 0, 2, ra[sel], q, kinds[0], gr)
-        gb, Gb, fb = _g(sides, 1, 3, rb[sel], q, kinds[1], gr)
+        ga, Ga, fa = evaluate_field(sides, 0, 2, ra[sel], q, kinds[0], gr)
+        gb, Gb, fb = evaluate_field(sides, 1, 3, rb[sel], q, kinds[1], gr)
         return [ga, Ga, gb, Gb, *fa, *fb]
 
     def evaluate(q: FloatArray, sel: np.ndarray, warm: np.ndarray) -> tuple:  # type: ignore[type-arg]
