@@ -9,8 +9,9 @@ medax's Verdict code on both meshes) and the time ratio medax / gmsh transfinite
 peak memory of a medax 512 x 512 mesh (largest region) is measured in a fresh subprocess
 (``ru_maxrss``, and ``tracemalloc`` for the Python heap).
 
-    python benchmarks/bench_mesh.py [--sizes 16,32,128,512] [--regions a,b] [--paper]
+    python benchmarks/bench_mesh.py [--sizes 16,32,128,512] [--regions a,b] [--angle] [--paper]
 
+``--angle`` adds ``method="angle"`` (angle-weighted ratio curves on all line and arc pairs);
 ``--paper`` adds the paper's recursion (``method="paper"``) at the sizes up to 32.
 """
 
@@ -129,6 +130,7 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="16,32,128,512")
     ap.add_argument("--regions", default="")
+    ap.add_argument("--angle", action="store_true", help="add method='angle'")
     ap.add_argument("--paper", action="store_true", help="add method='paper' at N <= 32")
     ap.add_argument("--memory-child", nargs=2, metavar=("REGION", "N"), help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -155,6 +157,10 @@ def main() -> int:
             m = mesh_region(region, (n, n))
             t_medax = time.perf_counter() - t0
             rows = [("medax ratio", m.points, m.quads, t_medax)]
+            if args.angle:
+                t0 = time.perf_counter()
+                ma = mesh_region(region, (n, n), method="angle")
+                rows.append(("medax angle", ma.points, ma.quads, time.perf_counter() - t0))
             if args.paper and n <= 32:
                 t0 = time.perf_counter()
                 mp = mesh_region(region, (n, n), method="paper", tol=1e-7)
