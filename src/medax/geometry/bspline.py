@@ -102,12 +102,13 @@ class BSpline(Curve):
     def _raw_many(self, t: FloatArray, orders: tuple[int, ...]) -> list[FloatArray]:
         """Homogeneous (or plain) derivatives of the given orders, sharing the span search
         and the coefficient gather."""
-        t = np.clip(np.asarray(t, dtype=np.float64), 0.0, 1.0)
+        # np.minimum/np.maximum: np.clip costs microseconds more per call on small arrays
+        t = np.minimum(np.maximum(np.asarray(t, dtype=np.float64), 0.0), 1.0)
         if self.degree > POWER_BASIS_MAX_DEGREE:
             return [np.asarray(self._spl(t, nu)) for nu in orders]
         x, coefs = self._pieces
         i = np.searchsorted(x, t, side="right") - 1
-        np.clip(i, 0, len(x) - 2, out=i)
+        i = np.minimum(np.maximum(i, 0), len(x) - 2)
         s = (t - x[i])[:, None, None]
         c = coefs[i, :, : max(orders) + 1]  # (n, degree+1, orders, dim)
         v = c[:, 0].copy()

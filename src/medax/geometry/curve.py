@@ -149,7 +149,7 @@ def closest_from(curve: Curve, points: FloatArray, t0: FloatArray, iters: int = 
         with np.errstate(divide="ignore", invalid="ignore"):
             step = np.where(dg > 0.0, g / dg, g / np.maximum(speed2, 1e-300))
         step = np.where(np.isfinite(step), step, 0.0)
-        new = np.clip(t[rows] - step, 0.0, 1.0)
+        new = np.minimum(np.maximum(t[rows] - step, 0.0), 1.0)
         moved = np.abs(new - t[rows]) > 1e-12
         t[rows] = new
         rows = rows[moved]
@@ -203,8 +203,8 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
     n = points.shape[0]
     cand = _candidate_samples(curve, points, k)
     dt = ts[1] - ts[0]
-    lo = np.clip(ts[cand] - dt, 0.0, 1.0).ravel()
-    hi = np.clip(ts[cand] + dt, 0.0, 1.0).ravel()
+    lo = np.maximum(ts[cand] - dt, 0.0).ravel()
+    hi = np.minimum(ts[cand] + dt, 1.0).ravel()
     x = np.repeat(points, k, axis=0)
     t = _bracketed_newton(curve, x, lo, hi)
     foot = curve.evaluate(t)
@@ -291,7 +291,8 @@ def _bracketed_newton(
         # the distance is stationary at the foot: |dt| < 1e-10 leaves it exact to round-off
         small = np.abs(step) <= 1e-10
         bad = ~np.isfinite(new) | (new < aa) | (new > bb)
-        new = np.where(small, np.clip(new, aa, bb), np.where(bad, 0.5 * (aa + bb), new))
+        kept = np.minimum(np.maximum(new, aa), bb)
+        new = np.where(small, kept, np.where(bad, 0.5 * (aa + bb), new))
         done = small | (bb - aa <= 4e-16) | (g == 0.0)
         a[ia], b[ia], s[ia] = aa, bb, new
         ia = ia[~done]
