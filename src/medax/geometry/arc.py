@@ -100,16 +100,24 @@ class Arc(Curve):
         """Closed form: the polar angle of the point, clamped to the arc, or an end."""
         x = np.asarray(points, dtype=np.float64)
         v = x - self.center
+        rho = np.hypot(v[:, 0], v[:, 1])
         ang = np.arctan2(v[:, 1], v[:, 0])
-        rel = np.mod((ang - self.a0) * np.sign(self.sweep), 2.0 * np.pi)
-        t = rel / abs(self.sweep)
-        inside = t <= 1.0
-        t_in = np.where(inside, t, 0.0)
-        ends = np.array([0.0, 1.0])
-        pe = self.evaluate(ends)
-        d0 = np.linalg.norm(x - pe[0], axis=1)
-        d1 = np.linalg.norm(x - pe[1], axis=1)
-        t = np.where(inside, t_in, np.where(d0 <= d1, 0.0, 1.0))
-        foot = self.evaluate(t)
-        dist = np.linalg.norm(x - foot, axis=1)
+        t = np.mod((ang - self.a0) * np.sign(self.sweep), 2.0 * np.pi) / abs(self.sweep)
+        # inside the arc's angle: the radial foot, at distance |rho - r| (no trigonometry)
+        scale = self.radius / np.maximum(rho, np.finfo(float).tiny)
+        foot = self.center + v * scale[:, None]
+        dist = np.abs(rho - self.radius)
+        centre = rho == 0.0  # every point of the arc is nearest: take the one at t
+        if np.any(centre):
+            foot[centre] = self.evaluate(t[centre])
+        out = np.flatnonzero(t > 1.0)
+        if out.size:  # beyond the ends: the nearer end
+            pe = self.evaluate(np.array([0.0, 1.0]))
+            xo = x[out]
+            d0 = np.hypot(*(xo - pe[0]).T)
+            d1 = np.hypot(*(xo - pe[1]).T)
+            end = (d1 < d0).astype(np.int64)
+            t[out] = end.astype(np.float64)
+            foot[out] = pe[end]
+            dist[out] = np.minimum(d0, d1)
         return Closest(t=t, foot=foot, distance=dist)

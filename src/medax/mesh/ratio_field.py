@@ -84,6 +84,8 @@ def foot_angle(ua: FloatArray, ub: FloatArray, weighting: str) -> FloatArray:
 
 def _weights(r: FloatArray, theta: FloatArray) -> tuple[FloatArray, FloatArray]:
     """``(1 - r) S((1 - r) T)`` and ``r S(r T)`` (each (n,))."""
+    if not np.any(theta):
+        return 1.0 - r, r
     return (1.0 - r) * _sinc((1.0 - r) * theta), r * _sinc(r * theta)
 
 
