@@ -140,3 +140,47 @@ def test_certify_closest_never_certifies_a_wrong_foot():
     wrong = far.distance > truth + 1e-9
     assert wrong.sum() > 50
     assert not np.any(certify_closest(c, x, far.t, far.distance, slack)[wrong])
+
+
+class Cylinder:
+    """``E(u, v) = (R cos u, R sin u, v)``, written independently of medax's surfaces."""
+
+    dim = 3
+    is_identity = False
+
+    def __init__(self, radius: float) -> None:
+        self.r = radius
+
+    def evaluate(self, p):
+        return np.column_stack((self.r * np.cos(p[:, 0]), self.r * np.sin(p[:, 0]), p[:, 1]))
+
+    def jacobian(self, p):
+        j = np.zeros((len(p), 3, 2))
+        j[:, 0, 0] = -self.r * np.sin(p[:, 0])
+        j[:, 1, 0] = self.r * np.cos(p[:, 0])
+        j[:, 2, 1] = 1.0
+        return j
+
+
+@pytest.mark.parametrize("div", [(5, 4), (50, 48)])
+def test_mesh_on_a_cylinder_patch_measures_in_space(div):
+    """Nodes of a patch on a cylinder satisfy both ratio equations with distances in space
+    measured by brute force (the large grid takes the coarse start and tracked feet)."""
+    c = np.array([[0.2, 0], [2.5, 0], [2.0, 3], [0.0, 2.5]], float)
+    emb = Cylinder(2.0)
+    reg = Region.build([Line(c[k], c[(k + 1) % 4]) for k in range(4)], "cyl", embedding=emb)
+    n1, n2 = div
+    m = mesh_region(reg, div)
+    assert m.points.shape == ((n1 + 1) * (n2 + 1), 3)
+    s = np.linspace(0.0, 1.0, 100001)
+    from scipy.spatial import cKDTree
+
+    d = [
+        cKDTree(emb.evaluate(c[k] + s[:, None] * (c[(k + 1) % 4] - c[k]))).query(m.points)[0]
+        for k in range(4)
+    ]
+    j, i = np.divmod(np.arange(m.n_nodes), n1 + 1)
+    inner = (i > 0) & (i < n1) & (j > 0) & (j < n2)
+    assert np.abs(d[0] / (d[0] + d[2]) - j / n2)[inner].max() < 1e-7
+    assert np.abs(d[1] / (d[1] + d[3]) - (1 - i / n1))[inner].max() < 1e-7
+    assert np.all(m.quality().scaled_jacobian > 0.0)
