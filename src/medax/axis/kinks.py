@@ -67,6 +67,14 @@ def locate_kink(
         return None
     if abs(ta[0] - tb[0]) < 1e-9:  # both branches converged to one: no kink after all
         return None
+    # it must lie in its interval: Newton can also find a crossing of the two branches'
+    # fields far away (not on this piece of the axis)
+    ab = p[i + 1] - p[i]
+    along = float((q - p[i]) @ ab / (ab @ ab))
+    if not (1e-9 < along < 1.0 - 1e-9) or np.linalg.norm(q - p[i] - along * ab) > np.linalg.norm(
+        ab
+    ):
+        return None
     # the kink must be on the axis of the full (global) field
     if field(q[None, :]).error[0] > tol:
         return None

@@ -25,6 +25,11 @@ CHECK_SAMPLES = 10
 MAX_ROUNDS = 30
 #: the checks aim at this fraction of the tolerance: between two check samples the error can
 #: exceed the sampled maximum by a few percent (1.0047e-6 seen at tol 1e-6 on a random quad)
+#: intervals shorter than this (x diagonal) are not refined further
+MIN_INTERVAL = 1e-7
+#: refinement stops when the error, still above twice the target, has not dropped by 10 %
+#: over this many rounds (a singularity no break describes)
+STALL_ROUNDS = 4
 CHECK_MARGIN = 0.75
 DEGREE = 3
 
@@ -65,13 +70,15 @@ def fit_and_refine(
     s = field(pts)
     breaks: set[int] = set()  # indices into pts of C0 break points
     tried: set[int] = set()  # kink intervals Newton did not confirm (refined instead)
-    tried_t: set[tuple[int, int, float]] = set()  # transitions not confirmed
+    tried_t: set[tuple[int, int, float, int]] = set()  # transitions not confirmed
+    vertices = (field.a1.breaks(), field.a2.breaks())  # corners of the constraints
     iters = 0
     curve_error = np.inf
     spline: BSpline | None = None
     u = np.zeros(0)
     rounds = 0
     checked: _Checked | None = None
+    history: list[tuple[float, int]] = []  # curve error and point count per checked round
     for rounds in range(1, MAX_ROUNDS + 1):  # noqa: B007
         # 1. pieces between breaks need DEGREE + 1 points: insert chord midpoints where short
         cuts = [0, *sorted(breaks), len(pts) - 1]
@@ -95,7 +102,7 @@ def fit_and_refine(
         tried |= set(kinks)
         trans = [
             f
-            for f in transition_intervals(s)
+            for f in transition_intervals(s, vertices)
             if f not in tried_t
             and f[0] not in breaks
             and f[0] + 1 not in breaks
@@ -109,7 +116,19 @@ def fit_and_refine(
         if new_breaks:
             idx = np.array(sorted(new_breaks), dtype=np.int64)
             kp = np.array([new_breaks[i] for i in idx])
-            pts, s, breaks = _insert_at(pts, s, breaks, idx, kp, field(kp), as_break=True)
+            # a break found on an existing point (e.g. a foot reaching its constraint's end
+            # exactly at B1 or B2) is not inserted again: interior points become breaks
+            on = _existing(pts, idx, kp, 1e-12 * scale)
+            fresh = on < 0
+            marked = {int(j) for j in on[~fresh] if 0 < j < len(pts) - 1} - breaks
+            if np.any(fresh):
+                breaks |= marked
+                kf = kp[fresh]
+                pts, s, breaks = _insert_at(pts, s, breaks, idx[fresh], kf, field(kf), True)
+            elif marked:
+                breaks |= marked
+            else:
+                continue  # nothing new: the tried sets keep these intervals from coming back
             tried, tried_t = set(), set()
             continue
         spline, u = interpolate(pts, sorted(breaks), DEGREE)
@@ -117,7 +136,17 @@ def fit_and_refine(
         err, checked = _check(field, spline, u, pts, checked, target)
         curve_error = float(err.max())
         bad = np.nonzero(err > target)[0]
-        if bad.size == 0:
+        # intervals already shorter than the tracer's smallest step are not split again: no
+        # smooth piece needs them, and at a singularity that no break describes (e.g. the
+        # axis through a focal point of a constraint) splitting would never end
+        chord = np.linalg.norm(pts[bad + 1] - pts[bad], axis=1)
+        bad = bad[chord > MIN_INTERVAL * scale]
+        history.append((curve_error, len(pts)))
+        stalled = False
+        if len(history) > STALL_ROUNDS:
+            err0, _ = history[-1 - STALL_ROUNDS]
+            stalled = curve_error > 0.9 * err0 and curve_error > 2.0 * target
+        if bad.size == 0 or stalled:
             break
         # cubic interpolation error ~ h^4: split each bad interval into enough pieces
         pieces = np.clip(np.ceil(1.3 * (err[bad] / target) ** 0.25), 2, 8).astype(np.int64)
@@ -126,6 +155,14 @@ def fit_and_refine(
     if spline is None or len(u) != len(pts):  # rounds ran out while inserting breaks
         spline, u = interpolate(pts, sorted(breaks), DEGREE)
     return Fitted(pts, s, sorted(breaks), spline, u, curve_error, rounds, iters)
+
+
+def _existing(pts: FloatArray, idx: np.ndarray, q: FloatArray, eps: float) -> np.ndarray:
+    """For new points ``q`` (k, 2) in intervals ``idx`` (k,): the index of the interval end
+    they coincide with (within ``eps``), or -1."""
+    lo = np.linalg.norm(q - pts[idx], axis=1) <= eps
+    hi = np.linalg.norm(q - pts[idx + 1], axis=1) <= eps
+    return np.where(lo, idx, np.where(hi, idx + 1, -1))
 
 
 @dataclass
@@ -197,6 +234,15 @@ def _insert(
     else:
         guess = pts[intervals] + frac[:, None] * (pts[intervals + 1] - pts[intervals])
     new, sn, _, it = correct_newton(field, guess, tol)
+    # a corrected point that left its interval (slid onto a neighbour near a singularity)
+    # would break the order of the points: it is dropped
+    a, b = pts[intervals], pts[intervals + 1]
+    along = np.einsum("ij,ij->i", new - a, b - a) / np.einsum("ij,ij->i", b - a, b - a)
+    keep = np.isfinite(along) & (along > 1e-9) & (along < 1.0 - 1e-9)
+    same = intervals[1:] == intervals[:-1]
+    keep[1:] &= ~same | (along[1:] > along[:-1] + 1e-9)
+    if not np.all(keep):
+        intervals, new, sn = intervals[keep], new[keep], _take(sn, np.flatnonzero(keep))
     pts, s, breaks = _insert_at(pts, s, breaks, intervals, new, sn, as_break=False)
     return pts, s, breaks, it
 

@@ -1,13 +1,16 @@
-"""Transitions of the axis: points where a foot point reaches an end of its constraint.
+"""Transitions of the axis: points where a foot point reaches an end of its constraint, or
+a corner of it (a C0 joint of a B-spline or polyline constraint, e.g. a traced axis with a
+kink used as a side).
 
-Past a constraint's end the nearest point of that constraint stays at the end, and the axis
-changes from one kind of curve to another (e.g. from a line to a parabola): it is only C1
-there. A cubic spline through points on both sides converges slowly across such a point, so
-the refinement would pile points up around it. Locating it exactly and making it a break of
-the fit keeps each piece smooth.
+Past a constraint's end (or onto a corner) the nearest point of that constraint stays there,
+and the axis changes from one kind of curve to another (e.g. from a line to a parabola): it
+is only C1 there. A cubic spline through points on both sides converges slowly across
+such a point, so the refinement would pile points up around it. Locating it exactly and
+making it a break of the fit keeps each piece smooth.
 
-The transition at the end ``c = C(e)`` (``e`` = 0 or 1) of a constraint ``C`` is where the
-axis crosses the plane through ``c`` normal to the tangent ``C'(e)``: the root of
+The transition at the vertex ``c = C(e)`` (``e`` = 0, 1 or a corner) of a constraint ``C``
+is where the axis crosses the plane through ``c`` normal to the one-sided tangent ``C'(e)``
+of the piece the foot leaves: the root of
 
     g(p) = 0,   h(p) = (E(p) - c) . C'(e) = 0,
 
@@ -21,15 +24,23 @@ import numpy as np
 from medax.axis.field import DistanceField, FieldSample
 from medax.geometry._types import FloatArray
 
+#: a foot parameter this close to a vertex is at the vertex
+AT_VERTEX = 1e-12
 
-def transition_intervals(s: FieldSample) -> list[tuple[int, int, float]]:
-    """``(i, constraint, end)``: the foot on constraint 1 or 2 reaches its end ``end``
-    (0.0 or 1.0) between points ``i`` and ``i + 1``."""
+
+def transition_intervals(
+    s: FieldSample, breaks: tuple[FloatArray, FloatArray] = (np.zeros(0), np.zeros(0))
+) -> list[tuple[int, int, float, int]]:
+    """``(i, constraint, vertex, side)``: the foot on constraint 1 or 2 reaches a vertex
+    (0.0, 1.0 or one of the constraint's ``breaks``) between points ``i`` and ``i + 1``,
+    coming from the piece before it (``side = -1``) or after it (``+1``)."""
     out = []
-    for k, t in ((1, s.t1), (2, s.t2)):
-        for end in (0.0, 1.0):
-            at = t == end
-            out += [(int(i), k, end) for i in np.nonzero(at[:-1] != at[1:])[0]]
+    for k, t, inner in ((1, s.t1, breaks[0]), (2, s.t2, breaks[1])):
+        for e in (0.0, *np.asarray(inner).tolist(), 1.0):
+            at = np.abs(t - e) <= AT_VERTEX
+            for i in np.nonzero(at[:-1] != at[1:])[0]:
+                off = t[i + 1] if at[i] else t[i]  # the foot not at the vertex
+                out.append((int(i), k, float(e), -1 if off < e else 1))
     return out
 
 
@@ -37,7 +48,7 @@ def locate_transitions(
     field: DistanceField,
     pts: FloatArray,
     s: FieldSample,
-    found: list[tuple[int, int, float]],
+    found: list[tuple[int, int, float, int]],
     tol: float,
     iters: int = 12,
 ) -> tuple[np.ndarray, FloatArray]:
@@ -47,10 +58,12 @@ def locate_transitions(
     if not found:
         return np.zeros(0, dtype=np.int64), np.zeros((0, 2))
     idx = np.array([f[0] for f in found], dtype=np.int64)
-    curves = [field.a1 if k == 1 else field.a2 for _, k, _ in found]
-    ends = [np.array([e]) for _, _, e in found]
+    curves = [field.a1 if k == 1 else field.a2 for _, k, _, _ in found]
+    ends = [np.array([e]) for _, _, e, _ in found]
+    # one-sided tangent of the piece the foot leaves (a hair inside it)
+    sides = [np.clip(np.array([e + 1e-12 * side]), 0.0, 1.0) for _, _, e, side in found]
     c = np.array([cv.evaluate(e)[0] for cv, e in zip(curves, ends, strict=True)])
-    d = np.array([cv.derivative(e)[0] for cv, e in zip(curves, ends, strict=True)])
+    d = np.array([cv.derivative(e)[0] for cv, e in zip(curves, sides, strict=True)])
     d /= np.linalg.norm(d, axis=1)[:, None]
     emb = field.region.embedding
     a, b = pts[idx], pts[idx + 1]

@@ -68,6 +68,12 @@ class BSpline(Curve):
     def dim(self) -> int:
         return int(self.control_points.shape[1])
 
+    def breaks(self) -> FloatArray:
+        """Interior knots of multiplicity >= degree (C0 joints)."""
+        kn, mult = np.unique(self.knots, return_counts=True)
+        inner = (kn > 0.0) & (kn < 1.0) & (mult >= self.degree)
+        return kn[inner]
+
     def complexity(self) -> int:
         return max(1, int(np.unique(self.knots).size - 1))
 

@@ -70,6 +70,10 @@ class Curve(ABC):
         """Number of smooth pieces (spans, segments); sets the sampling density."""
         return 1
 
+    def breaks(self) -> FloatArray:
+        """Interior parameters (k,) where the curve is only C0 (a corner), increasing."""
+        return np.zeros(0)
+
     @property
     def start(self) -> FloatArray:
         """First point, shape ``(dim,)``."""
@@ -318,6 +322,10 @@ class SubCurve(Curve):
 
     def complexity(self) -> int:
         return max(1, int(np.ceil(self.base.complexity() * abs(self.t1 - self.t0))))
+
+    def breaks(self) -> FloatArray:
+        b = (self.base.breaks() - self.t0) / (self.t1 - self.t0)
+        return np.sort(b[(b > 0.0) & (b < 1.0)])
 
     def _map(self, t: FloatArray) -> FloatArray:
         return self.t0 + np.asarray(t, dtype=np.float64) * (self.t1 - self.t0)

@@ -27,6 +27,9 @@ class EmbeddedCurve(Curve):
     def dim(self) -> int:
         return self.embedding.dim
 
+    def breaks(self) -> FloatArray:
+        return self.curve.breaks()
+
     def complexity(self) -> int:
         return max(4, self.curve.complexity())
 

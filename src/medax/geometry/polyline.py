@@ -31,6 +31,9 @@ class Polyline(Curve):
     def dim(self) -> int:
         return int(self.points.shape[1])
 
+    def breaks(self) -> FloatArray:
+        return self._tk[1:-1].copy()
+
     def complexity(self) -> int:
         return self.points.shape[0] - 1
 

@@ -48,6 +48,9 @@ class AxisSide(Curve):
     def complexity(self) -> int:
         return self.pieces
 
+    def breaks(self) -> FloatArray:
+        return self.spline.breaks()
+
     def evaluate(self, t: FloatArray) -> FloatArray:
         return self.spline.evaluate(t)
 
