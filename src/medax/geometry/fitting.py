@@ -7,6 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.interpolate import make_interp_spline
 
+from medax.errors import CurveError
 from medax.geometry._types import FloatArray
 from medax.geometry.bspline import BSpline
 
@@ -30,6 +31,9 @@ def interpolate(
     """
     pts = np.asarray(points, dtype=np.float64)
     u = chord_parameters(pts)
+    if not np.all(np.diff(u) > 0.0):
+        i = int(np.argmin(np.diff(u)))
+        raise CurveError(f"cannot fit a spline: points {i} and {i + 1} of {len(pts)} coincide")
     cuts = [0, *sorted(int(b) for b in breaks), len(pts) - 1]
     knots: list[FloatArray] = []
     ctrl: list[FloatArray] = []
