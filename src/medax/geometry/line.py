@@ -42,6 +42,11 @@ class Line(Curve):
         """Closed form: project onto the segment and clamp to its ends."""
         x = np.asarray(points, dtype=np.float64)
         dd = float(self._d @ self._d)
-        t = np.clip(((x - self.a) @ self._d) / dd, 0.0, 1.0) if dd > 0 else np.zeros(len(x))
-        foot = self.evaluate(t)
-        return Closest(t=t, foot=foot, distance=np.linalg.norm(x - foot, axis=1))
+        if dd > 0:
+            t = np.minimum(np.maximum(((x - self.a) @ self._d) / dd, 0.0), 1.0)
+        else:
+            t = np.zeros(len(x))
+        foot = self.a + t[:, None] * self._d
+        r = x - foot
+        dist = np.hypot(r[:, 0], r[:, 1]) if r.shape[1] == 2 else np.linalg.norm(r, axis=1)
+        return Closest(t=t, foot=foot, distance=dist)
