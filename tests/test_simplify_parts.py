@@ -182,3 +182,24 @@ def test_deviation_measures_a_known_offset():
     wide_bottom = next(f for f in faces_of(wide) if abs(face_samples(f, 2)[:, 2]).max() < 1e-12)
     d1, d2 = deviation([bottom], wide_bottom)
     assert d1 < 1e-12 and d2 > 4.0
+
+
+def test_extrusion_projection_matches_occt_surface_projection(box4, monkeypatch):
+    """The fast projection through an extrusion's profile gives OCCT's surface-projection
+    distances (checked point by point on offset samples of every new extruded face)."""
+    from OCP.BRep import BRep_Tool
+
+    from medax.cad.simplify import validate as V
+
+    _, res = box4
+    faces = [f for f in faces_of(res.shape) if V._ExtrusionProjection.of(BRep_Tool.Surface_s(f))]
+    assert faces  # the merged faces are extrusions
+    rng = np.random.default_rng(11)
+    for f in faces:
+        pts = face_samples(f, 5)
+        pts = pts + rng.normal(0.0, 0.5, pts.shape)
+        fast = [max_distance(p[None], [f]) for p in pts]
+        with monkeypatch.context() as m:
+            m.setattr(V._ExtrusionProjection, "of", classmethod(lambda cls, s: None))
+            slow = [max_distance(p[None], [f]) for p in pts]
+        np.testing.assert_allclose(fast, slow, atol=1e-9)
