@@ -17,6 +17,7 @@ global feet.
 from __future__ import annotations
 
 import logging
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.interpolate import RectBivariateSpline
@@ -304,6 +305,83 @@ def _wrong_feet(sides: SideDistances, p: FloatArray, tol: float, rows: np.ndarra
     return rows[wrong]
 
 
+@dataclass
+class _Values:
+    """Both equations at some rows: values ``ga``, ``gb`` (n,), gradients ``Ga``, ``Gb``
+    (n, 2) and the feet ``(t, t, d, d)`` on sides (0, 2) and (1, 3)."""
+
+    ga: FloatArray
+    Ga: FloatArray
+    gb: FloatArray
+    Gb: FloatArray
+    feet_a: tuple[FloatArray, ...]
+    feet_b: tuple[FloatArray, ...]
+
+    def take(self, ok: np.ndarray) -> _Values:
+        return _Values(
+            self.ga[ok], self.Ga[ok], self.gb[ok], self.Gb[ok],
+            tuple(f[ok] for f in self.feet_a), tuple(f[ok] for f in self.feet_b),
+        )  # fmt: skip
+
+    @staticmethod
+    def merge(hot: _Values, cold: _Values, warm: np.ndarray) -> _Values:
+        """Rows ``warm`` from ``hot``, the others from ``cold``, in order."""
+
+        def mix(h: FloatArray, c: FloatArray) -> FloatArray:
+            out = np.empty((warm.size, *h.shape[1:]))
+            out[warm], out[~warm] = h, c
+            return out
+
+        return _Values(
+            mix(hot.ga, cold.ga), mix(hot.Ga, cold.Ga), mix(hot.gb, cold.gb),
+            mix(hot.Gb, cold.Gb),
+            tuple(mix(h, c) for h, c in zip(hot.feet_a, cold.feet_a, strict=True)),
+            tuple(mix(h, c) for h, c in zip(hot.feet_b, cold.feet_b, strict=True)),
+        )  # fmt: skip
+
+
+@dataclass
+class _System:
+    """The two equations of the node ``rows`` (indices into the feet arrays of ``sides``)."""
+
+    sides: SideDistances
+    ra: FloatArray
+    rb: FloatArray
+    rows: np.ndarray
+    kinds: tuple[str, str]
+
+    def _part(self, q: FloatArray, sel: np.ndarray, warm: bool) -> _Values:
+        gr = self.rows[sel] if warm else None
+        ga, Ga, fa = evaluate_field(self.sides, 0, 2, self.ra[sel], q, self.kinds[0], gr)
+        gb, Gb, fb = evaluate_field(self.sides, 1, 3, self.rb[sel], q, self.kinds[1], gr)
+        return _Values(ga, Ga, gb, Gb, fa, fb)
+
+    def evaluate(self, q: FloatArray, sel: np.ndarray, warm: np.ndarray) -> _Values:
+        """Values at ``q`` (len(sel), 2) for rows ``sel``: feet tracked where ``warm``,
+        found by a global query elsewhere."""
+        if warm.all() or not warm.any():
+            return self._part(q, sel, bool(warm.all()))
+        hot = self._part(q[warm], sel[warm], True)
+        cold = self._part(q[~warm], sel[~warm], False)
+        return _Values.merge(hot, cold, warm)
+
+    def accept(self, sel: np.ndarray, v: _Values) -> None:
+        """Store the feet of rows ``sel`` as the accepted ones (the next warm start)."""
+        g, s = self.rows[sel], self.sides
+        s.t[0][g], s.t[2][g], s.d[0][g], s.d[2][g] = v.feet_a
+        s.t[1][g], s.t[3][g], s.d[1][g], s.d[3][g] = v.feet_b
+
+
+def _newton_step(ga: FloatArray, Ga: FloatArray, gb: FloatArray, Gb: FloatArray) -> FloatArray:
+    """The Newton step (n, 2) of the 2 x 2 systems ``[Ga; Gb] step = -[ga; gb]``."""
+    det = Ga[:, 0] * Gb[:, 1] - Ga[:, 1] * Gb[:, 0]
+    safe = np.where(np.abs(det) > 1e-300, det, 1e-300)
+    return (
+        -np.column_stack((Gb[:, 1] * ga - Ga[:, 1] * gb, -Gb[:, 0] * ga + Ga[:, 0] * gb))
+        / safe[:, None]
+    )
+
+
 def _newton(
     sides: SideDistances,
     p: FloatArray,
@@ -313,46 +391,19 @@ def _newton(
     tol: float,
     kinds: tuple[str, str],
 ) -> tuple[FloatArray, int, FloatArray]:
-    """Damped Newton on ``g_a = g_b = 0`` for the node ``rows`` (p: (len(rows), 2))."""
+    """Damped Newton on ``g_a = g_b = 0`` for the node ``rows`` (p: (len(rows), 2)), with
+    backtracking on the residual ``hypot(g_a, g_b)``. Returns nodes, iterations, residuals."""
     p = p.copy()
-    ra, rb = ra_all[rows], rb_all[rows]
+    system = _System(sides, ra_all[rows], rb_all[rows], rows, kinds)
     # rows whose feet are known (interpolated or reset to global ones) start tracked
     known = np.ones(rows.size, dtype=bool)
     for k, tracked in enumerate(sides.tracked):
         if tracked:
             known &= np.isfinite(sides.t[k][rows])
-
-    def evaluate_part(q: FloatArray, sel: np.ndarray, warm: bool) -> list:  # type: ignore[type-arg]
-        gr = rows[sel] if warm else None
-        ga, Ga, fa = evaluate_field(sides, 0, 2, ra[sel], q, kinds[0], gr)
-        gb, Gb, fb = evaluate_field(sides, 1, 3, rb[sel], q, kinds[1], gr)
-        return [ga, Ga, gb, Gb, *fa, *fb]
-
-    def evaluate(q: FloatArray, sel: np.ndarray, warm: np.ndarray) -> tuple:  # type: ignore[type-arg]
-        """Values at ``q`` for rows ``sel``: feet tracked where ``warm``, global elsewhere."""
-        if warm.all() or not warm.any():
-            out = evaluate_part(q, sel, bool(warm.all()))
-        else:
-            hot, cold = (
-                evaluate_part(q[warm], sel[warm], True),
-                evaluate_part(q[~warm], sel[~warm], False),
-            )
-            out = []
-            for h, c in zip(hot, cold, strict=True):
-                m = np.empty((sel.size, *h.shape[1:]))
-                m[warm], m[~warm] = h, c
-                out.append(m)
-        return out[0], out[1], out[2], out[3], tuple(out[4:8]), tuple(out[8:])
-
-    def accept(sel: np.ndarray, fa: tuple, fb: tuple) -> None:  # type: ignore[type-arg]
-        g = rows[sel]
-        sides.t[0][g], sides.t[2][g], sides.d[0][g], sides.d[2][g] = fa
-        sides.t[1][g], sides.t[3][g], sides.d[1][g], sides.d[3][g] = fb
-
     all_rows = np.arange(rows.size)
-    ga, Ga, gb, Gb, fa, fb = evaluate(p, all_rows, known)
-    accept(all_rows, fa, fb)
-    res = np.hypot(ga, gb)
+    v = system.evaluate(p, all_rows, known)
+    system.accept(all_rows, v)
+    res = np.hypot(v.ga, v.gb)
     diag = sides.region.diagonal
     max_step = 0.1 * diag
     active = all_rows
@@ -362,14 +413,7 @@ def _newton(
         if active.size == 0:
             break
         it += 1
-        A, B = Ga[active], Gb[active]
-        det = A[:, 0] * B[:, 1] - A[:, 1] * B[:, 0]
-        safe = np.where(np.abs(det) > 1e-300, det, 1e-300)
-        fa_, fb_ = ga[active], gb[active]
-        step = (
-            -np.column_stack((B[:, 1] * fa_ - A[:, 1] * fb_, -B[:, 0] * fa_ + A[:, 0] * fb_))
-            / safe[:, None]
-        )
+        step = _newton_step(v.ga[active], v.Ga[active], v.gb[active], v.Gb[active])
         norm = np.linalg.norm(step, axis=1)
         step *= np.minimum(1.0, max_step / np.maximum(norm, 1e-300))[:, None]
         lam = np.ones(active.size)
@@ -380,13 +424,13 @@ def _newton(
             # feet are tracked for small moves only: a long step may cross the place where a
             # foot jumps to another part of its side, which only a global query sees
             warm = lam[todo] * norm[todo] <= _TRACK_STEP * diag
-            na, nGa, nb, nGb, nfa, nfb = evaluate(q, sel, warm)
-            nres = np.hypot(na, nb)
+            nv = system.evaluate(q, sel, warm)
+            nres = np.hypot(nv.ga, nv.gb)
             ok = nres < res[sel] * (1.0 - 1e-4 * lam[todo]) + tol
-            acc = sel[ok]
-            p[acc], ga[acc], gb[acc], res[acc] = q[ok], na[ok], nb[ok], nres[ok]
-            Ga[acc], Gb[acc] = nGa[ok], nGb[ok]
-            accept(acc, tuple(f[ok] for f in nfa), tuple(f[ok] for f in nfb))
+            acc, good = sel[ok], nv.take(ok)
+            p[acc], res[acc] = q[ok], nres[ok]
+            v.ga[acc], v.Ga[acc], v.gb[acc], v.Gb[acc] = good.ga, good.Ga, good.gb, good.Gb
+            system.accept(acc, good)
             todo = todo[~ok]
             if todo.size == 0:
                 break
