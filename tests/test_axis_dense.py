@@ -8,7 +8,7 @@ import pytest
 from medax.axis import trace_axis
 from medax.geometry import Line, Region, read_regions, region_from_dict, sample_regions_path
 from medax.geometry.embedding import PlaneEmbedding
-from truth import dense_sides
+from truth import Cylinder, dense_sides
 
 REGIONS = ("arcs", "wavy", "trapezoid", "annulus_sector")
 
@@ -96,26 +96,6 @@ def test_clockwise_input_gives_the_same_axis(regions_spec, name):
 
         gap, _ = cKDTree(a.spline.sample(20000)).query(dense)
         assert gap.max() <= 1e-3 * a.diagonal
-
-
-class Cylinder:
-    """``E(u, v) = (R cos u, R sin u, v)``: a test embedding written independently."""
-
-    dim = 3
-    is_identity = False
-
-    def __init__(self, radius: float) -> None:
-        self.r = radius
-
-    def evaluate(self, p):
-        return np.column_stack((self.r * np.cos(p[:, 0]), self.r * np.sin(p[:, 0]), p[:, 1]))
-
-    def jacobian(self, p):
-        j = np.zeros((len(p), 3, 2))
-        j[:, 0, 0] = -self.r * np.sin(p[:, 0])
-        j[:, 1, 0] = self.r * np.cos(p[:, 0])
-        j[:, 2, 1] = 1.0
-        return j
 
 
 def test_axis_on_a_cylinder_patch_measures_in_space():

@@ -11,6 +11,7 @@ from medax.mesh import ratio_field as rf
 from medax.mesh import ratio_grid as rg
 from medax.mesh.grid import boundary_indices
 from medax.mesh.mesher import mesh_region
+from truth import Cylinder
 
 REGIONS = read_regions(sample_regions_path())
 
@@ -140,26 +141,6 @@ def test_certify_closest_never_certifies_a_wrong_foot():
     wrong = far.distance > truth + 1e-9
     assert wrong.sum() > 50
     assert not np.any(certify_closest(c, x, far.t, far.distance, slack)[wrong])
-
-
-class Cylinder:
-    """``E(u, v) = (R cos u, R sin u, v)``, written independently of medax's surfaces."""
-
-    dim = 3
-    is_identity = False
-
-    def __init__(self, radius: float) -> None:
-        self.r = radius
-
-    def evaluate(self, p):
-        return np.column_stack((self.r * np.cos(p[:, 0]), self.r * np.sin(p[:, 0]), p[:, 1]))
-
-    def jacobian(self, p):
-        j = np.zeros((len(p), 3, 2))
-        j[:, 0, 0] = -self.r * np.sin(p[:, 0])
-        j[:, 1, 0] = self.r * np.cos(p[:, 0])
-        j[:, 2, 1] = 1.0
-        return j
 
 
 @pytest.mark.parametrize("div", [(5, 4), (50, 48)])

@@ -101,3 +101,24 @@ def dense_sides(spec: dict) -> list[DenseDistance]:
         DenseDistance(side_function(spec["sides"][k], corners[k], corners[(k + 1) % 4]))
         for k in range(4)
     ]
+
+
+class Cylinder:
+    """``E(u, v) = (R cos u, R sin u, v)``: a test embedding written independently of medax's
+    surfaces."""
+
+    dim = 3
+    is_identity = False
+
+    def __init__(self, radius: float) -> None:
+        self.r = radius
+
+    def evaluate(self, p):
+        return np.column_stack((self.r * np.cos(p[:, 0]), self.r * np.sin(p[:, 0]), p[:, 1]))
+
+    def jacobian(self, p):
+        j = np.zeros((len(p), 3, 2))
+        j[:, 0, 0] = -self.r * np.sin(p[:, 0])
+        j[:, 1, 0] = self.r * np.cos(p[:, 0])
+        j[:, 2, 1] = 1.0
+        return j

@@ -50,6 +50,7 @@ def colour_keys(report: dict[str, Any], n_before: int) -> tuple[list[int], list[
 def run(args: argparse.Namespace) -> int:
     from medax.cad.classify import classify_file
     from medax.cad.simplify import simplify, specs_from_classification
+    from medax.cad.simplify.occ import compound
     from medax.cad.simplify.step_out import write_step
 
     for path in (args.output, args.report, args.png):
@@ -70,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
         n = len(specs.fillets) + len(specs.refused)
         progress(f"solid {k}: {len(cls.faces)} faces, {n} blends")
         results.append(simplify(cls.shape, specs, tol=args.tol, progress=progress))
-    shape = results[0].shape if len(results) == 1 else _compound([r.shape for r in results])
+    shape = results[0].shape if len(results) == 1 else compound([r.shape for r in results])
     write_step(shape, args.output)
     reports = [r.report() for r in results]
     report = _combine(reports)
@@ -113,18 +114,6 @@ def _combine(reports: list[dict[str, Any]]) -> dict[str, Any]:
         "notes": [f"{len(reports)} solids: face indices are per solid (see 'solids')"],
         "solids": reports,
     }
-
-
-def _compound(shapes: list[Any]) -> Any:
-    from OCP.BRep import BRep_Builder
-    from OCP.TopoDS import TopoDS_Compound
-
-    b = BRep_Builder()
-    c = TopoDS_Compound()
-    b.MakeCompound(c)
-    for s in shapes:
-        b.Add(c, s)
-    return c
 
 
 def _png(before_shape: Any, result: Any, path: str, title: str) -> None:

@@ -5,7 +5,7 @@ Points are returned as numpy arrays ``(n, 3)`` in the part's length unit.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from typing import Any
 
 import numpy as np
@@ -29,6 +29,19 @@ def shape_map(shape: Any, kind: Any) -> Any:
     m = ShapeMap()
     TopExp.MapShapes_s(shape, kind, m)
     return m
+
+
+def compound(shapes: Iterable[Any]) -> Any:
+    """A ``TopoDS_Compound`` of ``shapes``."""
+    from OCP.BRep import BRep_Builder
+    from OCP.TopoDS import TopoDS_Compound
+
+    b = BRep_Builder()
+    c = TopoDS_Compound()
+    b.MakeCompound(c)
+    for s in shapes:
+        b.Add(c, s)
+    return c
 
 
 def faces_of(shape: Any) -> Iterator[Any]:

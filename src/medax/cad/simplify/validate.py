@@ -15,7 +15,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from OCP.BRep import BRep_Builder
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
 from OCP.BRepCheck import BRepCheck_Analyzer
@@ -25,9 +24,8 @@ from OCP.gp import gp_Pnt, gp_Pnt2d
 from OCP.GProp import GProp_GProps
 from OCP.IntTools import IntTools_FClass2d
 from OCP.TopAbs import TopAbs_IN, TopAbs_OUT, TopAbs_SHELL
-from OCP.TopoDS import TopoDS_Compound
 
-from medax.cad.simplify.occ import Array, count, faces_of, uv_bounds, xyz
+from medax.cad.simplify.occ import Array, compound, count, faces_of, uv_bounds, xyz
 
 #: Relative accuracy asked of the volume integration.
 VOLUME_EPS = 1e-10
@@ -127,15 +125,6 @@ def face_samples(face: Any, n: int = 12) -> Array:
     return np.array(out).reshape(-1, 3)
 
 
-def _compound(faces: Sequence[Any]) -> Any:
-    b = BRep_Builder()
-    c = TopoDS_Compound()
-    b.MakeCompound(c)
-    for f in faces:
-        b.Add(c, f)
-    return c
-
-
 class _ExtrusionProjection:
     """Orthogonal projection onto a surface of linear extrusion ``S(u, v) = C(u) + v d``
     through its profile: the point moved along ``d`` into the profile's plane is projected on
@@ -230,7 +219,7 @@ def max_distance(points: Array, faces: Sequence[Any], enough: float = 0.0) -> fl
                     break
         if best == float("inf"):
             if target is None:
-                target = _compound(faces)
+                target = compound(faces)
             v = BRepBuilderAPI_MakeVertex(gp).Vertex()
             d = BRepExtrema_DistShapeShape(v, target)
             if not d.IsDone():
