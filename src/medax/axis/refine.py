@@ -23,13 +23,13 @@ from medax.geometry.fitting import interpolate
 #: samples per interval when checking the fitted curve ("10x denser")
 CHECK_SAMPLES = 10
 MAX_ROUNDS = 30
-#: the checks aim at this fraction of the tolerance: between two check samples the error can
-#: exceed the sampled maximum by a few percent (1.0047e-6 seen at tol 1e-6 on a random quad)
 #: intervals shorter than this (x diagonal) are not refined further
 MIN_INTERVAL = 1e-7
 #: refinement stops when the error, still above twice the target, has not dropped by 10 %
 #: over this many rounds (a singularity no break describes)
 STALL_ROUNDS = 4
+#: the checks aim at this fraction of the tolerance: between two check samples the error can
+#: exceed the sampled maximum by a few percent (1.0047e-6 seen at tol 1e-6 on a random quad)
 CHECK_MARGIN = 0.75
 DEGREE = 3
 
@@ -78,7 +78,7 @@ def fit_and_refine(
     u = np.zeros(0)
     rounds = 0
     checked: _Checked | None = None
-    history: list[tuple[float, int]] = []  # curve error and point count per checked round
+    history: list[float] = []  # curve error per checked round
     for rounds in range(1, MAX_ROUNDS + 1):  # noqa: B007
         # 1. pieces between breaks need DEGREE + 1 points: insert chord midpoints where short
         cuts = [0, *sorted(breaks), len(pts) - 1]
@@ -141,10 +141,10 @@ def fit_and_refine(
         # axis through a focal point of a constraint) splitting would never end
         chord = np.linalg.norm(pts[bad + 1] - pts[bad], axis=1)
         bad = bad[chord > MIN_INTERVAL * scale]
-        history.append((curve_error, len(pts)))
+        history.append(curve_error)
         stalled = False
         if len(history) > STALL_ROUNDS:
-            err0, _ = history[-1 - STALL_ROUNDS]
+            err0 = history[-1 - STALL_ROUNDS]
             stalled = curve_error > 0.9 * err0 and curve_error > 2.0 * target
         if bad.size == 0 or stalled:
             break
