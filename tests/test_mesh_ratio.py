@@ -165,3 +165,14 @@ def test_mesh_on_a_cylinder_patch_measures_in_space(div):
     assert np.abs(d[0] / (d[0] + d[2]) - j / n2)[inner].max() < 1e-7
     assert np.abs(d[1] / (d[1] + d[3]) - (1 - i / n1))[inner].max() < 1e-7
     assert np.all(m.quality().scaled_jacobian > 0.0)
+
+
+def test_far_from_the_origin_gives_the_same_mesh():
+    """The wavy region moved by (1e6, -2e6): the same nodes, moved (tracked feet and their
+    certification work in centred coordinates)."""
+    r = REGIONS["wavy"]
+    shift = np.array([1e6, -2e6])
+    moved = Region.build([s.transformed(-shift, 1.0) for s in r.sides], name="far")
+    a = mesh_region(r, (50, 48))
+    b = mesh_region(moved, (50, 48))
+    assert np.abs(b.params - shift - a.params).max() <= 1e-9 * r.diagonal

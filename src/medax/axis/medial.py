@@ -14,7 +14,7 @@ from medax.axis.result import MedialAxis, WorkCounts
 from medax.axis.trace import TraceStats, trace_frame, trace_paper
 from medax.errors import InputError
 from medax.geometry.fitting import interpolate
-from medax.geometry.region import Region, pair_roles
+from medax.geometry.region import Region, normalised_region, pair_roles
 
 log = logging.getLogger(__name__)
 METHODS = ("frame", "paper")
@@ -46,7 +46,7 @@ def trace_axis(
     if not tol > 0.0 or not point_tol > 0.0:
         raise InputError(f"tolerances must be positive, got tol={tol}, point_tol={point_tol}")
     roles = pair_roles(pair)
-    work, offset, scale = _normalised(region)
+    work, offset, scale = normalised_region(region)
     field = DistanceField(work, roles, ratio)
     diag = work.diagonal
     tol_pt, tol_cv = point_tol * diag, tol * diag
@@ -104,16 +104,3 @@ def trace_axis(
         max_point_error=point_error * scale, max_curve_error=curve_error * scale,
         tol=tol, counts=counts,
     )  # fmt: skip
-
-
-def _normalised(region: Region) -> tuple[Region, np.ndarray, float]:
-    """A planar region moved to the origin and scaled to unit diagonal, with the offset and
-    scale that map it back (``x = x' * scale + offset``); surface regions unchanged."""
-    if not region.embedding.is_identity:
-        return region, np.zeros(2), 1.0
-    pts = region.boundary
-    offset = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
-    scale = region.diagonal
-    sides = tuple(s.transformed(offset, scale) for s in region.sides)
-    work = Region(sides, region.embedding, region.name, region.reoriented)  # type: ignore[arg-type]
-    return work, offset, scale

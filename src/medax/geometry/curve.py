@@ -176,7 +176,10 @@ def certify_closest(
     certified need the full query.
     """
     ts, pts, _ = curve._search
-    x = np.asarray(points, dtype=np.float64)
+    # centred on the samples: |x|^2 - 2 x.p + |p|^2 loses digits far from the origin
+    centre = pts.mean(axis=0)
+    pts = pts - centre
+    x = np.asarray(points, dtype=np.float64) - centre
     n, m = x.shape[0], pts.shape[0]
     half = 0.55 * float(np.max(np.linalg.norm(np.diff(pts, axis=0), axis=1)))
     dt = ts[1] - ts[0]
@@ -230,6 +233,8 @@ def _candidate_samples(curve: Curve, points: FloatArray, k: int) -> np.ndarray:
     if m * n > 50 * _BLOCK:  # very long curves: nearest samples from the k-d tree
         _, idx = tree.query(points, k=4 * k)
         return np.asarray(idx)[:, ::4][:, :k]
+    centre = pts.mean(axis=0)  # |x|^2 - 2 x.p + |p|^2 loses digits far from the origin
+    pts, points = pts - centre, points - centre
     out = np.empty((n, k), dtype=np.int64)
     rows = max(1, _BLOCK // m)
     pp = np.einsum("mj,mj->m", pts, pts)

@@ -239,3 +239,17 @@ def _self_crossing(p: FloatArray, eps: float) -> bool:
     gi = (i[:, None] * _CHUNK + np.arange(_CHUNK))[:, :, None]
     gj = (j[:, None] * _CHUNK + np.arange(_CHUNK))[:, None, :]
     return bool(np.any(table & (gj >= gi + 2)))
+
+
+def normalised_region(region: Region) -> tuple[Region, FloatArray, float]:
+    """A planar region moved to the origin and scaled to unit diagonal, with the offset and
+    scale that map it back (``x = x' * scale + offset``); surface regions unchanged. Work
+    done there keeps its relative accuracy far from the origin and in any unit."""
+    if not region.embedding.is_identity:
+        return region, np.zeros(2), 1.0
+    pts = region.boundary
+    offset = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
+    scale = region.diagonal
+    sides = tuple(s.transformed(offset, scale) for s in region.sides)
+    work = Region(sides, region.embedding, region.name, region.reoriented)  # type: ignore[arg-type]
+    return work, offset, scale

@@ -29,7 +29,7 @@ import numpy as np
 
 from medax import tolerances
 from medax.errors import InputError, MeshError
-from medax.geometry.region import Region
+from medax.geometry.region import Region, normalised_region
 from medax.mesh.crossings import family_crossings
 from medax.mesh.grid import QuadMesh, boundary_indices
 from medax.mesh.ratio_grid import ratio_grid
@@ -84,9 +84,13 @@ def mesh_region(
     info: dict = {}
     if method in ("angle", "ratio"):
         weighting = "angle" if method == "angle" else "auto"
+        # solved centred and at unit diagonal, so that far from the origin the node tolerance
+        # (1e-13 x diagonal) is still above round-off
+        work, offset, scale = normalised_region(region)
         params, info = ratio_grid(
-            region, n1, n2, point_tol=min(tol, tolerances.POINT_TOL), weighting=weighting
+            work, n1, n2, point_tol=min(tol, tolerances.POINT_TOL), weighting=weighting
         )
+        params = params * scale + offset
     else:
         params, n1, n2 = _paper_grid(region, n1, n2, size, tol)
     info["time_s"] = time.perf_counter() - t0
