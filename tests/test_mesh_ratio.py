@@ -176,3 +176,17 @@ def test_far_from_the_origin_gives_the_same_mesh():
     a = mesh_region(r, (50, 48))
     b = mesh_region(moved, (50, 48))
     assert np.abs(b.params - shift - a.params).max() <= 1e-9 * r.diagonal
+
+
+@pytest.mark.parametrize("degrees", [200.0, 270.0])
+def test_channels_bent_past_180_degrees(degrees):
+    """Past 180 degrees a sector has no apex angle to divide: the distance ratio is used,
+    the arcs stay concentric and no quad inverts (thin channel, 1/50 and 64 x 512)."""
+    r = sector(5.0, 5.1, degrees)
+    assert rf.pair_weighting(r, 0, 2, "auto") == "distance"
+    for div in ((8, 64), (64, 512)):
+        m = mesh_region(r, div)
+        rad = np.linalg.norm(m.grid(), axis=-1)
+        want = 5.0 + 0.1 * np.arange(div[0] + 1) / div[0]
+        assert np.abs(rad - want[None]).max() <= 1e-9 * r.diagonal
+        assert m.quality().scaled_jacobian.min() > 0.9

@@ -58,13 +58,14 @@ def pair_weighting(region: Region, a: int, b: int, weighting: str) -> str:
 
 
 def _is_polar_pair(region: Region, a: int, b: int) -> bool:
-    """Sides ``a``, ``b`` are lines meeting at a point where both other sides are centred."""
+    """Sides ``a``, ``b`` are lines meeting at a point where both other sides are centred,
+    arcs of less than 180 degrees."""
     la, lb = region.sides[a], region.sides[b]
     others = [region.sides[k] for k in range(4) if k not in (a, b)]
     if not (isinstance(la, Line) and isinstance(lb, Line)):
         return False
-    if not all(isinstance(o, Arc) for o in others):
-        return False
+    if not all(isinstance(o, Arc) and abs(o.sweep) < np.pi - 1e-9 for o in others):
+        return False  # (a sector of 180 degrees or more has no apex angle to divide)
     da, db = la.b - la.a, lb.b - lb.a
     cross = da[0] * db[1] - da[1] * db[0]
     if abs(cross) <= 1e-12 * float(np.linalg.norm(da) * np.linalg.norm(db)):
