@@ -184,8 +184,9 @@ def test_channels_bent_past_180_degrees(degrees):
     the arcs stay concentric and no quad inverts (thin channel, 1/50 and 64 x 512)."""
     r = sector(5.0, 5.1, degrees)
     assert rf.pair_weighting(r, 0, 2, "auto") == "distance"
-    for div in ((8, 64), (64, 512)):
-        m = mesh_region(r, div)
+    assert rf.pair_weighting(r, 0, 2, "angle") == "distance"
+    for div, method in (((8, 64), "ratio"), ((64, 512), "ratio"), ((8, 64), "angle")):
+        m = mesh_region(r, div, method=method)
         rad = np.linalg.norm(m.grid(), axis=-1)
         want = 5.0 + 0.1 * np.arange(div[0] + 1) / div[0]
         assert np.abs(rad - want[None]).max() <= 1e-9 * r.diagonal

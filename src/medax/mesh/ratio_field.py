@@ -52,9 +52,26 @@ def pair_weighting(region: Region, a: int, b: int, weighting: str) -> str:
     simple = all(isinstance(sides[k], (Line, Arc)) for k in (a, b))
     if not (region.embedding.is_identity and simple) or weighting == "distance":
         return "distance"
+    if not _facing(region, a, b):
+        return "distance"
     if weighting == "angle":
         return "angle"
     return "angle" if _is_polar_pair(region, a, b) else "distance"
+
+
+def _facing(region: Region, a: int, b: int) -> bool:
+    """False for two line sides of which one lies behind the other (a region bent past 180
+    degrees around their meeting point: the angle between the lines does not describe it)."""
+    la, lb = region.sides[a], region.sides[b]
+    if not (isinstance(la, Line) and isinstance(lb, Line)):
+        return True
+    eps = 1e-9 * region.diagonal
+    for p, q in ((la, lb), (lb, la)):
+        d = p.b - p.a
+        inward = np.array([-d[1], d[0]]) / float(np.hypot(d[0], d[1]))  # left of a CCW side
+        if min(float((q.a - p.a) @ inward), float((q.b - p.a) @ inward)) < -eps:
+            return False
+    return True
 
 
 def _is_polar_pair(region: Region, a: int, b: int) -> bool:
