@@ -23,7 +23,7 @@ rounding noise and count as equal. Times are the best of ``--repeat`` runs; meda
 freshly built region each run (no warm sample caches), built and checked outside the timer as
 the peer's region is. OCP is imported only here, in the benchmark.
 
-    python benchmarks/bench_axis.py [--repeat 3] [--cap 65536]
+    python benchmarks/bench_axis.py [--repeat 3] [--cap 65536] [--tols 1e-6,1e-8] [--regions a,b]
 
 Target (issue 2): medax default at least 10x faster than the Voronoi peer at equal accuracy,
 on every region and pair (reported at each tolerance: the peer's sample count grows like
@@ -456,11 +456,14 @@ def main() -> None:
         help="medax spline tolerances (relative to the diagonal); the peer is sampled until it "
         "is as accurate as medax at each",
     )
+    ap.add_argument("--regions", default="", help="comma-separated names (default: all)")
     args = ap.parse_args()
     tols = [float(t) for t in args.tols.split(",")]
     t_start = time.perf_counter()
     data = load_region_file(sample_regions_path())
     names = [k for k in data if not k.startswith("_")]
+    if args.regions:
+        names = [k for k in args.regions.split(",") if k in names]
     rows: list[Row] = []
     verdict: list[tuple[str, str, float, float, bool]] = []
     for name in names:
