@@ -359,7 +359,7 @@ class _System:
     def evaluate(self, q: FloatArray, sel: np.ndarray, warm: np.ndarray) -> _Values:
         """Values at ``q`` (len(sel), 2) for rows ``sel``: feet tracked where ``warm``,
         found by a global query elsewhere."""
-        if warm.all() or not warm.any():
+        if warm.all() or not warm.any() or not any(self.sides.tracked):
             return self._part(q, sel, bool(warm.all()))
         hot = self._part(q[warm], sel[warm], True)
         cold = self._part(q[~warm], sel[~warm], False)
