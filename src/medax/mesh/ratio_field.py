@@ -127,6 +127,34 @@ def _line_closest(curve: Line, x: FloatArray) -> Closest:
     return Closest(t=t, foot=foot, distance=np.linalg.norm(x - foot, axis=1))
 
 
+def _arc_radial(arc: Arc, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Distances (n,), unit vectors (n, 2) from the foot, and NaN foot parameters, for points
+    ``x`` (n, 2) to an arc: radial inside the arc's angle (decided by two cross products, no
+    arctangent: the hot path of meshes on arc sides), the nearer end for the others."""
+    v = x - arc.center
+    rho = np.hypot(v[:, 0], v[:, 1])
+    sgn = 1.0 if arc.sweep > 0 else -1.0
+    e0 = np.array([np.cos(arc.a0), np.sin(arc.a0)])
+    e1 = np.array([np.cos(arc.a0 + arc.sweep), np.sin(arc.a0 + arc.sweep)])
+    after_start = sgn * (e0[0] * v[:, 1] - e0[1] * v[:, 0]) >= 0.0
+    before_end = sgn * (v[:, 0] * e1[1] - v[:, 1] * e1[0]) >= 0.0
+    inside = after_start & before_end if abs(arc.sweep) <= np.pi else after_start | before_end
+    inside &= rho > 0.0
+    d = np.abs(rho - arc.radius)
+    # unit vector from the foot c + R v / rho to x: +v / rho outside the circle, -v inside
+    u = v * (np.where(rho >= arc.radius, 1.0, -1.0) / np.maximum(rho, _TINY))[:, None]
+    out = np.flatnonzero(~inside)
+    if out.size:  # outside the arc's angle the nearer end is the foot
+        xo = x[out]
+        ends = arc.evaluate(np.array([0.0, 1.0]))
+        r0, r1 = xo - ends[0], xo - ends[1]
+        d0, d1 = np.hypot(r0[:, 0], r0[:, 1]), np.hypot(r1[:, 0], r1[:, 1])
+        first = d0 <= d1
+        d[out] = np.where(first, d0, d1)
+        u[out] = np.where(first[:, None], r0, r1) / np.maximum(d[out], _TINY)[:, None]
+    return d, u, np.full(x.shape[0], np.nan)
+
+
 class SideDistances:
     """Distances to the four sides with feet tracked between calls (per node row).
 
@@ -145,6 +173,11 @@ class SideDistances:
             not (ext or has_closed_form_closest(c))
             for c, ext in zip(self.curves, self.extended, strict=True)
         ]
+        # arcs of a distance-weighted pair: radial distances, no foot parameter needed
+        self.radial = [
+            kinds[k % 2] == "distance" and isinstance(c, Arc) and c.dim == 2
+            for k, c in enumerate(self.curves)
+        ]
         self.t = [np.full(n, np.nan) for _ in range(4)]  # accepted feet (tracked sides)
         self.d = [np.full(n, np.nan) for _ in range(4)]  # accepted distances
 
@@ -154,6 +187,9 @@ class SideDistances:
         """Distances (n,), unit vectors (n, dim) and foot parameters (n,) of space points
         ``x`` to side ``k``; warm-started from the accepted feet of ``rows`` if given."""
         curve = self.curves[k]
+        if self.radial[k]:
+            assert isinstance(curve, Arc)
+            return _arc_radial(curve, x)
         if self.extended[k]:
             assert isinstance(curve, Line)
             c = _line_closest(curve, x)
