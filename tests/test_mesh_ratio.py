@@ -191,3 +191,15 @@ def test_channels_bent_past_180_degrees(degrees):
         want = 5.0 + 0.1 * np.arange(div[0] + 1) / div[0]
         assert np.abs(rad - want[None]).max() <= 1e-9 * r.diagonal
         assert m.quality().scaled_jacobian.min() > 0.9
+
+
+@pytest.mark.parametrize("sweep", [1.0, -2.5, 4.5])
+def test_arc_radial_distances_match_closest_points(sweep):
+    """The mesher's radial arc distances and directions equal Arc.closest's (points inside
+    and outside the circle, inside and outside the arc's angle, sweeps above pi)."""
+    arc = Arc(np.array([1.0, -2.0]), 3.0, 0.7, sweep)
+    x = np.random.default_rng(2).uniform(-6.0, 8.0, (2000, 2))
+    d, u, _ = rf._arc_radial(arc, x)
+    c = arc.closest(x)
+    np.testing.assert_allclose(d, c.distance, atol=1e-12)
+    np.testing.assert_allclose(u, (x - c.foot) / c.distance[:, None], atol=1e-9)
