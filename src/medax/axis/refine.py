@@ -70,7 +70,8 @@ def fit_and_refine(
     s = field(pts)
     breaks: set[int] = set()  # indices into pts of C0 break points
     tried: set[int] = set()  # kink intervals Newton did not confirm (refined instead)
-    tried_t: set[tuple[int, int, float, int]] = set()  # transitions not confirmed
+    # transitions tried, keyed by their interval's end points (kept while it is unchanged)
+    tried_t: set[tuple[bytes, int, float, int]] = set()
     vertices = (field.a1.breaks(), field.a2.breaks())  # corners of the constraints
     iters = 0
     curve_error = np.inf
@@ -103,12 +104,12 @@ def fit_and_refine(
         trans = [
             f
             for f in transition_intervals(s, vertices)
-            if f not in tried_t
+            if _key(pts, f) not in tried_t
             and f[0] not in breaks
             and f[0] + 1 not in breaks
             and f[0] not in jumps  # a foot jumping onto an end is a kink, not a transition
         ]
-        tried_t |= set(trans)
+        tried_t |= {_key(pts, f) for f in trans}
         ti, tq = locate_transitions(field, pts, s, trans, tol_point)
         # one new break per interval and round, kinks first
         new_breaks = {i: q for i, q in zip(ti.tolist(), tq, strict=True)}
@@ -129,7 +130,7 @@ def fit_and_refine(
                 breaks |= marked
             else:
                 continue  # nothing new: the tried sets keep these intervals from coming back
-            tried, tried_t = set(), set()
+            tried = set()
             continue
         spline, u = interpolate(pts, sorted(breaks), DEGREE)
         # 3. check the curve between the points
@@ -155,6 +156,11 @@ def fit_and_refine(
     if spline is None or len(u) != len(pts):  # rounds ran out while inserting breaks
         spline, u = interpolate(pts, sorted(breaks), DEGREE)
     return Fitted(pts, s, sorted(breaks), spline, u, curve_error, rounds, iters)
+
+
+def _key(pts: FloatArray, f: tuple[int, int, float, int]) -> tuple[bytes, int, float, int]:
+    """A transition interval ``f`` keyed by its end points, which survive re-indexing."""
+    return (pts[f[0] : f[0] + 2].tobytes(), f[1], f[2], f[3])
 
 
 def _existing(pts: FloatArray, idx: np.ndarray, q: FloatArray, eps: float) -> np.ndarray:
