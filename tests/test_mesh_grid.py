@@ -172,3 +172,30 @@ def test_bad_input():
     with pytest.raises(InputError, match="unknown mesh method"):
         mesh_region(r, (2, 2), method="voodoo")
     assert divisions_for_size(r, 1.0) == (10, 7)
+
+
+def test_axis_side_closest_points_are_global():
+    """A traced axis used as a side (hundreds of spans) answers the nearest point, checked
+    against dense sampling of the spline; with the total sampling capped (12 pieces, as
+    before) the search returned local feet up to 5e-5 of the diagonal too far."""
+    from medax.axis import trace_axis
+    from medax.mesh.split import AxisSide
+
+    r = REGIONS["wavy"]
+    axis = trace_axis(r, (0, 2), tol=1e-9)
+    side = AxisSide(axis.spline)
+    rng = np.random.default_rng(4)
+    # points at 0.2 - 1.0 from the axis, on both sides: where the sub-regions' axes run
+    u = rng.uniform(0.0, 1.0, 3000)
+    tan = axis.spline.derivative(u)
+    nrm = np.column_stack((-tan[:, 1], tan[:, 0])) / np.linalg.norm(tan, axis=1)[:, None]
+    x = (
+        axis.spline.evaluate(u)
+        + rng.choice([-1.0, 1.0], u.size)[:, None] * rng.uniform(0.2, 1.0, u.size)[:, None] * nrm
+    )
+    dense = axis.spline.sample(400001)
+    from scipy.spatial import cKDTree
+
+    truth, _ = cKDTree(dense).query(x)
+    got = side.closest(x).distance
+    assert np.all(got <= truth + 1e-9 * r.diagonal)  # never farther than the true nearest
