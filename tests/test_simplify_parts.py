@@ -89,16 +89,6 @@ def test_plate_boss_revolution(boss):
     assert len(merged) == 2 and {g.surface for g in merged} == {"revolution"}
 
 
-def test_box_all_edges_kept_with_reasons():
-    part = P.box_all_fillets()
-    r = _run(part)
-    assert r.faces_after == r.faces_before == 26
-    assert r.valid and not r.blends_removed
-    kept = dict(r.blends_kept)
-    assert sorted(kept) == sorted(part.blends)
-    assert all("corner" in reason for reason in kept.values())
-
-
 def test_no_fillets_unchanged():
     box = BRepPrimAPI_MakeBox(10.0, 20.0, 30.0).Shape()
     r = simplify(box, specs_from_blend_faces(box, []))
@@ -122,8 +112,15 @@ def test_via_classifier_same_result():
 # The classification issue's catalogue of OCCT-built parts, classified by medax.cad.classify:
 # parts whose fillets all have exact merged surfaces lose every blend; on all parts the
 # result is valid, the volume unchanged, and faces after = faces before - blends removed.
-ALL_REMOVED = ("l_bracket", "plate_with_boss", "stepped_shaft", "pocket", "slotted_plate")
-SOME_KEPT = ("rounded_box_chain", "variable_radius_box", "box_random")
+ALL_REMOVED = (
+    "l_bracket",
+    "plate_with_boss",
+    "stepped_shaft",
+    "pocket",
+    "slotted_plate",
+    "box_random",  # its corner blends and non-parallel fillets: fitted faces
+)
+SOME_KEPT = ("rounded_box_chain", "variable_radius_box")
 
 
 @pytest.mark.parametrize("name", ALL_REMOVED + SOME_KEPT)
@@ -140,7 +137,9 @@ def test_catalogue(name):
     assert c.valid and c.shells == 1 and c.closed
     assert r.faces_after == r.faces_before - len(r.blends_removed)
     assert abs(r.volume_rel_change) <= 1e-6
-    assert r.max_deviation <= 1e-7 * r.diagonal
+    fitted = any(g.surface == "fitted" for g in r.face_groups)
+    # the issue: 1e-5 x diagonal, exact-surface cases 1e-7
+    assert r.max_deviation <= (1e-5 if fitted else 1e-7) * r.diagonal
     assert len(r.blends_removed) + len(r.blends_kept) == len(cls.blends)
     if name in ALL_REMOVED:
         assert r.faces_after == r.faces_before - len(cls.blends) and not r.blends_kept

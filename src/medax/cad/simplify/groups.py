@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from OCP.BRep import BRep_Tool
 from OCP.collections import (
     IndexedDataMap_TopoDS_Shape_List_TopoDS_Shape_TopTools_ShapeMapHasher as AncestorMap,
 )
@@ -19,7 +20,14 @@ from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX
 from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS
 
-from medax.cad.simplify.occ import edge_ends, edges_of, shape_map, small_list
+from medax.cad.simplify.occ import (
+    edge_ends,
+    edges_of,
+    face_inside_point,
+    face_normal_at,
+    shape_map,
+    small_list,
+)
 from medax.cad.simplify.split import SplitResult
 from medax.errors import CadError
 
@@ -65,12 +73,18 @@ def _ancestors(shape: Any, sub: Any, anc: Any) -> Any:
     return m
 
 
-def build_groups(split: SplitResult, fillets: dict[int, tuple[int, int]]) -> list[Group]:
+def build_groups(
+    split: SplitResult,
+    fillets: dict[int, tuple[int, int]],
+    corners: dict[int, tuple[int, ...]] | None = None,
+) -> list[Group]:
     """Groups of the split solid.
 
     ``fillets`` maps each simplified fillet (original face index) to its two supporting
-    faces (original indices). Raises :class:`CadError` when a half does not touch exactly
-    one supporting face or a boundary cannot be chained.
+    faces (original indices); ``corners`` each split corner blend to its supporting faces
+    (each piece goes to the one whose normal is nearest to the piece's own). Raises
+    :class:`CadError` when a half does not touch exactly one supporting face or a boundary
+    cannot be chained.
     """
     shape, fmap = split.shape, split.face_map
     emap = shape_map(shape, TopAbs_EDGE)
@@ -112,6 +126,14 @@ def build_groups(split: SplitResult, fillets: dict[int, tuple[int, int]]) -> lis
                 parent[find(j)] = find(split.pieces(s)[0])
             for j in split.pieces(s):
                 support_of[j] = s
+    for corner, corner_supports in (corners or {}).items():
+        for k in split.pieces(corner):
+            s = _nearest_support(fmap, split, k, corner_supports, corner)
+            root = find(split.pieces(s)[0])
+            if not any(find(j) == root for j in face_nbrs(k)):
+                raise CadError(f"corner blend {corner}: a piece does not touch face {s}'s group")
+            parent[find(k)] = find(split.pieces(s)[0])
+            halves.setdefault(s, []).append(k)
     roots = sorted({find(k) for k in range(nface)})
     gid = {r: i for i, r in enumerate(roots)}
     group_of = [gid[find(k)] for k in range(nface)]
@@ -147,11 +169,30 @@ def build_groups(split: SplitResult, fillets: dict[int, tuple[int, int]]) -> lis
     return groups
 
 
+def _nearest_support(
+    fmap: Any, split: SplitResult, k: int, supports: tuple[int, ...], corner: int
+) -> int:
+    """The supporting face whose outward normal is nearest to corner piece ``k``'s own."""
+    piece = TopoDS.Face(fmap.FindKey(k + 1))
+    p = face_inside_point(piece)
+    n = None if p is None else face_normal_at(piece, p)
+    if p is None or n is None:
+        raise CadError(f"corner blend {corner}: a piece has no inside point")
+    best, pick = -2.0, supports[0]
+    for s in supports:
+        ns = face_normal_at(TopoDS.Face(fmap.FindKey(split.pieces(s)[0] + 1)), p)
+        if ns is not None and float(ns @ n) > best:
+            best, pick = float(ns @ n), s
+    return pick
+
+
 def _loops(g, group_of, fmap, emap, vmap, edge_faces, degree) -> list[list[Run]]:  # type: ignore[no-untyped-def]
     counts: dict[int, int] = {}
     oriented: dict[int, Any] = {}
     for k in g.members:
         for e in edges_of(TopoDS.Face(fmap.FindKey(k + 1))):
+            if BRep_Tool.Degenerated_s(e):  # a pole of a corner's sphere: not a boundary
+                continue
             i = emap.FindIndex(e) - 1
             counts[i] = counts.get(i, 0) + 1
             oriented[i] = e

@@ -20,11 +20,13 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
 from OCP.TopoDS import TopoDS
 
+from medax.cad.simplify.corner import corner_arcs, plane_normal
+from medax.cad.simplify.fitted import FittedSurface, graph_surface
 from medax.cad.simplify.groups import Group, build_groups
 from medax.cad.simplify.medial import Medial, medial_curve
 from medax.cad.simplify.occ import count, diagonal, shape_map, small_list
 from medax.cad.simplify.rebuild import build_solid
-from medax.cad.simplify.specs import BlendInput, FilletSpec
+from medax.cad.simplify.specs import BlendInput, CornerSpec, FilletSpec
 from medax.cad.simplify.split import split_along
 from medax.cad.simplify.surfaces import Half, MergedSurface, merged_surface
 from medax.cad.simplify.validate import check, deviation, volume, volume_change
@@ -40,6 +42,12 @@ VOLUME_TOL = 1e-6
 DEVIATION_SAMPLES = 8
 #: Geometric tolerance of the construction, relative to the diagonal.
 BUILD_TOL = 1e-7
+#: A fitted surface must be within this share of the deviation tolerance (measured).
+FIT_SHARE = 0.1
+#: Deviation samples per face (n x n) for groups on a fitted surface.
+FITTED_DEVIATION_SAMPLES = 16
+#: Marker in the surface table: this supporting plane gets a fitted surface per attempt.
+FITTED = "fitted"
 
 
 @dataclass(frozen=True)
@@ -71,6 +79,7 @@ class SimplifyResult:
     face_groups: list[FaceGroup]
     time_s: float
     medial_error: float = 0.0
+    fit_error: float = 0.0
     notes: list[str] = field(default_factory=list)
 
     @property
@@ -95,6 +104,10 @@ class SimplifyResult:
             },
             "diagonal": self.diagonal,
             "medial_equidistance_error": self.medial_error,
+            "max_fit_error": {
+                "absolute": self.fit_error,
+                "relative_to_diagonal": self.fit_error / self.diagonal,
+            },
             "deviation_samples_per_face": DEVIATION_SAMPLES**2,
             "face_groups": [
                 {
@@ -120,6 +133,7 @@ class _Attempt:
     origin: tuple[int, ...]
     halves_origin: dict[int, list[int]]
     kinds: dict[int, str]
+    fit_error: float = 0.0
 
 
 def simplify(
@@ -153,15 +167,22 @@ def simplify(
             kept[spec.face] = m
         else:
             medials[spec.face] = m
+    corners, arcs = _corners(blends, medials, fmap, kept)
     _keep_next_to_corners(work, blends, medials, kept)
-    say(f"{len(medials)} fillets with a medial curve, {len(kept)} kept so far")
+    say(f"{len(medials)} fillets with a medial curve, {len(corners)} corner blends split")
     specs = {s.face: s for s in blends.fillets if s.face in medials}
-    surfaces = _surfaces(specs, medials, fmap, emap, kept, btol)
-    say(f"{len(specs)} fillets with exact merged surfaces on {len(surfaces)} faces")
+    _cascade(specs, corners, kept)
+    surfaces = _surfaces(specs, medials, fmap, emap, kept, btol, corners)
+    n_fit = sum(1 for v in surfaces.values() if isinstance(v, str))
+    say(f"{len(specs)} fillets on {len(surfaces)} merged faces ({n_fit} fitted)")
+    cache: dict[tuple[int, ...], FittedSurface | str] = {}
 
     def attempt(sel: dict[int, FilletSpec]) -> _Attempt | str:
-        return _attempt(work, sel, medials, surfaces, fmap, diag, vol0, tol, say)
+        csel = {c: cs for c, cs in corners.items() if set(cs.fillets) <= set(sel)}
+        return _attempt(work, sel, csel, arcs, medials, surfaces, fmap, diag, vol0, tol, say, cache)
 
+    if n_fit:
+        _fit_pass(work, specs, corners, arcs, medials, surfaces, fmap, kept, diag, tol, say, cache)
     result = attempt(specs) if specs else None
     if isinstance(result, str):
         say(f"rebuild with all fillets failed ({result}); bisecting")
@@ -172,7 +193,15 @@ def simplify(
                 kept[f] = f"rebuild failed: {result}"
             result = None
         specs = good
-    removed = sorted(specs) if result is not None else []
+    used_corners = (
+        sorted(c for c, cs in corners.items() if set(cs.fillets) <= set(specs))
+        if result is not None
+        else []
+    )
+    for c in corners:
+        if c not in used_corners:
+            kept.setdefault(c, "a fillet meeting this corner blend was kept")
+    removed = sorted(list(specs) + used_corners) if result is not None else []
     for f in specs:
         if result is None and f not in kept:
             kept[f] = "rebuild failed"
@@ -199,17 +228,18 @@ def simplify(
         diagonal=diag,
         face_groups=groups_out,
         time_s=time.perf_counter() - t0,
-        medial_error=max((medials[f].error for f in removed), default=0.0),
+        medial_error=max((medials[f].error for f in removed if f in medials), default=0.0),
+        fit_error=result.fit_error if result is not None else 0.0,
         notes=notes,
     )
 
 
 def _keep_next_to_corners(shape, blends, medials, kept) -> None:  # type: ignore[no-untyped-def]
-    """Fillets sharing an edge with a refused blend (corner blends) are kept too: their
-    medial curves would have to end at the corner's centre (not supported)."""
+    """Fillets sharing an edge with a blend that stays (a refused or unsplit corner blend)
+    are kept too: their medial curves would have to end at that blend's centre."""
     from medax.cad.simplify.specs import edge_face_map
 
-    refused = {f for f, _ in blends.refused}
+    refused = {f for f, _ in blends.refused} | {c.face for c in blends.corners if c.face in kept}
     if not refused:
         return
     fmap = shape_map(shape, TopAbs_FACE)
@@ -225,7 +255,54 @@ def _keep_next_to_corners(shape, blends, medials, kept) -> None:  # type: ignore
         } & refused
         if near:
             medials.pop(spec.face)
-            kept[spec.face] = f"meets corner blend {min(near)} (kept): not supported"
+            kept[spec.face] = f"meets blend {min(near)}, which is kept"
+
+
+def _corners(blends, medials, fmap, kept) -> tuple[dict[int, CornerSpec], dict[int, list[Any]]]:  # type: ignore[no-untyped-def]
+    """Corner blends that can be split (a sphere between planes, every fillet meeting it
+    with a medial curve) and their split arcs; the others go to ``kept``."""
+    by_face = {s.face: s for s in blends.fillets}
+    corners: dict[int, CornerSpec] = {}
+    arcs: dict[int, list[Any]] = {}
+    for cs in blends.corners:
+        missing = [f for f in cs.fillets if f not in medials]
+        if missing:
+            kept[cs.face] = f"corner blend: fillets {missing} meeting it are kept"
+            continue
+        normals = {}
+        for sup in cs.supporting:
+            n = plane_normal(TopoDS.Face(fmap.FindKey(sup + 1)))
+            if n is None:
+                break
+            normals[sup] = n
+        if len(normals) != len(cs.supporting):
+            kept[cs.face] = "corner blend between faces that are not planes (not supported)"
+            continue
+        pairs = [by_face[f].supporting for f in cs.fillets]
+        r = corner_arcs(TopoDS.Face(fmap.FindKey(cs.face + 1)), pairs, normals)
+        if isinstance(r, str):
+            kept[cs.face] = r
+            continue
+        corners[cs.face], arcs[cs.face] = cs, r[0]
+    return corners, arcs
+
+
+def _cascade(specs: dict[int, FilletSpec], corners: dict[int, CornerSpec], kept) -> None:  # type: ignore[no-untyped-def]
+    """A corner blend goes only with all its fillets, and a fillet only with its corners:
+    drop both ways until nothing changes."""
+    changed = True
+    while changed:
+        changed = False
+        for c, cs in list(corners.items()):
+            gone = [f for f in cs.fillets if f not in specs]
+            if gone:
+                corners.pop(c)
+                kept.setdefault(c, f"corner blend: fillet {gone[0]} meeting it is kept")
+                for f in cs.fillets:
+                    if f in specs:
+                        specs.pop(f)
+                        kept.setdefault(f, f"meets corner blend {c}, which is kept")
+                changed = True
 
 
 def _halves_of(specs: dict[int, FilletSpec]) -> dict[int, list[tuple[int, int]]]:
@@ -237,25 +314,35 @@ def _halves_of(specs: dict[int, FilletSpec]) -> dict[int, list[tuple[int, int]]]
     return out
 
 
-def _surfaces(specs, medials, fmap, emap, kept, btol) -> dict[int, MergedSurface]:  # type: ignore[no-untyped-def]
-    """Merged surface per supporting face; fillets of faces without one move to ``kept``."""
+def _surfaces(specs, medials, fmap, emap, kept, btol, corners) -> dict[int, MergedSurface | str]:  # type: ignore[no-untyped-def]
+    """Merged surface per supporting face: an exact one, or ``FITTED`` for a plane whose
+    pieces have none (fitted per attempt); fillets of other faces move to ``kept``."""
     while True:
-        surfaces: dict[int, MergedSurface] = {}
+        _cascade(specs, corners, kept)
+        with_corner = {s for cs in corners.values() for s in cs.supporting}
+        surfaces: dict[int, MergedSurface | str] = {}
         failed = False
         for sup, hs in _halves_of(specs).items():
-            halves = [
-                Half(
-                    TopoDS.Face(fmap.FindKey(f + 1)),
-                    medials[f],
-                    TopoDS.Edge(emap.FindKey(e + 1)),
-                )
-                for f, e in hs
-            ]
-            try:
-                ms = merged_surface(TopoDS.Face(fmap.FindKey(sup + 1)), halves, btol)
-            except (ValueError, RuntimeError) as err:  # OCCT construction failures
-                ms = f"surface construction failed: {err}"
-            if isinstance(ms, str):
+            support = TopoDS.Face(fmap.FindKey(sup + 1))
+            planar = plane_normal(support) is not None
+            if sup in with_corner:
+                ms: MergedSurface | str = FITTED if planar else "corner pieces on a curved face"
+            else:
+                halves = [
+                    Half(
+                        TopoDS.Face(fmap.FindKey(f + 1)),
+                        medials[f],
+                        TopoDS.Edge(emap.FindKey(e + 1)),
+                    )
+                    for f, e in hs
+                ]
+                try:
+                    ms = merged_surface(support, halves, btol)
+                except (ValueError, RuntimeError) as err:  # OCCT construction failures
+                    ms = f"surface construction failed: {err}"
+                if isinstance(ms, str) and planar:
+                    ms = FITTED
+            if isinstance(ms, str) and ms != FITTED:
                 for f, _ in hs:
                     kept.setdefault(f, f"supporting face {sup}: {ms}")
                     specs.pop(f, None)
@@ -266,13 +353,88 @@ def _surfaces(specs, medials, fmap, emap, kept, btol) -> dict[int, MergedSurface
             return surfaces
 
 
-def _attempt(work, sel, medials, surfaces, fmap, diag, vol0, tol, say) -> _Attempt | str:  # type: ignore[no-untyped-def]
+def _fitted(split, g: Group, fmap, cache, diag: float, tol: float) -> FittedSurface | str:  # type: ignore[no-untyped-def]
+    """The fitted surface of group ``g`` (cached by its support and its members' origins)."""
+    assert g.support is not None
+    key = (g.support, *sorted(split.origin[k] for k in g.members))
+    if key not in cache:
+        members = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
+        plane = TopoDS.Face(fmap.FindKey(g.support + 1))
+        try:
+            cache[key] = graph_surface(plane, members, FIT_SHARE * tol * diag, BUILD_TOL * diag)
+        except Exception as err:  # OCCT failures while sampling the pieces
+            cache[key] = f"fitting failed ({type(err).__name__}: {err})"
+    return cache[key]
+
+
+def _fit_pass(
+    work, specs, corners, arcs, medials, surfaces, fmap, kept, diag, tol, say, cache
+) -> None:  # type: ignore[no-untyped-def]
+    """Fit every fitted face once on the full split; fillets of faces whose fit fails are
+    kept (with the reason) before the rebuild is tried, so bisection is not spent on them."""
+    for _ in range(len(surfaces) + 1):
+        fitted = [s for s, v in surfaces.items() if v == FITTED]
+        if not fitted or not specs:
+            return
+        tools = [medials[f].edge for f in specs] + [e for c in corners for e in arcs[c]]
+        try:
+            split = split_along(work, tools)
+            groups = build_groups(
+                split,
+                {f: s.supporting for f, s in specs.items()},
+                {c: cs.supporting for c, cs in corners.items()},
+            )
+        except CadError:
+            return  # the attempt will report it
+        bad: dict[int, str] = {}
+        for g in groups:
+            if g.support is not None and g.support in fitted:
+                r = _fitted(split, g, fmap, cache, diag, tol)
+                if isinstance(r, str):
+                    bad[g.support] = r
+        if not bad:
+            return
+        say(f"fitted surfaces failed on faces {sorted(bad)}: their fillets are kept")
+        for sup, why in bad.items():
+            surfaces.pop(sup, None)
+            for f, s in list(specs.items()):
+                if sup in s.supporting:
+                    specs.pop(f)
+                    kept.setdefault(f, f"supporting face {sup}: {why}")
+        _cascade(specs, corners, kept)
+        live = {x for s in specs.values() for x in s.supporting}
+        for sup in list(surfaces):
+            if sup not in live:
+                surfaces.pop(sup)
+
+
+def _attempt(
+    work, sel, csel, arcs, medials, surfaces, fmap, diag, vol0, tol, say, cache
+) -> _Attempt | str:  # type: ignore[no-untyped-def]
+    fit_err = 0.0
     try:
-        say(f"splitting {len(sel)} fillets along their medial curves")
-        split = split_along(work, [medials[f].edge for f in sel])
-        groups = build_groups(split, {f: s.supporting for f, s in sel.items()})
+        say(f"splitting {len(sel)} fillets and {len(csel)} corner blends along medial curves")
+        tools = [medials[f].edge for f in sel] + [e for c in csel for e in arcs[c]]
+        split = split_along(work, tools)
+        groups = build_groups(
+            split,
+            {f: s.supporting for f, s in sel.items()},
+            {c: cs.supporting for c, cs in csel.items()},
+        )
+        used: dict[int, Any] = {}
+        for g in groups:
+            if g.support is None:
+                continue
+            ms = surfaces[g.support]
+            if ms == FITTED:
+                fs = _fitted(split, g, fmap, cache, diag, tol)
+                if isinstance(fs, str):
+                    return f"face {g.support}: {fs}"
+                used[g.support] = fs.surface
+                fit_err = max(fit_err, fs.error)
+            else:
+                used[g.support] = ms.surface
         say(f"rebuilding: {len(groups)} faces")
-        used = {g.support: surfaces[g.support].surface for g in groups if g.support is not None}
         shape, faces = build_solid(split, groups, used, BUILD_TOL * diag)
     except CadError as err:
         return str(err)
@@ -288,16 +450,21 @@ def _attempt(work, sel, medials, surfaces, fmap, diag, vol0, tol, say) -> _Attem
     if why:
         return why
     dev = 0.0
+    kinds: dict[int, str] = {}
     for g, face in zip(groups, faces, strict=True):
         if g.support is None:
             continue
+        ms = surfaces[g.support]
+        kinds[g.id] = FITTED if ms == FITTED else ms.kind
+        n = FITTED_DEVIATION_SAMPLES if ms == FITTED else DEVIATION_SAMPLES
         old = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
-        dev = max(dev, *deviation(old, face, n=DEVIATION_SAMPLES, enough=1e-3 * tol * diag))
+        dev = max(dev, *deviation(old, face, n=n, enough=1e-3 * tol * diag))
     if dev > tol * diag:
         return f"surface deviation {dev / diag:.2e} x diagonal (> {tol:g})"
     halves_origin = {g.id: [split.origin[k] for k in g.halves] for g in groups}
-    kinds = {g.id: surfaces[g.support].kind for g in groups if g.support is not None}
-    return _Attempt(shape, groups, faces, dev, vol0 * (1 + dv), split.origin, halves_origin, kinds)
+    return _Attempt(
+        shape, groups, faces, dev, vol0 * (1 + dv), split.origin, halves_origin, kinds, fit_err
+    )
 
 
 def _clusters(specs: dict[int, FilletSpec]) -> list[list[int]]:

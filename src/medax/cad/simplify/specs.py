@@ -42,16 +42,34 @@ class FilletSpec:
 
 
 @dataclass(frozen=True)
+class CornerSpec:
+    """A corner blend where fillets meet: face ``face``, the fillet faces ``fillets`` that end
+    on it and the ``supporting`` faces of those fillets (0-based face indices)."""
+
+    face: int
+    fillets: tuple[int, ...]
+    supporting: tuple[int, ...]
+
+
+@dataclass(frozen=True)
 class BlendInput:
-    """Blends of a solid: fillets to try, and blends refused up front with a reason."""
+    """Blends of a solid: fillets and corner blends to try, and blends refused up front with
+    a reason."""
 
     fillets: tuple[FilletSpec, ...]
     refused: tuple[tuple[int, str], ...]
+    corners: tuple[CornerSpec, ...] = ()
 
     @property
     def blend_faces(self) -> tuple[int, ...]:
         """All blend face indices (tried and refused), sorted."""
-        return tuple(sorted({f.face for f in self.fillets} | {i for i, _ in self.refused}))
+        return tuple(
+            sorted(
+                {f.face for f in self.fillets}
+                | {c.face for c in self.corners}
+                | {i for i, _ in self.refused}
+            )
+        )
 
 
 def edge_face_map(shape: Any) -> Any:
@@ -73,6 +91,7 @@ def specs_from_blend_faces(shape: Any, blends: Iterable[int]) -> BlendInput:
     blend_set = set(blends)
     fillets: list[FilletSpec] = []
     refused: list[tuple[int, str]] = []
+    corner_nbrs: dict[int, set[int]] = {}
     for b in sorted(blend_set):
         face = TopoDS.Face(fmap.FindKey(b + 1))
         smooth: list[tuple[int, int]] = []
@@ -99,11 +118,32 @@ def specs_from_blend_faces(shape: Any, blends: Iterable[int]) -> BlendInput:
             )
         elif len(smooth) == 2:
             refused.append((b, f"both smooth edges on face {smooth[0][1]}"))
-        elif blend_nbrs and len(smooth) != 2:
-            refused.append((b, f"corner blend (meets blends {sorted(blend_nbrs)}): not supported"))
+        elif blend_nbrs and not smooth:
+            corner_nbrs[b] = blend_nbrs
+        elif blend_nbrs:
+            refused.append(
+                (b, f"blend meeting blends {sorted(blend_nbrs)} and faces: not supported")
+            )
         else:
             refused.append((b, f"{len(smooth)} smooth edges (an edge fillet has 2)"))
-    return BlendInput(tuple(fillets), tuple(refused))
+    return _with_corners(fillets, refused, corner_nbrs)
+
+
+def _with_corners(
+    fillets: list[FilletSpec], refused: list[tuple[int, str]], corner_nbrs: dict[int, set[int]]
+) -> BlendInput:
+    """Corner blends whose neighbours are all fillets become :class:`CornerSpec`; the rest
+    are refused with the reason."""
+    by_face = {f.face: f for f in fillets}
+    corners: list[CornerSpec] = []
+    for c, nbrs in sorted(corner_nbrs.items()):
+        if not nbrs <= set(by_face):
+            others = sorted(nbrs - set(by_face))
+            refused.append((c, f"corner blend next to blends {others} that are not fillets"))
+            continue
+        sup = sorted({s for f in nbrs for s in by_face[f].supporting})
+        corners.append(CornerSpec(c, tuple(sorted(nbrs)), tuple(sup)))
+    return BlendInput(tuple(fillets), tuple(refused), tuple(corners))
 
 
 def specs_from_classification(cls: Any) -> BlendInput:
@@ -122,6 +162,4 @@ def specs_from_classification(cls: Any) -> BlendInput:
             refused.append((rec.face, f"both smooth edges on face {rec.supporting[0]}"))
         else:
             fillets.append(FilletSpec(rec.face, (a[0], b[0]), tuple(rec.supporting), rec.radius))
-    for c in cls.corners:
-        refused.append((c.face, f"corner blend (meets fillets {list(c.fillets)}): not supported"))
-    return BlendInput(tuple(fillets), tuple(refused))
+    return _with_corners(fillets, refused, {c.face: set(c.fillets) for c in cls.corners})

@@ -1,0 +1,83 @@
+"""Split curves of a spherical corner blend (the paper's point-transition fillet).
+
+A corner where fillets between planes meet is a sphere piece. Each fillet's medial curve
+ends on the corner at ``M = C + s R (n_a + n_b) / |n_a + n_b|`` (``n_a``, ``n_b`` the outward
+normals of its supporting planes, ``C`` and ``R`` the sphere's centre and radius, ``s = +1`` on
+a convex corner, ``-1`` on a concave one). The corner's centre is the point of the sphere
+equidistant from all its supporting planes, ``P = C + s R u`` with ``u . n_i`` equal for all
+``i``. The great arc from ``M`` to ``P`` lies in the plane through ``C`` spanned by
+``n_a + n_b`` and ``u``, where every point of the sphere is equidistant from planes ``a`` and
+``b``: it is the corner's medial curve between the two faces, continuing the fillet's.
+Each piece then goes to the supporting face whose normal is nearest to its own.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge
+from OCP.GC import GC_MakeArcOfCircle
+from OCP.GeomAbs import GeomAbs_Plane, GeomAbs_Sphere
+from OCP.gp import gp_Ax2, gp_Circ, gp_Dir, gp_Pnt
+
+from medax.cad.simplify.occ import Array, face_inside_point, face_normal_at, xyz
+
+
+def _p(a: Array) -> gp_Pnt:
+    return gp_Pnt(float(a[0]), float(a[1]), float(a[2]))
+
+
+def plane_normal(face: Any) -> Array | None:
+    """Outward unit normal of a planar face (orientation applied), None if not a plane."""
+    if BRepAdaptor_Surface(face).GetType() != GeomAbs_Plane:
+        return None
+    p = face_inside_point(face)
+    return None if p is None else face_normal_at(face, p)
+
+
+def corner_arcs(
+    corner: Any, pairs: Sequence[tuple[int, int]], normals: dict[int, Array]
+) -> tuple[list[Any], Array] | str:
+    """Great-arc tool edges of ``corner`` (a face), one per fillet meeting it, and its centre.
+
+    ``pairs``: the two supporting faces (indices) of each fillet that meets the corner;
+    ``normals``: outward unit normal of each of those faces (all planes). Returns the edges and
+    the centre point (3,), or a one-line reason when this corner is not a sphere piece.
+    """
+    ad = BRepAdaptor_Surface(corner)
+    if ad.GetType() != GeomAbs_Sphere:
+        return "corner blend is not a sphere piece (not supported)"
+    sph = ad.Sphere()
+    c, r = xyz(sph.Location()), float(sph.Radius())
+    inside = face_inside_point(corner)
+    n_in = None if inside is None else face_normal_at(corner, inside)
+    if inside is None or n_in is None:
+        return "corner blend: no inside point"
+    s = 1.0 if float(n_in @ (inside - c)) > 0 else -1.0
+    faces = sorted({f for pair in pairs for f in pair})
+    n = np.array([normals[f] for f in faces])
+    u, *_ = np.linalg.lstsq(n, np.ones(len(n)), rcond=None)
+    u /= np.linalg.norm(u)
+    if np.ptp(n @ u) > 1e-9:
+        return "corner blend: no point equidistant from all its supporting planes"
+    centre = c + s * r * u
+    edges = []
+    for fa, fb in pairs:
+        w = normals[fa] + normals[fb]
+        if np.linalg.norm(w) < 1e-9:
+            return "corner blend: opposite supporting planes"
+        m = c + s * r * w / np.linalg.norm(w)
+        axis = np.cross(m - c, centre - c)
+        if np.linalg.norm(axis) < 1e-12 * r * r:
+            return "corner blend: a fillet's medial curve ends at the corner's centre"
+        axis /= np.linalg.norm(axis)
+        frame = gp_Ax2(_p(c), gp_Dir(*map(float, axis)), gp_Dir(*map(float, (m - c) / r)))
+        arc = GC_MakeArcOfCircle(gp_Circ(frame, r), _p(m), _p(centre), True).Value()
+        mk = BRepBuilderAPI_MakeEdge(arc)
+        if not mk.IsDone():
+            return "corner blend: could not build a split arc"
+        edges.append(mk.Edge())
+    return edges, centre

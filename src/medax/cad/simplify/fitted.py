@@ -1,0 +1,278 @@
+"""A fitted surface for a planar supporting face merged with blend pieces (a height field).
+
+Where the exact routes do not apply (fillet halves along non-parallel edges of one plane,
+pieces of corner blends), the merged face is the graph of a height ``h(x, y)`` along the
+plane's normal over the plane: the plane piece at ``h = 0``, each fillet half or corner piece
+rising or falling to its medial curve (a half turns the normal by less than 90 degrees, so the
+graph is single-valued). The height is known exactly: at every grid point the line along the
+normal is intersected in closed form with the surface of the member face above it (plane,
+cylinder or sphere), the member found by point-in-polygon on the members' projected
+boundaries; just outside the face, with the nearest member's surface. The fit
+(:func:`medax.geometry.tensor_fit.fit_height`) puts C1 knots on the projected straight edges
+parallel to the frame's axes (where the curvature jumps) and measures its own error on a
+grid 7 points per knot span; the result is one cubic ``Geom_BSplineSurface`` whose control
+points sit at the Greville abscissae (so ``x`` and ``y`` are reproduced exactly).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from matplotlib.path import Path
+from OCP.BRep import BRep_Tool
+from OCP.BRepAdaptor import BRepAdaptor_Curve, BRepAdaptor_Surface
+from OCP.BRepTools import BRepTools, BRepTools_WireExplorer
+from OCP.GeomAbs import GeomAbs_Cylinder, GeomAbs_Line, GeomAbs_Plane, GeomAbs_Sphere
+from OCP.TopAbs import TopAbs_REVERSED, TopAbs_WIRE
+from OCP.TopExp import TopExp_Explorer
+from OCP.TopoDS import TopoDS
+
+from medax.cad.simplify.occ import Array, edge_points, edges_of, xyz
+from medax.geometry.tensor_fit import TensorFit, fit_height, greville
+
+#: Samples per edge for the projected member boundaries.
+EDGE_SAMPLES = 48
+#: Heights are taken where the member surface's normal is within this angle of the plane's
+#: (steeper points are dropped: the penalty continues the fit there).
+MAX_SLOPE_ANGLE = np.radians(70.0)
+
+
+@dataclass(frozen=True)
+class _Member:
+    kind: str  # "plane" | "cylinder" | "sphere"
+    centre: Array  # a point of the plane / the axis / the centre
+    axis: Array  # the plane's normal / the cylinder's axis (unused for spheres)
+    radius: float
+    outer: Path
+    inner: tuple[Path, ...]
+    boundary: Array  # (k, 2) projected boundary samples
+
+
+@dataclass(frozen=True)
+class FittedSurface:
+    """The fitted ``surface`` (``Geom_BSplineSurface``), its measured ``error`` (largest
+    height error on the face, length unit) and the knot ``spacing`` that reached it."""
+
+    surface: Any
+    error: float
+    spacing: float
+
+
+def _wire_polygon(wire: Any, frame: tuple[Array, Array, Array]) -> Array:
+    o, ex, ey = frame
+    pts = []
+    exp = BRepTools_WireExplorer(TopoDS.Wire(wire))
+    while exp.More():
+        e = exp.Current()
+        if BRep_Tool.Degenerated_s(e):
+            exp.Next()
+            continue
+        p = edge_points(e, EDGE_SAMPLES)
+        if e.Orientation() == TopAbs_REVERSED:
+            p = p[::-1]
+        pts.append(p[:-1])
+        exp.Next()
+    q = np.vstack(pts) - o
+    return np.column_stack([q @ ex, q @ ey])
+
+
+def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
+    ad = BRepAdaptor_Surface(face)
+    kind = ad.GetType()
+    if kind == GeomAbs_Plane:
+        ax = ad.Plane().Axis()
+        m = ("plane", xyz(ax.Location()), xyz(ax.Direction()), 0.0)
+    elif kind == GeomAbs_Cylinder:
+        cyl = ad.Cylinder()
+        ax = cyl.Axis()
+        m = ("cylinder", xyz(ax.Location()), xyz(ax.Direction()), float(cyl.Radius()))
+    elif kind == GeomAbs_Sphere:
+        sph = ad.Sphere()
+        m = ("sphere", xyz(sph.Location()), np.zeros(3), float(sph.Radius()))
+    else:
+        return "fitted merge takes plane, cylinder and sphere pieces only"
+    outer_wire = BRepTools.OuterWire_s(face)
+    outer = _wire_polygon(outer_wire, frame)
+    inner = []
+    exp = TopExp_Explorer(face, TopAbs_WIRE)
+    while exp.More():
+        w = exp.Current()
+        if not w.IsSame(outer_wire):
+            inner.append(Path(_wire_polygon(w, frame)))
+        exp.Next()
+    o, ex, ey = frame
+    bnd = (
+        np.vstack(
+            [edge_points(e, EDGE_SAMPLES) for e in edges_of(face) if not BRep_Tool.Degenerated_s(e)]
+        )
+        - o
+    )
+    return _Member(
+        m[0],
+        m[1],
+        m[2],
+        m[3],
+        Path(outer),
+        tuple(inner),
+        np.column_stack([bnd @ ex, bnd @ ey]),
+    )
+
+
+def _heights(m: _Member, q: Array, n: Array) -> tuple[Array, np.ndarray]:
+    """Signed distance ``t`` along ``n`` from points ``q`` (k, 3) to member ``m``'s surface
+    (the root nearest the plane) and where it is defined with a moderate slope."""
+    if m.kind == "plane":
+        den = float(n @ m.axis)
+        if abs(den) < np.cos(MAX_SLOPE_ANGLE):
+            return np.zeros(len(q)), np.zeros(len(q), bool)
+        return ((m.centre - q) @ m.axis) / den, np.ones(len(q), bool)
+    w = q - m.centre
+    if m.kind == "cylinder":
+        w = w - np.outer(w @ m.axis, m.axis)
+        d = n - (n @ m.axis) * m.axis
+    else:
+        d = n
+    a = float(d @ d)
+    if a < 1e-24:
+        return np.zeros(len(q)), np.zeros(len(q), bool)
+    b = w @ d
+    c = np.einsum("ij,ij->i", w, w) - m.radius**2
+    disc = b * b - a * c
+    ok = disc >= 0
+    root = np.sqrt(np.maximum(disc, 0.0))
+    t1, t2 = (-b - root) / a, (-b + root) / a
+    t = np.where(np.abs(t1) < np.abs(t2), t1, t2)
+    # slope: the surface normal at the hit against n
+    x = w + np.outer(t, d)
+    normal = x / np.maximum(np.linalg.norm(x, axis=1), 1e-300)[:, None]
+    cos = np.abs(normal @ n)
+    return t, ok & (cos >= np.cos(MAX_SLOPE_ANGLE))
+
+
+def _frame(plane_face: Any, members: Sequence[Any]) -> tuple[Array, Array, Array, Array]:
+    """(origin, ex, ey, n): n the plane's normal, ex along the group's longest straight edge
+    normal to n (so the edges of box-like parts lie on knot lines)."""
+    pl = BRepAdaptor_Surface(plane_face).Plane()
+    o, n = xyz(pl.Location()), xyz(pl.Axis().Direction())
+    ex = xyz(pl.XAxis().Direction())
+    best = 0.0
+    for f in members:
+        for e in edges_of(f):
+            c = BRepAdaptor_Curve(e)
+            if c.GetType() != GeomAbs_Line:
+                continue
+            d = xyz(c.Line().Direction())
+            length = abs(c.LastParameter() - c.FirstParameter())
+            if abs(d @ n) < 1e-9 and length > best:
+                best, ex = length, d
+    ex = ex - (ex @ n) * n
+    ex /= np.linalg.norm(ex)
+    return o, ex, np.cross(n, ex), n
+
+
+def _breaks(members: Sequence[_Member], tol: float) -> tuple[list[float], list[float]]:
+    """Coordinates of projected straight boundary pieces parallel to the frame's axes."""
+    xs: list[float] = []
+    ys: list[float] = []
+    for m in members:
+        for poly in [m.outer, *m.inner]:
+            v = np.asarray(poly.vertices, dtype=float)
+            k = EDGE_SAMPLES - 1
+            for s in range(0, len(v), k):  # one projected edge per EDGE_SAMPLES - 1 points
+                seg = v[s : s + k + 1] if s + k < len(v) else np.vstack([v[s:], v[:1]])
+                if len(seg) < 3 or np.ptp(seg, axis=0).max() < tol:
+                    continue
+                if np.ptp(seg[:, 0]) < tol:
+                    xs.append(float(seg[:, 0].mean()))
+                if np.ptp(seg[:, 1]) < tol:
+                    ys.append(float(seg[:, 1].mean()))
+    return _dedup(xs, tol), _dedup(ys, tol)
+
+
+def _dedup(vals: list[float], tol: float) -> list[float]:
+    out: list[float] = []
+    for v in sorted(vals):
+        if not out or v - out[-1] > 100 * tol:
+            out.append(v)
+    return out
+
+
+def graph_surface(
+    plane_face: Any, members: Sequence[Any], fit_tol: float, geom_tol: float
+) -> FittedSurface | str:
+    """Fitted surface of the merged face made of ``members`` (faces of the split solid, one of
+    them on the supporting plane of ``plane_face``), to ``fit_tol`` (length unit); the reason
+    (str) when the pieces are not a height field over the plane or the fit misses ``fit_tol``.
+    ``geom_tol``: length tolerance of the geometric tests."""
+    o, ex, ey, n = _frame(plane_face, members)
+    frame = (o, ex, ey)
+    ms: list[_Member] = []
+    for f in members:
+        m = _member(f, frame)
+        if isinstance(m, str):
+            return m
+        ms.append(m)
+    curved = [m.radius for m in ms if m.kind != "plane"]
+    if not curved:
+        return "no curved piece to merge"
+    rmin = min(curved)
+    allb = np.vstack([m.boundary for m in ms])
+    margin = 0.25 * rmin
+    lo, hi = allb.min(axis=0) - margin, allb.max(axis=0) + margin
+
+    def h(x: Array, y: Array) -> tuple[Array, np.ndarray, np.ndarray]:
+        pts = np.column_stack([x.ravel(), y.ravel()])
+        label = np.full(len(pts), -1)
+        for i, m in enumerate(ms):
+            inside = m.outer.contains_points(pts, radius=0.0)
+            for hole in m.inner:
+                inside &= ~hole.contains_points(pts)
+            label[(label < 0) & inside] = i
+        face_mask = label >= 0
+        z = np.zeros(len(pts))
+        ok = np.zeros(len(pts), bool)
+        q = o + np.outer(pts[:, 0], ex) + np.outer(pts[:, 1], ey)
+        for i, m in enumerate(ms):
+            sel = label == i
+            if sel.any():
+                z[sel], ok[sel] = _heights(m, q[sel], n)
+        return z.reshape(x.shape), ok.reshape(x.shape), face_mask.reshape(x.shape)
+
+    xb, yb = _breaks(ms, geom_tol)
+    fit = fit_height((lo[0], hi[0]), (lo[1], hi[1]), xb, yb, h, fit_tol, rmin / 4, levels=4)
+    if not np.isfinite(fit.error):
+        return "the merged face is not a height field over its plane (steep or undefined)"
+    if fit.error > fit_tol:
+        return f"fitted surface error {fit.error:.2e} above {fit_tol:.2e}"
+    return FittedSurface(_bspline_surface(fit, o, ex, ey, n), fit.error, fit.spacing)
+
+
+def _bspline_surface(fit: TensorFit, o: Array, ex: Array, ey: Array, n: Array) -> Any:
+    """``Geom_BSplineSurface`` of the fit: poles ``o + gx ex + gy ey + c n``."""
+    from OCP.collections import Array1_double, Array1_int, Array2_gp_Pnt
+    from OCP.Geom import Geom_BSplineSurface
+    from OCP.gp import gp_Pnt
+
+    gx, gy = greville(fit.tx), greville(fit.ty)
+    nx, ny = fit.coef.shape
+    poles = Array2_gp_Pnt(1, nx, 1, ny)
+    for i in range(nx):
+        base = o + gx[i] * ex
+        for j in range(ny):
+            p = base + gy[j] * ey + fit.coef[i, j] * n
+            poles.SetValue(i + 1, j + 1, gp_Pnt(*map(float, p)))
+
+    def knots(t: Array) -> tuple[Any, Any]:
+        u, m = np.unique(t, return_counts=True)
+        ak, am = Array1_double(1, len(u)), Array1_int(1, len(u))
+        for k, (kv, mult) in enumerate(zip(u, m, strict=True)):
+            ak.SetValue(k + 1, float(kv))
+            am.SetValue(k + 1, int(mult))
+        return ak, am
+
+    uk, um = knots(fit.tx)
+    vk, vm = knots(fit.ty)
+    return Geom_BSplineSurface(poles, uk, vk, um, vm, 3, 3)
