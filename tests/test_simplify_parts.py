@@ -110,7 +110,7 @@ def test_via_classifier_same_result():
 
 
 # The classification issue's catalogue of OCCT-built parts, classified by medax.cad.classify:
-# parts whose fillets all have exact merged surfaces lose every blend; on all parts the
+# parts whose fillets all have exact or fitted merged surfaces lose every blend; on all parts the
 # result is valid, the volume unchanged, and faces after = faces before - blends removed.
 ALL_REMOVED = (
     "l_bracket",

@@ -2,7 +2,8 @@
 
 A box with four filleted vertical edges (10 -> 6 faces, extrusion surfaces), a plate with a
 filleted boss and a hole (10 -> 9 faces, revolution surfaces) and a boss filleted at its root
-and top (10 -> 8 faces; the top face holds the pole of its revolution surface): the input
+and top (10 -> 8 faces; the top face holds the pole of its revolution surface) and a box with
+all 12 edges filleted (26 -> 6 faces: eight sphere corners split, fitted faces): the input
 STEP, the simplified STEP, the JSON report and the before/after picture of each.
 """
 
@@ -23,6 +24,7 @@ def demo(outdir: Path) -> list[Path]:
         ("box", parts.box_vertical_fillets()),
         ("boss", parts.plate_with_boss()),
         ("boss-top", parts.boss_top_fillet(2.0, root=True)),
+        ("box-12-edges", parts.box_all_fillets()),
     ):
         src = write_step(part.shape, outdir / f"simplify-{name}-input.step")
         out, rep, png = (outdir / f"simplify-{name}{ext}" for ext in (".step", ".json", ".png"))

@@ -246,7 +246,10 @@ def graph_surface(
     if not np.isfinite(fit.error):
         return "the merged face is not a height field over its plane (steep or undefined)"
     if fit.error > fit_tol:
-        return f"fitted surface error {fit.error:.2e} above {fit_tol:.2e}"
+        return (
+            f"fitted surface error {fit.error:.2e} above {fit_tol:.2e} (the pieces do not form "
+            "one smooth height field over the plane, e.g. a step at a cross edge)"
+        )
     return FittedSurface(_bspline_surface(fit, o, ex, ey, n), fit.error, fit.spacing)
 
 
