@@ -1,0 +1,63 @@
+"""The penalised tensor-product fit of a height field (numpy only, no OCP): a rounded box
+corner in closed form (plane, two cylinder strips, a sphere corner)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from medax.geometry.tensor_fit import fit_height, greville
+
+R = 4.0  # fillet radius; the flat part starts at x = y = R
+
+
+def _corner(x, y):
+    """Height of a rounded corner below the top plane (closed form) and the face mask: the
+    top face's share of the rounded box, out to the 45-degree medial lines."""
+    dx, dy = np.maximum(R - x, 0.0), np.maximum(R - y, 0.0)
+    s = R * R - dx * dx - dy * dy
+    z = R - np.sqrt(np.maximum(s, 0.0))
+    medial = R * (1 - np.sqrt(0.5))
+    inside = (x >= medial) & (y >= medial) & (s >= R * R / 3)  # corner piece to 54.7 deg
+    return z, inside
+
+
+def _h(x, y):
+    z, inside = _corner(x, y)
+    return z, inside.copy(), inside
+
+
+def test_fit_meets_tolerance_against_closed_form():
+    tol = 2e-5
+    fit = fit_height((0.9, 20.0), (0.9, 20.0), [1.1716, R], [1.1716, R], _h, tol, R / 4)
+    assert fit.error <= tol
+    rng = np.random.default_rng(3)
+    x, y = rng.uniform(0.9, 20.0, 400), rng.uniform(0.9, 20.0, 400)
+    z = np.diag(fit(np.sort(x), np.sort(y)))
+    truth, inside = _corner(np.sort(x), np.sort(y))
+    assert np.abs(z - truth)[inside].max() <= 2 * tol  # off the check grid, same order
+
+
+def test_breaks_on_the_curvature_jumps_matter():
+    """With C1 knots where the curvature jumps the fit converges at its full order; without,
+    it does not (measured: 16x, then 60x apart at R/16 and R/32)."""
+    errs = []
+    for step in (R / 16, R / 32):
+        with_b = fit_height((0.9, 20.0), (0.9, 20.0), [R], [R], _h, 0.0, step, levels=1)
+        without = fit_height((0.9, 20.0), (0.9, 20.0), [], [], _h, 0.0, step, levels=1)
+        errs.append((with_b.error, without.error))
+    (a1, b1), (a2, b2) = errs
+    assert b1 > 10 * a1 and b2 > 30 * a2
+    assert a1 / a2 > 4  # at least third order with breaks
+    assert b1 / b2 < 2  # stalled without
+
+
+def test_linear_height_is_exact_and_greville_reproduces_x():
+    def plane(x, y):
+        ones = np.ones(x.shape, bool)
+        return 2.0 * x - 3.0 * y + 1.0, ones, ones
+
+    fit = fit_height((0.0, 10.0), (-5.0, 5.0), [3.0], [], plane, 1e-12, 1.0)
+    assert fit.error <= 1e-10
+    t = fit.tx
+    g = greville(t)
+    assert g[0] == t[0] and g[-1] == t[-1] and np.all(np.diff(g) > 0)
