@@ -25,7 +25,13 @@ from matplotlib.path import Path
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Curve, BRepAdaptor_Surface
 from OCP.BRepTools import BRepTools, BRepTools_WireExplorer
-from OCP.GeomAbs import GeomAbs_Cylinder, GeomAbs_Line, GeomAbs_Plane, GeomAbs_Sphere
+from OCP.GeomAbs import (
+    GeomAbs_Cylinder,
+    GeomAbs_Line,
+    GeomAbs_Plane,
+    GeomAbs_Sphere,
+    GeomAbs_Torus,
+)
 from OCP.TopAbs import TopAbs_REVERSED, TopAbs_WIRE
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS
@@ -42,13 +48,14 @@ MAX_SLOPE_ANGLE = np.radians(70.0)
 
 @dataclass(frozen=True)
 class _Member:
-    kind: str  # "plane" | "cylinder" | "sphere"
+    kind: str  # "plane" | "cylinder" | "sphere" | "torus"
     centre: Array  # a point of the plane / the axis / the centre
-    axis: Array  # the plane's normal / the cylinder's axis (unused for spheres)
-    radius: float
+    axis: Array  # the plane's normal / the cylinder's or torus' axis (unused for spheres)
+    radius: float  # cylinder, sphere: radius; torus: minor radius
     outer: Path
     inner: tuple[Path, ...]
     boundary: Array  # (k, 2) projected boundary samples
+    major: float = 0.0  # torus: major radius
 
 
 @dataclass(frozen=True)
@@ -82,6 +89,7 @@ def _wire_polygon(wire: Any, frame: tuple[Array, Array, Array]) -> Array:
 def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
     ad = BRepAdaptor_Surface(face)
     kind = ad.GetType()
+    major = 0.0
     if kind == GeomAbs_Plane:
         ax = ad.Plane().Axis()
         m = ("plane", xyz(ax.Location()), xyz(ax.Direction()), 0.0)
@@ -92,8 +100,13 @@ def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
     elif kind == GeomAbs_Sphere:
         sph = ad.Sphere()
         m = ("sphere", xyz(sph.Location()), np.zeros(3), float(sph.Radius()))
+    elif kind == GeomAbs_Torus:
+        tor = ad.Torus()
+        ax = tor.Axis()
+        m = ("torus", xyz(ax.Location()), xyz(ax.Direction()), float(tor.MinorRadius()))
+        major = float(tor.MajorRadius())
     else:
-        return "fitted merge takes plane, cylinder and sphere pieces only"
+        return "fitted merge takes plane, cylinder, sphere and torus pieces only"
     outer_wire = BRepTools.OuterWire_s(face)
     outer = _wire_polygon(outer_wire, frame)
     inner = []
@@ -118,6 +131,7 @@ def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
         Path(outer),
         tuple(inner),
         np.column_stack([bnd @ ex, bnd @ ey]),
+        major,
     )
 
 
@@ -129,6 +143,8 @@ def _heights(m: _Member, q: Array, n: Array) -> tuple[Array, np.ndarray]:
         if abs(den) < np.cos(MAX_SLOPE_ANGLE):
             return np.zeros(len(q)), np.zeros(len(q), bool)
         return ((m.centre - q) @ m.axis) / den, np.ones(len(q), bool)
+    if m.kind == "torus":
+        return _torus_heights(m, q, n)
     w = q - m.centre
     if m.kind == "cylinder":
         w = w - np.outer(w @ m.axis, m.axis)
@@ -148,6 +164,47 @@ def _heights(m: _Member, q: Array, n: Array) -> tuple[Array, np.ndarray]:
     # slope: the surface normal at the hit against n
     x = w + np.outer(t, d)
     normal = x / np.maximum(np.linalg.norm(x, axis=1), 1e-300)[:, None]
+    cos = np.abs(normal @ n)
+    return t, ok & (cos >= np.cos(MAX_SLOPE_ANGLE))
+
+
+def _torus_heights(m: _Member, q: Array, n: Array) -> tuple[Array, np.ndarray]:
+    """Line-torus intersections for many lines at once: the quartic
+    ``(|X|^2 + R^2 - r^2)^2 = 4 R^2 (|X|^2 - (X.a)^2)``, ``X = w + t n``, solved by the
+    eigenvalues of its companion matrices (one (k, 4, 4) batch), the real root nearest the
+    plane polished by two Newton steps."""
+    big, r, a = m.major, m.radius, m.axis
+    w = q - m.centre
+    b, za, na = w @ n, w @ a, float(n @ a)
+    ww = np.einsum("ij,ij->i", w, w)
+    c0 = ww + big * big - r * r
+    k4 = 4 * big * big
+    coef = np.stack(
+        [
+            4 * b,
+            4 * b * b + 2 * c0 - k4 * (1 - na * na),
+            4 * b * c0 - 2 * k4 * (b - za * na),
+            c0 * c0 - k4 * (ww - za * za),
+        ],
+        axis=1,
+    )
+    comp = np.zeros((len(q), 4, 4))
+    comp[:, 0, :] = -coef
+    comp[:, 1, 0] = comp[:, 2, 1] = comp[:, 3, 2] = 1.0
+    roots = np.linalg.eigvals(comp) if len(q) else np.zeros((0, 4), complex)
+    real = np.abs(roots.imag) <= 1e-6 * (big + r)
+    cand = np.where(real, np.abs(roots.real), np.inf)
+    pick = np.argmin(cand, axis=1)
+    ok = np.isfinite(cand[np.arange(len(q)), pick])
+    t = roots.real[np.arange(len(q)), pick]
+    for _ in range(2):
+        p = (((t + coef[:, 0]) * t + coef[:, 1]) * t + coef[:, 2]) * t + coef[:, 3]
+        dp = ((4 * t + 3 * coef[:, 0]) * t + 2 * coef[:, 1]) * t + coef[:, 2]
+        t = t - np.where(np.abs(dp) > 1e-300, p / np.where(dp == 0, 1.0, dp), 0.0)
+    x = w + np.outer(t, n)
+    radial = x - np.outer(x @ a, a)
+    core = big * radial / np.maximum(np.linalg.norm(radial, axis=1), 1e-300)[:, None]
+    normal = (x - core) / r
     cos = np.abs(normal @ n)
     return t, ok & (cos >= np.cos(MAX_SLOPE_ANGLE))
 
@@ -201,12 +258,17 @@ def _dedup(vals: list[float], tol: float) -> list[float]:
 
 
 def graph_surface(
-    plane_face: Any, members: Sequence[Any], fit_tol: float, geom_tol: float
+    plane_face: Any,
+    members: Sequence[Any],
+    fit_tol: float,
+    geom_tol: float,
+    probe: bool = False,
 ) -> FittedSurface | str:
     """Fitted surface of the merged face made of ``members`` (faces of the split solid, one of
     them on the supporting plane of ``plane_face``), to ``fit_tol`` (length unit); the reason
     (str) when the pieces are not a height field over the plane or the fit misses ``fit_tol``.
-    ``geom_tol``: length tolerance of the geometric tests."""
+    ``geom_tol``: length tolerance of the geometric tests. With ``probe`` only the coarsest
+    fit is made and only a face that is no height field is refused (a cheap first check)."""
     o, ex, ey, n = _frame(plane_face, members)
     frame = (o, ex, ey)
     ms: list[_Member] = []
@@ -222,15 +284,23 @@ def graph_surface(
     allb = np.vstack([m.boundary for m in ms])
     margin = 0.25 * rmin
     lo, hi = allb.min(axis=0) - margin, allb.max(axis=0) + margin
+    boxes = [(m.boundary.min(axis=0) - geom_tol, m.boundary.max(axis=0) + geom_tol) for m in ms]
 
     def h(x: Array, y: Array) -> tuple[Array, np.ndarray, np.ndarray]:
         pts = np.column_stack([x.ravel(), y.ravel()])
         label = np.full(len(pts), -1)
         for i, m in enumerate(ms):
-            inside = m.outer.contains_points(pts, radius=0.0)
+            # only the points in the member's bounding box go to the polygon test
+            blo, bhi = boxes[i]
+            cand = np.flatnonzero(
+                (label < 0) & np.all(pts >= blo, axis=1) & np.all(pts <= bhi, axis=1)
+            )
+            if cand.size == 0:
+                continue
+            inside = m.outer.contains_points(pts[cand], radius=0.0)
             for hole in m.inner:
-                inside &= ~hole.contains_points(pts)
-            label[(label < 0) & inside] = i
+                inside &= ~hole.contains_points(pts[cand])
+            label[cand[inside]] = i
         face_mask = label >= 0
         z = np.zeros(len(pts))
         ok = np.zeros(len(pts), bool)
@@ -242,10 +312,11 @@ def graph_surface(
         return z.reshape(x.shape), ok.reshape(x.shape), face_mask.reshape(x.shape)
 
     xb, yb = _breaks(ms, geom_tol)
-    fit = fit_height((lo[0], hi[0]), (lo[1], hi[1]), xb, yb, h, fit_tol, rmin / 4, levels=4)
+    levels = 1 if probe else 4
+    fit = fit_height((lo[0], hi[0]), (lo[1], hi[1]), xb, yb, h, fit_tol, rmin / 4, levels=levels)
     if not np.isfinite(fit.error):
         return "the merged face is not a height field over its plane (steep or undefined)"
-    if fit.error > fit_tol:
+    if fit.error > fit_tol and not probe:
         return (
             f"fitted surface error {fit.error:.2e} above {fit_tol:.2e} (the pieces do not form "
             "one smooth height field over the plane, e.g. a step at a cross edge)"

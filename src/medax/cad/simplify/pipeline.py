@@ -16,7 +16,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
+from OCP.GeomAbs import GeomAbs_Plane
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
 from OCP.TopoDS import TopoDS
 
@@ -324,7 +326,7 @@ def _surfaces(specs, medials, fmap, emap, kept, btol, corners) -> dict[int, Merg
         failed = False
         for sup, hs in _halves_of(specs).items():
             support = TopoDS.Face(fmap.FindKey(sup + 1))
-            planar = plane_normal(support) is not None
+            planar = BRepAdaptor_Surface(support).GetType() == GeomAbs_Plane
             if sup in with_corner:
                 ms: MergedSurface | str = FITTED if planar else "corner pieces on a curved face"
             else:
@@ -353,15 +355,18 @@ def _surfaces(specs, medials, fmap, emap, kept, btol, corners) -> dict[int, Merg
             return surfaces
 
 
-def _fitted(split, g: Group, fmap, cache, diag: float, tol: float) -> FittedSurface | str:  # type: ignore[no-untyped-def]
-    """The fitted surface of group ``g`` (cached by its support and its members' origins)."""
+def _fitted(split, g: Group, fmap, cache, diag: float, tol: float, probe: bool = False):  # type: ignore[no-untyped-def]
+    """The fitted surface of group ``g`` (cached by its support and its members' origins);
+    with ``probe`` the cheap height-field check only (see :func:`graph_surface`)."""
     assert g.support is not None
-    key = (g.support, *sorted(split.origin[k] for k in g.members))
+    key = (int(probe), g.support, *sorted(split.origin[k] for k in g.members))
     if key not in cache:
         members = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
         plane = TopoDS.Face(fmap.FindKey(g.support + 1))
         try:
-            cache[key] = graph_surface(plane, members, FIT_SHARE * tol * diag, BUILD_TOL * diag)
+            cache[key] = graph_surface(
+                plane, members, FIT_SHARE * tol * diag, BUILD_TOL * diag, probe=probe
+            )
         except Exception as err:  # OCCT failures while sampling the pieces
             cache[key] = f"fitting failed ({type(err).__name__}: {err})"
     return cache[key]
@@ -370,42 +375,67 @@ def _fitted(split, g: Group, fmap, cache, diag: float, tol: float) -> FittedSurf
 def _fit_pass(
     work, specs, corners, arcs, medials, surfaces, fmap, kept, diag, tol, say, cache
 ) -> None:  # type: ignore[no-untyped-def]
-    """Fit every fitted face once on the full split; fillets of faces whose fit fails are
-    kept (with the reason) before the rebuild is tried, so bisection is not spent on them."""
-    for _ in range(len(surfaces) + 1):
-        fitted = [s for s, v in surfaces.items() if v == FITTED]
-        if not fitted or not specs:
-            return
-        tools = [medials[f].edge for f in specs] + [e for c in corners for e in arcs[c]]
-        try:
-            split = split_along(work, tools)
-            groups = build_groups(
-                split,
-                {f: s.supporting for f, s in specs.items()},
-                {c: cs.supporting for c, cs in corners.items()},
-            )
-        except CadError:
-            return  # the attempt will report it
-        bad: dict[int, str] = {}
-        for g in groups:
-            if g.support is not None and g.support in fitted:
-                r = _fitted(split, g, fmap, cache, diag, tol)
-                if isinstance(r, str):
-                    bad[g.support] = r
-        if not bad:
-            return
-        say(f"fitted surfaces failed on faces {sorted(bad)}: their fillets are kept")
-        for sup, why in bad.items():
-            surfaces.pop(sup, None)
-            for f, s in list(specs.items()):
-                if sup in s.supporting:
-                    specs.pop(f)
-                    kept.setdefault(f, f"supporting face {sup}: {why}")
-        _cascade(specs, corners, kept)
-        live = {x for s in specs.values() for x in s.supporting}
-        for sup in list(surfaces):
-            if sup not in live:
-                surfaces.pop(sup)
+    """Check every fitted face on the full split, first cheaply (is it a height field at
+    all?) until no face fails, then with the full fit; fillets of faces that fail are kept
+    (with the reason) before the rebuild is tried, so bisection is not spent on them."""
+    for probe in (True, False):
+        for _ in range(len(surfaces) + 1):
+            if not _fit_round(
+                work,
+                specs,
+                corners,
+                arcs,
+                medials,
+                surfaces,
+                fmap,
+                kept,
+                diag,
+                tol,
+                say,
+                cache,
+                probe,
+            ):
+                break
+
+
+def _fit_round(
+    work, specs, corners, arcs, medials, surfaces, fmap, kept, diag, tol, say, cache, probe
+) -> bool:  # type: ignore[no-untyped-def]
+    """One round of :func:`_fit_pass`; True when some face failed (and was dropped)."""
+    fitted = [s for s, v in surfaces.items() if v == FITTED]
+    if not fitted or not specs:
+        return False
+    tools = [medials[f].edge for f in specs] + [e for c in corners for e in arcs[c]]
+    try:
+        split = split_along(work, tools)
+        groups = build_groups(
+            split,
+            {f: s.supporting for f, s in specs.items()},
+            {c: cs.supporting for c, cs in corners.items()},
+        )
+    except CadError:
+        return False  # the attempt will report it
+    bad: dict[int, str] = {}
+    for g in groups:
+        if g.support is not None and g.support in fitted:
+            r = _fitted(split, g, fmap, cache, diag, tol, probe)
+            if isinstance(r, str):
+                bad[g.support] = r
+    if not bad:
+        return False
+    say(f"fitted surfaces failed on faces {sorted(bad)}: their fillets are kept")
+    for sup, why in bad.items():
+        surfaces.pop(sup, None)
+        for f, s in list(specs.items()):
+            if sup in s.supporting:
+                specs.pop(f)
+                kept.setdefault(f, f"supporting face {sup}: {why}")
+    _cascade(specs, corners, kept)
+    live = {x for s in specs.values() for x in s.supporting}
+    for sup in list(surfaces):
+        if sup not in live:
+            surfaces.pop(sup)
+    return True
 
 
 def _attempt(
