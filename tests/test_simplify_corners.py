@@ -107,3 +107,33 @@ def _spheres(part):
         for i in range(1, fmap.Size() + 1)
         if BRepAdaptor_Surface(TopoDS.Face(fmap.FindKey(i))).GetType() == GeomAbs_Sphere
     }
+
+
+def test_torus_heights_match_occt_intersections():
+    """The batched line-torus quartic against OCCT's own curve/surface intersection."""
+    from matplotlib.path import Path
+    from OCP.Geom import Geom_Line, Geom_ToroidalSurface
+    from OCP.GeomAPI import GeomAPI_IntCS
+    from OCP.gp import gp_Ax3, gp_Dir, gp_Pnt
+
+    from medax.cad.simplify.fitted import _heights, _Member
+
+    centre, axis, big, small = np.array([1.0, 2.0, 3.0]), np.array([0.0, 0.0, 1.0]), 10.0, 2.0
+    dummy = Path(np.zeros((3, 2)))
+    m = _Member("torus", centre, axis, small, dummy, (), np.zeros((1, 2)), big)
+    n = np.array([0.0, 0.0, -1.0])  # looking down onto the torus' top
+    rng = np.random.default_rng(5)
+    ang = rng.uniform(0, 2 * np.pi, 200)
+    rad = big + rng.uniform(-1.99, 1.99, 200)
+    q = centre + np.column_stack([rad * np.cos(ang), rad * np.sin(ang), np.full(200, 5.0)])
+    t, ok = _heights(m, q, n)
+    torus = Geom_ToroidalSurface(gp_Ax3(gp_Pnt(*centre), gp_Dir(*axis)), big, small)
+    for qi, ti in zip(q, t, strict=True):
+        inter = GeomAPI_IntCS(Geom_Line(gp_Pnt(*qi), gp_Dir(*n)), torus)
+        hits = [qi[2] - inter.Point(k).Z() for k in range(1, inter.NbPoints() + 1)]
+        assert abs(ti - min(hits, key=abs)) <= 1e-9
+    # steep hits (the tube's normal more than 70 degrees from n) are flagged, not used:
+    # the tube's slope angle at offset s from its crest is arcsin(s / small)
+    slope = np.degrees(np.arcsin(np.abs(rad - big) / small))
+    assert np.all(ok[slope < 69.0]) and not np.any(ok[slope > 71.0])
+    assert ok.sum() > 10 and (~ok).sum() > 3
