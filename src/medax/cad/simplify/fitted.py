@@ -318,8 +318,8 @@ def graph_surface(
         return "the merged face is not a height field over its plane (steep or undefined)"
     if fit.error > fit_tol and not probe:
         return (
-            f"fitted surface error {fit.error:.2e} above {fit_tol:.2e} (the pieces do not form "
-            "one smooth height field over the plane, e.g. a step at a cross edge)"
+            f"fitted surface error {fit.error:.2e} above {fit_tol:.2e} (curvature jumps off the "
+            "knot lines, e.g. along circles, or a step at a cross edge)"
         )
     return FittedSurface(_bspline_surface(fit, o, ex, ey, n), fit.error, fit.spacing)
 

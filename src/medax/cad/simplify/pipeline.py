@@ -138,6 +138,37 @@ class _Attempt:
     fit_error: float = 0.0
 
 
+@dataclass
+class _Job:
+    """State shared by the steps of one :func:`simplify` run: the working copy and its
+    maps, the medial curves, corner arcs, merged surfaces, fitted-surface cache, the fillets
+    still tried (``specs``), the blends kept with their reasons, and tolerances."""
+
+    work: Any
+    fmap: Any
+    emap: Any
+    diag: float
+    vol0: float
+    tol: float
+    say: Callable[[str], None]
+    kept: dict[int, str]
+    medials: dict[int, Medial] = field(default_factory=dict)
+    specs: dict[int, FilletSpec] = field(default_factory=dict)
+    corners: dict[int, CornerSpec] = field(default_factory=dict)
+    arcs: dict[int, list[Any]] = field(default_factory=dict)
+    surfaces: dict[int, MergedSurface | str] = field(default_factory=dict)
+    cache: dict[tuple[int, ...], FittedSurface | str] = field(default_factory=dict)
+
+    @property
+    def btol(self) -> float:
+        """Length tolerance of the construction."""
+        return BUILD_TOL * self.diag
+
+    def face(self, i: int) -> Any:
+        """Face ``i`` (0-based) of the working solid."""
+        return TopoDS.Face(self.fmap.FindKey(i + 1))
+
+
 def simplify(
     shape: Any,
     blends: BlendInput,
@@ -152,39 +183,41 @@ def simplify(
     t0 = time.perf_counter()
     say = progress or (lambda msg: log.info(msg))
     work = BRepBuilderAPI_Copy(shape, True, False).Shape()
-    diag = diagonal(work)
-    btol = BUILD_TOL * diag
     fmap = shape_map(work, TopAbs_FACE)
-    emap = shape_map(work, TopAbs_EDGE)
-    nfaces = fmap.Size()
-    vol0 = volume(work)
-    kept: dict[int, str] = dict(blends.refused)
-    medials: dict[int, Medial] = {}
+    job = _Job(
+        work,
+        fmap,
+        shape_map(work, TopAbs_EDGE),
+        diagonal(work),
+        volume(work),
+        tol,
+        say,
+        dict(blends.refused),
+    )
+    nfaces, vol0, kept, diag = fmap.Size(), job.vol0, job.kept, job.diag
     for spec in blends.fillets:
         m = medial_curve(
-            TopoDS.Face(fmap.FindKey(spec.face + 1)),
-            *[TopoDS.Edge(emap.FindKey(i + 1)) for i in spec.smooth_edges],
+            job.face(spec.face),
+            *[TopoDS.Edge(job.emap.FindKey(i + 1)) for i in spec.smooth_edges],
         )
         if isinstance(m, str):
             kept[spec.face] = m
         else:
-            medials[spec.face] = m
-    corners, arcs = _corners(blends, medials, fmap, kept)
-    _keep_next_to_corners(work, blends, medials, kept)
-    say(f"{len(medials)} fillets with a medial curve, {len(corners)} corner blends split")
-    specs = {s.face: s for s in blends.fillets if s.face in medials}
-    _cascade(specs, corners, kept)
-    surfaces = _surfaces(specs, medials, fmap, emap, kept, btol, corners)
-    n_fit = sum(1 for v in surfaces.values() if isinstance(v, str))
-    say(f"{len(specs)} fillets on {len(surfaces)} merged faces ({n_fit} fitted)")
-    cache: dict[tuple[int, ...], FittedSurface | str] = {}
+            job.medials[spec.face] = m
+    _corners(job, blends)
+    _keep_next_to_corners(work, blends, job.medials, kept)
+    say(f"{len(job.medials)} fillets with a medial curve, {len(job.corners)} corner blends split")
+    job.specs = {s.face: s for s in blends.fillets if s.face in job.medials}
+    _refresh_surfaces(job)
+    n_fit = sum(1 for v in job.surfaces.values() if v == FITTED)
+    say(f"{len(job.specs)} fillets on {len(job.surfaces)} merged faces ({n_fit} fitted)")
 
     def attempt(sel: dict[int, FilletSpec]) -> _Attempt | str:
-        csel = {c: cs for c, cs in corners.items() if set(cs.fillets) <= set(sel)}
-        return _attempt(work, sel, csel, arcs, medials, surfaces, fmap, diag, vol0, tol, say, cache)
+        return _attempt(job, sel)
 
     if n_fit:
-        _fit_pass(work, specs, corners, arcs, medials, surfaces, fmap, kept, diag, tol, say, cache)
+        _fit_pass(job)
+    specs, corners = job.specs, job.corners
     result = attempt(specs) if specs else None
     if isinstance(result, str):
         say(f"rebuild with all fillets failed ({result}); bisecting")
@@ -230,7 +263,7 @@ def simplify(
         diagonal=diag,
         face_groups=groups_out,
         time_s=time.perf_counter() - t0,
-        medial_error=max((medials[f].error for f in removed if f in medials), default=0.0),
+        medial_error=max((job.medials[f].error for f in removed if f in job.medials), default=0.0),
         fit_error=result.fit_error if result is not None else 0.0,
         notes=notes,
     )
@@ -260,33 +293,30 @@ def _keep_next_to_corners(shape, blends, medials, kept) -> None:  # type: ignore
             kept[spec.face] = f"meets blend {min(near)}, which is kept"
 
 
-def _corners(blends, medials, fmap, kept) -> tuple[dict[int, CornerSpec], dict[int, list[Any]]]:  # type: ignore[no-untyped-def]
+def _corners(job: _Job, blends: BlendInput) -> None:
     """Corner blends that can be split (a sphere between planes, every fillet meeting it
-    with a medial curve) and their split arcs; the others go to ``kept``."""
+    with a medial curve) and their split arcs into ``job``; the others go to ``job.kept``."""
     by_face = {s.face: s for s in blends.fillets}
-    corners: dict[int, CornerSpec] = {}
-    arcs: dict[int, list[Any]] = {}
     for cs in blends.corners:
-        missing = [f for f in cs.fillets if f not in medials]
+        missing = [f for f in cs.fillets if f not in job.medials]
         if missing:
-            kept[cs.face] = f"corner blend: fillets {missing} meeting it are kept"
+            job.kept[cs.face] = f"corner blend: fillets {missing} meeting it are kept"
             continue
         normals = {}
         for sup in cs.supporting:
-            n = plane_normal(TopoDS.Face(fmap.FindKey(sup + 1)))
+            n = plane_normal(job.face(sup))
             if n is None:
                 break
             normals[sup] = n
         if len(normals) != len(cs.supporting):
-            kept[cs.face] = "corner blend between faces that are not planes (not supported)"
+            job.kept[cs.face] = "corner blend between faces that are not planes (not supported)"
             continue
         pairs = [by_face[f].supporting for f in cs.fillets]
-        r = corner_arcs(TopoDS.Face(fmap.FindKey(cs.face + 1)), pairs, normals)
+        r = corner_arcs(job.face(cs.face), pairs, normals)
         if isinstance(r, str):
-            kept[cs.face] = r
+            job.kept[cs.face] = r
             continue
-        corners[cs.face], arcs[cs.face] = cs, r[0]
-    return corners, arcs
+        job.corners[cs.face], job.arcs[cs.face] = cs, r[0]
 
 
 def _cascade(specs: dict[int, FilletSpec], corners: dict[int, CornerSpec], kept) -> None:  # type: ignore[no-untyped-def]
@@ -316,30 +346,29 @@ def _halves_of(specs: dict[int, FilletSpec]) -> dict[int, list[tuple[int, int]]]
     return out
 
 
-def _surfaces(specs, medials, fmap, emap, kept, btol, corners) -> dict[int, MergedSurface | str]:  # type: ignore[no-untyped-def]
-    """Merged surface per supporting face: an exact one, or ``FITTED`` for a plane whose
-    pieces have none (fitted per attempt); fillets of other faces move to ``kept``."""
+def _refresh_surfaces(job: _Job) -> None:
+    """Merged surface per supporting face into ``job.surfaces``: an exact one, or
+    ``FITTED`` for a plane whose pieces have none (fitted per attempt); fillets of other
+    faces move to ``job.kept``. Exact surfaces depend on which halves a face gets, so this
+    runs again whenever fillets are dropped."""
+    specs, kept = job.specs, job.kept
     while True:
-        _cascade(specs, corners, kept)
-        with_corner = {s for cs in corners.values() for s in cs.supporting}
+        _cascade(specs, job.corners, kept)
+        with_corner = {s for cs in job.corners.values() for s in cs.supporting}
         surfaces: dict[int, MergedSurface | str] = {}
         failed = False
         for sup, hs in _halves_of(specs).items():
-            support = TopoDS.Face(fmap.FindKey(sup + 1))
+            support = job.face(sup)
             planar = BRepAdaptor_Surface(support).GetType() == GeomAbs_Plane
             if sup in with_corner:
                 ms: MergedSurface | str = FITTED if planar else "corner pieces on a curved face"
             else:
                 halves = [
-                    Half(
-                        TopoDS.Face(fmap.FindKey(f + 1)),
-                        medials[f],
-                        TopoDS.Edge(emap.FindKey(e + 1)),
-                    )
+                    Half(job.face(f), job.medials[f], TopoDS.Edge(job.emap.FindKey(e + 1)))
                     for f, e in hs
                 ]
                 try:
-                    ms = merged_surface(support, halves, btol)
+                    ms = merged_surface(support, halves, job.btol)
                 except (ValueError, RuntimeError) as err:  # OCCT construction failures
                     ms = f"surface construction failed: {err}"
                 if isinstance(ms, str) and planar:
@@ -352,131 +381,113 @@ def _surfaces(specs, medials, fmap, emap, kept, btol, corners) -> dict[int, Merg
                 break
             surfaces[sup] = ms
         if not failed:
-            return surfaces
+            job.surfaces = surfaces
+            return
 
 
-def _fitted(split, g: Group, fmap, cache, diag: float, tol: float, probe: bool = False):  # type: ignore[no-untyped-def]
+def _fitted(job: _Job, split: Any, g: Group, probe: bool = False) -> FittedSurface | str:
     """The fitted surface of group ``g`` (cached by its support and its members' origins);
     with ``probe`` the cheap height-field check only (see :func:`graph_surface`)."""
     assert g.support is not None
     key = (int(probe), g.support, *sorted(split.origin[k] for k in g.members))
-    if key not in cache:
+    if key not in job.cache:
         members = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
-        plane = TopoDS.Face(fmap.FindKey(g.support + 1))
+        fit_tol = FIT_SHARE * job.tol * job.diag
         try:
-            cache[key] = graph_surface(
-                plane, members, FIT_SHARE * tol * diag, BUILD_TOL * diag, probe=probe
+            job.cache[key] = graph_surface(
+                job.face(g.support), members, fit_tol, job.btol, probe=probe
             )
         except Exception as err:  # OCCT failures while sampling the pieces
-            cache[key] = f"fitting failed ({type(err).__name__}: {err})"
-    return cache[key]
+            job.cache[key] = f"fitting failed ({type(err).__name__}: {err})"
+    return job.cache[key]
 
 
-def _fit_pass(
-    work, specs, corners, arcs, medials, surfaces, fmap, kept, diag, tol, say, cache
-) -> None:  # type: ignore[no-untyped-def]
+def _split(job: _Job, sel: dict[int, FilletSpec], csel: dict[int, CornerSpec]) -> Any:
+    """The working solid split along the medial curves of ``sel`` and the arcs of ``csel``,
+    and its groups."""
+    tools = [job.medials[f].edge for f in sel] + [e for c in csel for e in job.arcs[c]]
+    split = split_along(job.work, tools)
+    groups = build_groups(
+        split,
+        {f: s.supporting for f, s in sel.items()},
+        {c: cs.supporting for c, cs in csel.items()},
+    )
+    return split, groups
+
+
+def _fit_pass(job: _Job) -> None:
     """Check every fitted face on the full split, first cheaply (is it a height field at
     all?) until no face fails, then with the full fit; fillets of faces that fail are kept
     (with the reason) before the rebuild is tried, so bisection is not spent on them."""
     for probe in (True, False):
-        for _ in range(len(surfaces) + 1):
-            if not _fit_round(
-                work,
-                specs,
-                corners,
-                arcs,
-                medials,
-                surfaces,
-                fmap,
-                kept,
-                diag,
-                tol,
-                say,
-                cache,
-                probe,
-            ):
+        for _ in range(len(job.surfaces) + 1):
+            if not _fit_round(job, probe):
                 break
+            _refresh_surfaces(job)
 
 
-def _fit_round(
-    work, specs, corners, arcs, medials, surfaces, fmap, kept, diag, tol, say, cache, probe
-) -> bool:  # type: ignore[no-untyped-def]
+def _fit_round(job: _Job, probe: bool) -> bool:
     """One round of :func:`_fit_pass`; True when some face failed (and was dropped)."""
-    fitted = [s for s, v in surfaces.items() if v == FITTED]
-    if not fitted or not specs:
+    fitted = {s for s, v in job.surfaces.items() if v == FITTED}
+    if not fitted or not job.specs:
         return False
-    tools = [medials[f].edge for f in specs] + [e for c in corners for e in arcs[c]]
     try:
-        split = split_along(work, tools)
-        groups = build_groups(
-            split,
-            {f: s.supporting for f, s in specs.items()},
-            {c: cs.supporting for c, cs in corners.items()},
-        )
+        split, groups = _split(job, job.specs, job.corners)
     except CadError:
         return False  # the attempt will report it
     bad: dict[int, str] = {}
     for g in groups:
         if g.support is not None and g.support in fitted:
-            r = _fitted(split, g, fmap, cache, diag, tol, probe)
+            r = _fitted(job, split, g, probe)
             if isinstance(r, str):
                 bad[g.support] = r
     if not bad:
         return False
-    say(f"fitted surfaces failed on faces {sorted(bad)}: their fillets are kept")
+    job.say(f"fitted surfaces failed on faces {sorted(bad)}: their fillets are kept")
     for sup, why in bad.items():
-        surfaces.pop(sup, None)
-        for f, s in list(specs.items()):
+        for f, s in list(job.specs.items()):
             if sup in s.supporting:
-                specs.pop(f)
-                kept.setdefault(f, f"supporting face {sup}: {why}")
-    _cascade(specs, corners, kept)
-    live = {x for s in specs.values() for x in s.supporting}
-    for sup in list(surfaces):
-        if sup not in live:
-            surfaces.pop(sup)
+                job.specs.pop(f)
+                job.kept.setdefault(f, f"supporting face {sup}: {why}")
+    _cascade(job.specs, job.corners, job.kept)
     return True
 
 
-def _attempt(
-    work, sel, csel, arcs, medials, surfaces, fmap, diag, vol0, tol, say, cache
-) -> _Attempt | str:  # type: ignore[no-untyped-def]
+def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
+    """Split, merge and rebuild with the fillets ``sel`` (and the corners all of whose
+    fillets are in it), then validate; the reason (str) when any step or check fails."""
+    csel = {c: cs for c, cs in job.corners.items() if set(cs.fillets) <= set(sel)}
+    diag, tol = job.diag, job.tol
     fit_err = 0.0
     try:
-        say(f"splitting {len(sel)} fillets and {len(csel)} corner blends along medial curves")
-        tools = [medials[f].edge for f in sel] + [e for c in csel for e in arcs[c]]
-        split = split_along(work, tools)
-        groups = build_groups(
-            split,
-            {f: s.supporting for f, s in sel.items()},
-            {c: cs.supporting for c, cs in csel.items()},
-        )
+        job.say(f"splitting {len(sel)} fillets and {len(csel)} corner blends along medial curves")
+        split, groups = _split(job, sel, csel)
         used: dict[int, Any] = {}
         for g in groups:
             if g.support is None:
                 continue
-            ms = surfaces[g.support]
-            if ms == FITTED:
-                fs = _fitted(split, g, fmap, cache, diag, tol)
+            ms = job.surfaces[g.support]
+            if isinstance(ms, str):
+                fs = _fitted(job, split, g)
                 if isinstance(fs, str):
                     return f"face {g.support}: {fs}"
                 used[g.support] = fs.surface
                 fit_err = max(fit_err, fs.error)
             else:
                 used[g.support] = ms.surface
-        say(f"rebuilding: {len(groups)} faces")
-        shape, faces = build_solid(split, groups, used, BUILD_TOL * diag)
+        job.say(f"rebuilding: {len(groups)} faces")
+        shape, faces = build_solid(split, groups, used, job.btol)
     except CadError as err:
         return str(err)
     except Exception as err:  # OCCT Standard_Failure subclasses, translated here
         return f"OCCT failed while rebuilding ({type(err).__name__}: {err})"
-    say("validating (analyzer, shell, volume, deviation both ways)")
+    job.say("validating (analyzer, shell, volume, deviation both ways)")
     c = check(shape)
     if not c.valid:
         return "rebuilt solid not valid (BRepCheck_Analyzer)"
     if c.shells != 1 or not c.closed:
         return f"rebuilt solid has {c.shells} shells / free edges"
-    dv, why = volume_change(shape, vol0, VOLUME_TOL)
+    dv, why = volume_change(shape, job.vol0, VOLUME_TOL)
     if why:
         return why
     dev = 0.0
@@ -484,16 +495,16 @@ def _attempt(
     for g, face in zip(groups, faces, strict=True):
         if g.support is None:
             continue
-        ms = surfaces[g.support]
-        kinds[g.id] = FITTED if ms == FITTED else ms.kind
-        n = FITTED_DEVIATION_SAMPLES if ms == FITTED else DEVIATION_SAMPLES
+        ms = job.surfaces[g.support]
+        kinds[g.id] = FITTED if isinstance(ms, str) else ms.kind
+        n = FITTED_DEVIATION_SAMPLES if isinstance(ms, str) else DEVIATION_SAMPLES
         old = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
         dev = max(dev, *deviation(old, face, n=n, enough=1e-3 * tol * diag))
     if dev > tol * diag:
         return f"surface deviation {dev / diag:.2e} x diagonal (> {tol:g})"
     halves_origin = {g.id: [split.origin[k] for k in g.halves] for g in groups}
     return _Attempt(
-        shape, groups, faces, dev, vol0 * (1 + dv), split.origin, halves_origin, kinds, fit_err
+        shape, groups, faces, dev, job.vol0 * (1 + dv), split.origin, halves_origin, kinds, fit_err
     )
 
 

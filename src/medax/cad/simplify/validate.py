@@ -88,8 +88,10 @@ def volume_change(shape: Any, before: float, tol: float) -> tuple[float, str]:
         if max(abs(d_gk), abs(d_ad)) <= tol:
             return d_ad, ""
     # on faces of extrusions and revolutions the integrators are unreliable (see
-    # :func:`volumes`): go to the NURBS copy at once
-    for nurbs in (True,) if _has_swept_faces(shape) else (False, True):
+    # :func:`volumes`): the NURBS copy first, the faces as built only when the two disagree
+    # there (the 64-boss grid: Gauss-Kronrod 1.3e-4 off on the copy, both within 1e-7 on
+    # the faces as built)
+    for nurbs in (True, False) if _has_swept_faces(shape) else (False, True):
         gk, ad = volumes(shape, nurbs, 1e-2 * tol if nurbs else VOLUME_EPS)
         d_gk, d_ad = (gk - before) / before, (ad - before) / before
         if max(abs(d_gk), abs(d_ad)) <= tol:
