@@ -47,7 +47,7 @@ BUILD_TOL = 1e-7
 #: A fitted surface must be within this share of the deviation tolerance (measured).
 FIT_SHARE = 0.1
 #: Deviation samples per face (n x n) for groups on a fitted surface.
-FITTED_DEVIATION_SAMPLES = 16
+FITTED_DEVIATION_SAMPLES = 12
 #: Marker in the surface table: this supporting plane gets a fitted surface per attempt.
 FITTED = "fitted"
 
