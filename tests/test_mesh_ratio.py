@@ -203,3 +203,59 @@ def test_arc_radial_distances_match_closest_points(sweep):
     c = arc.closest(x)
     np.testing.assert_allclose(d, c.distance, atol=1e-12)
     np.testing.assert_allclose(u, (x - c.foot) / c.distance[:, None], atol=1e-9)
+
+
+def _planar_cases():
+    """(region, weighting) pairs covering every closed-form term: clamped segments, radial
+    arcs (sweeps below and above pi), whole lines of an angle pair (meeting and parallel)."""
+    return [
+        (REGIONS["trapezoid"], "auto"),
+        (REGIONS["trapezoid"], "angle"),
+        (REGIONS["arcs"], "auto"),
+        (REGIONS["annulus_sector"], "auto"),
+        (sector(2.0, 7.0, 150.0), "auto"),
+        (sector(5.0, 5.1, 270.0), "auto"),
+    ]
+
+
+@pytest.mark.parametrize("case", range(6))
+def test_planar_field_equals_the_general_field(case):
+    """The closed-form field of line and arc regions gives the values and gradients of
+    evaluate_field, at points inside and around the region (feet clamped at segment ends,
+    outside an arc's angle, on either side of a whole line)."""
+    r, weighting = _planar_cases()[case]
+    kinds = (rf.pair_weighting(r, 0, 2, weighting), rf.pair_weighting(r, 1, 3, weighting))
+    assert rf.PlanarField.supports(r, kinds)
+    field = rf.PlanarField(r, kinds)
+    sides = rf.SideDistances(r, 0, kinds)
+    lo, hi = r.boundary.min(axis=0), r.boundary.max(axis=0)
+    rng = np.random.default_rng(case)
+    p = rng.uniform(lo - 0.3 * (hi - lo), hi + 0.3 * (hi - lo), (3000, 2))
+    ratio = rng.uniform(0.0, 1.0, 3000)
+    x, y = p[:, 0].copy(), p[:, 1].copy()
+    for pair, (a, b) in enumerate(((0, 2), (1, 3))):
+        g, grad, _ = rf.evaluate_field(sides, a, b, ratio, p, kinds[pair])
+        fg, fx, fy = field.pair(pair, x, y, field.weights(pair, ratio))
+        np.testing.assert_allclose(fg, g, rtol=0, atol=1e-12 * r.diagonal)
+        np.testing.assert_allclose(np.column_stack((fx, fy)), grad, rtol=0, atol=1e-12)
+
+
+def test_planar_field_only_for_closed_form_sides():
+    r = REGIONS["wavy"]
+    assert not rf.PlanarField.supports(r, ("distance", "distance"))
+    assert not rf.PlanarField.supports(REGIONS["arcs"], ("angle", "angle"))  # foot angle varies
+    c = np.array([[0.2, 0], [2.5, 0], [2.0, 3], [0.0, 2.5]], float)
+    cyl = Region.build([Line(c[k], c[(k + 1) % 4]) for k in range(4)], "c", embedding=Cylinder(2.0))
+    assert not rf.PlanarField.supports(cyl, ("distance", "distance"))
+
+
+@pytest.mark.parametrize("name", ["trapezoid", "arcs", "annulus_sector"])
+def test_planar_solve_gives_the_general_nodes(name, monkeypatch):
+    """The closed-form, blocked solve finds the nodes of the general solve (coarse start,
+    several blocks)."""
+    r = REGIONS[name]
+    monkeypatch.setattr(rg, "_BLOCK", 1000)
+    fast = mesh_region(r, (60, 52))
+    monkeypatch.setattr(rf.PlanarField, "supports", staticmethod(lambda region, kinds: False))
+    slow = mesh_region(r, (60, 52))
+    assert np.abs(fast.params - slow.params).max() <= 1e-12 * r.diagonal

@@ -30,6 +30,7 @@ from medax.geometry.region import Region
 from medax.mesh.grid import boundary_indices
 from medax.mesh.ratio_field import (
     WEIGHTINGS,
+    PlanarField,
     SideDistances,
     angular_ratio,
     evaluate_field,
@@ -44,6 +45,7 @@ _GLOBAL_ROUNDS = 3  # re-solves after the global foot check
 _COARSE_MIN = 12  # grids with both counts >= 4x this start from a coarser grid
 _FOOT_JUMP = 0.05  # coarse-cell spread of foot parameters taken as a jump
 _TRACK_STEP = 1e-3  # Newton moves (x diagonal) below which feet are tracked, not searched
+_BLOCK = 32768  # nodes solved together on the closed-form path (temporaries stay in cache)
 
 
 def side_nodes(
@@ -251,6 +253,13 @@ def _solve(
     feet and a re-solve of the rows whose feet were wrong. Returns nodes, feet, counts."""
     n = p.shape[0]
     counts = {"newton_iterations": 0, "global_resolved": 0, "max_residual": 0.0}
+    if n > 0 and PlanarField.supports(region, kinds):
+        # every foot in closed form: nothing to track or certify
+        p, counts["newton_iterations"], res = _solve_planar(
+            PlanarField(region, kinds), p, ra, rb, tol, region.diagonal
+        )
+        _check_residual(region, res, ra, rb, tol, counts)
+        return p, [np.empty(0)] * 4, counts
     sides = SideDistances(region, n, kinds)
     if n == 0:
         return p, sides.t, counts
@@ -273,6 +282,19 @@ def _solve(
         counts["global_resolved"] += int(rows.size)
         log.debug("region '%s': %d nodes re-solved from global feet", region.name, rows.size)
     # the feet of every row are now the global ones (to tol): res is the true residual
+    _check_residual(region, res, ra, rb, tol, counts)
+    return p, sides.t, counts
+
+
+def _check_residual(
+    region: Region,
+    res: FloatArray,
+    ra: FloatArray,
+    rb: FloatArray,
+    tol: float,
+    counts: dict[str, float],
+) -> None:
+    """Store the worst residual in ``counts``; raise if a node did not converge."""
     worst = float(res.max())
     counts["max_residual"] = worst
     if worst > 1e3 * tol or not np.isfinite(worst):
@@ -283,7 +305,87 @@ def _solve(
             f"{rb[bad]:.4g} of (S1, S3) do not cross (Newton residual {worst / diag:.2e} x "
             "diagonal); the region is too distorted for a structured grid"
         )
-    return p, sides.t, counts
+
+
+def _solve_planar(
+    field: PlanarField, p: FloatArray, ra: FloatArray, rb: FloatArray, tol: float, diag: float
+) -> tuple[FloatArray, int, FloatArray]:
+    """:func:`_newton` on the closed-form field, blocks of ``_BLOCK`` nodes at a time (each
+    node's iteration is its own: blocking changes no result, only keeps the temporaries
+    small). Returns nodes, iterations (the most of any block) and residuals."""
+    n = p.shape[0]
+    px, py = p[:, 0].copy(), p[:, 1].copy()
+    res = np.empty(n)
+    wa, wb = field.weights(0, ra), field.weights(1, rb)
+    iters = 0
+    for s in range(0, n, _BLOCK):
+        e = min(n, s + _BLOCK)
+        it, res[s:e] = _newton_planar(
+            field, px[s:e], py[s:e], tuple(w[s:e] for w in wa), tuple(w[s:e] for w in wb),
+            tol, diag,
+        )  # fmt: skip
+        iters = max(iters, it)
+    return np.column_stack((px, py)), iters, res
+
+
+def _newton_planar(
+    field: PlanarField,
+    px: FloatArray,
+    py: FloatArray,
+    wa: tuple[FloatArray, ...],
+    wb: tuple[FloatArray, ...],
+    tol: float,
+    diag: float,
+) -> tuple[int, FloatArray]:
+    """Damped Newton of :func:`_newton` (same steps, same backtracking on the residual
+    ``hypot(g_a, g_b)``) on coordinates ``px``, ``py`` (updated in place), weights of the
+    rows ``wa``, ``wb`` (:meth:`PlanarField.weights`). Returns iterations, residuals."""
+    ga, gax, gay = field.pair(0, px, py, wa)
+    gb, gbx, gby = field.pair(1, px, py, wb)
+    res = np.sqrt(ga * ga + gb * gb)
+    max_step = 0.1 * diag
+    active = np.arange(px.size)
+    it = 0
+    while it < _NEWTON_ITERS:
+        active = active[res[active] > tol]
+        if active.size == 0:
+            break
+        it += 1
+        a_ga, a_gb = ga[active], gb[active]
+        a_ax, a_ay, a_bx, a_by = gax[active], gay[active], gbx[active], gby[active]
+        det = a_ax * a_by - a_ay * a_bx
+        safe = np.where(np.abs(det) > 1e-300, det, 1e-300)
+        sx = (a_ay * a_gb - a_by * a_ga) / safe
+        sy = (a_bx * a_ga - a_ax * a_gb) / safe
+        norm = np.sqrt(sx * sx + sy * sy)
+        cap = np.minimum(1.0, max_step / np.maximum(norm, 1e-300))
+        sx *= cap
+        sy *= cap
+        lam = np.ones(active.size)
+        todo = np.arange(active.size)
+        for _ in range(12):  # backtracking on the residual
+            sel = active[todo]
+            lt = lam[todo]
+            qx = px[sel] + lt * sx[todo]
+            qy = py[sel] + lt * sy[todo]
+            na, nax, nay = field.pair(0, qx, qy, tuple(w[sel] for w in wa))
+            nb, nbx, nby = field.pair(1, qx, qy, tuple(w[sel] for w in wb))
+            nres = np.sqrt(na * na + nb * nb)
+            ok = nres < res[sel] * (1.0 - 1e-4 * lt) + tol
+            if ok.all():
+                acc = sel
+            else:
+                acc = sel[ok]
+                qx, qy, nres = qx[ok], qy[ok], nres[ok]
+                na, nax, nay, nb, nbx, nby = (v[ok] for v in (na, nax, nay, nb, nbx, nby))
+            px[acc], py[acc], res[acc] = qx, qy, nres
+            ga[acc], gax[acc], gay[acc] = na, nax, nay
+            gb[acc], gbx[acc], gby[acc] = nb, nbx, nby
+            todo = todo[~ok]
+            if todo.size == 0:
+                break
+            lam[todo] *= 0.5
+    return it, res
 
 
 def _wrong_feet(sides: SideDistances, p: FloatArray, tol: float, rows: np.ndarray) -> np.ndarray:
