@@ -279,27 +279,28 @@ def _grad_theta(
 
 
 class PlanarField:
-    """Both equations of the ratio grid at once, in closed form, for planar regions whose
-    four sides all measure distances in closed form: line segments (clamped feet), arcs of a
-    distance-weighted pair (radial), whole lines of an angle-weighted pair of lines (the
-    foot angle is then one of two constants). The same field as :func:`evaluate_field`
-    (same formulas, same conventions at zero distance) on coordinates held as two
-    contiguous arrays ``x``, ``y``: no ``(n, 2)`` columns, no foot parameters, the hot
-    path of meshes of line and arc regions.
+    """Both equations of the ratio grid in closed form, for planar regions whose four sides
+    all measure distances in closed form: line segments (clamped feet), arcs of a
+    distance-weighted pair (radial, or the nearer end outside the arc's angle), the whole
+    lines of an angle-weighted pair of lines (the foot angle is then one of two constants).
+    The field of :func:`evaluate_field` (same formulas, same conventions at zero distance)
+    on coordinates held as two contiguous arrays ``x``, ``y``, each side's weight folded
+    into its term: no ``(n, 2)`` columns, no foot parameters. The hot path of meshes of
+    line and arc regions.
     """
 
     def __init__(self, region: Region, kinds: tuple[str, str]) -> None:
-        assert PlanarField.supports(region, kinds)
+        if not PlanarField.supports(region, kinds):
+            raise ValueError(f"region '{region.name}' has no closed-form field")
         self.kinds = kinds
         self.curves = [region.sides[k] for k in range(4)]
-        # per pair: the foot angle between the whole lines when the points lie on the same
-        # side of both (sign +1) or on opposite sides (sign -1), or on one of them (0)
+        # per angle pair: the foot angle when the point is on the inner side of both lines
+        # or of neither (sign product +1), of one (-1), or on a line (0)
         self.angles: list[tuple[float, float, float]] = []
-        self.cos = [0.0, 0.0]  # n_a . n_b of the unit normals of an angle pair's lines
-        for i, (pair, kind) in enumerate(zip(((0, 2), (1, 3)), kinds, strict=True)):
+        for pair, kind in zip(((0, 2), (1, 3)), kinds, strict=True):
             if kind == "angle":
-                na, nb = (self._normal(self.curves[k]) for k in pair)  # type: ignore[arg-type]
-                c = self.cos[i] = float(na @ nb)
+                na, nb = (_unit_normal(self.curves[k]) for k in pair)  # type: ignore[arg-type]
+                c = float(na @ nb)
                 self.angles.append(
                     (
                         float(np.arccos(np.clip(-c, -1.0, 1.0))),
@@ -326,15 +327,10 @@ class PlanarField:
                     return False
         return True
 
-    @staticmethod
-    def _normal(line: Line) -> FloatArray:
-        d = line.b - line.a
-        return np.array([-d[1], d[0]]) / float(np.sqrt(d @ d))
-
     def weights(self, pair: int, r: FloatArray) -> tuple[FloatArray, ...]:
-        """Per-row weights of pair ``pair`` (0: sides (0, 2), 1: sides (1, 3)) for ratios
-        ``r``: ``(wa, wb)``, or for an angle pair ``(wa, wb)`` at each of the three foot
-        angles (same side, opposite sides, on a line)."""
+        """Per-row weights (non-negative) of pair ``pair`` (0: sides (0, 2), 1: sides
+        (1, 3)) for ratios ``r``: ``(wa, wb)``, or for an angle pair ``(wa, wb)`` at each of
+        the three foot angles of :attr:`angles`."""
         if self.kinds[pair] == "distance":
             return (1.0 - r, r)
         out: list[FloatArray] = []
@@ -342,97 +338,135 @@ class PlanarField:
             out.extend(_weights(r, np.full(r.shape, theta)))
         return tuple(out)
 
-    def _term(
-        self, k: int, x: FloatArray, y: FloatArray, extended: bool
-    ) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Distance (n,), and unit vector ``(ux, uy)`` from the foot, to side ``k``."""
-        curve = self.curves[k]
-        if isinstance(curve, Line):
-            ax, ay = float(curve.a[0]), float(curve.a[1])
-            ex, ey = float(curve.b[0]) - ax, float(curve.b[1]) - ay
-            dx, dy = x - ax, y - ay
-            if extended:  # signed distance to the whole line; u = 0 on it
-                nx, ny = self._normal(curve)
-                s = dx * nx
-                s += dy * ny
-                sg = np.sign(s)
-                return np.abs(s), sg * nx, sg * ny
-            ee = ex * ex + ey * ey
-            t = dx * ex
-            t += dy * ey
-            if ee > 0.0:
-                t /= ee
-                np.maximum(t, 0.0, out=t)
-                np.minimum(t, 1.0, out=t)
-            else:
-                t[:] = 0.0
-            rx = dx - t * ex
-            ry = dy - t * ey
-            d = rx * rx
-            d += ry * ry
-            np.sqrt(d, out=d)
-            inv = 1.0 / np.maximum(d, _TINY)
-            rx *= inv
-            ry *= inv
-            return d, rx, ry
-        assert isinstance(curve, Arc)
-        vx, vy = x - curve.center[0], y - curve.center[1]
-        rho = vx * vx
-        rho += vy * vy
-        np.sqrt(rho, out=rho)
-        sgn = 1.0 if curve.sweep > 0 else -1.0
-        a1 = curve.a0 + curve.sweep
-        c0, s0 = sgn * np.cos(curve.a0), sgn * np.sin(curve.a0)
-        c1, s1 = sgn * np.cos(a1), sgn * np.sin(a1)
-        after_start = c0 * vy - s0 * vx >= 0.0
-        before_end = vx * s1 - vy * c1 >= 0.0
-        if abs(curve.sweep) <= np.pi:
-            inside = after_start & before_end
-        else:
-            inside = after_start | before_end
-        inside &= rho > 0.0
-        dr = rho - curve.radius
-        # unit vector from the foot c + R v / rho to x: +v / rho outside the circle, -v inside
-        f = np.where(dr >= 0.0, 1.0, -1.0)
-        f /= np.maximum(rho, _TINY)
-        d = np.abs(dr)
-        ux, uy = vx * f, vy * f
-        out = np.flatnonzero(~inside)
-        if out.size:  # outside the arc's angle the nearer end is the foot
-            xo, yo = x[out], y[out]
-            ends = curve.evaluate(np.array([0.0, 1.0]))
-            r0x, r0y, r1x, r1y = xo - ends[0, 0], yo - ends[0, 1], xo - ends[1, 0], yo - ends[1, 1]
-            d0, d1 = np.sqrt(r0x * r0x + r0y * r0y), np.sqrt(r1x * r1x + r1y * r1y)
-            first = d0 <= d1
-            do = np.where(first, d0, d1)
-            inv = 1.0 / np.maximum(do, _TINY)
-            d[out] = do
-            ux[out] = np.where(first, r0x, r1x) * inv
-            uy[out] = np.where(first, r0y, r1y) * inv
-        return d, ux, uy
-
     def pair(
         self, pair: int, x: FloatArray, y: FloatArray, w: tuple[FloatArray, ...]
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
         """``g`` (n,) of pair ``pair`` and its gradient ``(gx, gy)`` at ``(x, y)``, with the
         rows' weights ``w`` of :meth:`weights`."""
         a, b = (0, 2) if pair == 0 else (1, 3)
-        angle = self.kinds[pair] == "angle"
-        da, uax, uay = self._term(a, x, y, angle)
-        db, ubx, uby = self._term(b, x, y, angle)
-        if angle:
-            # the foot angle's case from the sides of the lines the point is on
-            same = uax * ubx
-            same += uay * uby  # (-1, 0 or +1 times n_a . n_b: only its sign is used)
-            s = np.sign(same) * np.sign(self.cos[pair])
-            wa = np.where(s > 0, w[0], np.where(s < 0, w[2], w[4]))
-            wb = np.where(s > 0, w[1], np.where(s < 0, w[3], w[5]))
-        else:
-            wa, wb = w
-        g = wa * da
-        g -= wb * db
-        gx = wa * uax
-        gx -= wb * ubx
-        gy = wa * uay
-        gy -= wb * uby
+        if self.kinds[pair] == "angle":
+            return self._angle_pair(a, b, x, y, w)
+        g, gx, gy = self._term(a, x, y, w[0])
+        hb, hx, hy = self._term(b, x, y, w[1])
+        g -= hb
+        gx -= hx
+        gy -= hy
         return g, gx, gy
+
+    def _term(
+        self, k: int, x: FloatArray, y: FloatArray, w: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``w d`` (n,) and ``w u`` (two (n,)) for side ``k`` of a distance-weighted pair:
+        ``d`` the distance, ``u`` the unit vector from the foot to the point."""
+        curve = self.curves[k]
+        if isinstance(curve, Line):
+            return _segment_term(curve, x, y, w)
+        assert isinstance(curve, Arc)
+        return _arc_term(curve, x, y, w)
+
+    def _angle_pair(
+        self, a: int, b: int, x: FloatArray, y: FloatArray, w: tuple[FloatArray, ...]
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``g`` and gradient of an angle pair of whole lines: ``u = sign(s) n`` from the
+        signed distance ``s``, the foot angle one of three constants by the signs."""
+        la, lb = self.curves[a], self.curves[b]
+        assert isinstance(la, Line) and isinstance(lb, Line)
+        na, nb = _unit_normal(la), _unit_normal(lb)
+        sa = (x - la.a[0]) * na[0]
+        sa += (y - la.a[1]) * na[1]
+        sb = (x - lb.a[0]) * nb[0]
+        sb += (y - lb.a[1]) * nb[1]
+        ua, ub = np.sign(sa), np.sign(sb)
+        case = ua * ub
+        if case.all():
+            wa, wb = np.where(case > 0, w[0], w[2]), np.where(case > 0, w[1], w[3])
+        else:
+            wa = np.where(case > 0, w[0], np.where(case < 0, w[2], w[4]))
+            wb = np.where(case > 0, w[1], np.where(case < 0, w[3], w[5]))
+        g = wa * np.abs(sa)
+        g -= wb * np.abs(sb)
+        ua *= wa
+        ub *= wb
+        gx = ua * na[0]
+        gx -= ub * nb[0]
+        gy = ua * na[1]
+        gy -= ub * nb[1]
+        return g, gx, gy
+
+
+def _unit_normal(line: Line) -> FloatArray:
+    """The unit normal (2,) to the left of a line side (into a CCW region)."""
+    d = line.b - line.a
+    return np.array([-d[1], d[0]]) / float(np.sqrt(d @ d))
+
+
+def _segment_term(
+    line: Line, x: FloatArray, y: FloatArray, w: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``w d``, ``w u`` for a segment (the foot clamped to its ends; ``u = 0`` on it)."""
+    ax, ay = float(line.a[0]), float(line.a[1])
+    ex, ey = float(line.b[0]) - ax, float(line.b[1]) - ay
+    dx, dy = x - ax, y - ay
+    ee = ex * ex + ey * ey
+    t = dx * ex
+    t += dy * ey
+    if ee > 0.0:
+        t *= 1.0 / ee
+        np.maximum(t, 0.0, out=t)
+        np.minimum(t, 1.0, out=t)
+    else:
+        t[:] = 0.0
+    rx = t * ex
+    np.subtract(dx, rx, out=rx)
+    t *= ey
+    np.subtract(dy, t, out=t)
+    ry = t
+    d = rx * rx
+    d += ry * ry
+    np.sqrt(d, out=d)
+    f = np.maximum(d, _TINY)
+    np.divide(w, f, out=f)
+    rx *= f
+    ry *= f
+    d *= w
+    return d, rx, ry
+
+
+def _arc_term(
+    arc: Arc, x: FloatArray, y: FloatArray, w: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``w d``, ``w u`` for an arc: radial inside its angle (``v . m >= |v| cos(h)``, ``m``
+    the bisector, ``h`` half the sweep), the nearer end outside it or at the centre."""
+    cx, cy = float(arc.center[0]), float(arc.center[1])
+    mid = arc.a0 + 0.5 * arc.sweep
+    mx, my, ch = np.cos(mid), np.sin(mid), np.cos(0.5 * abs(arc.sweep))
+    vx, vy = x - cx, y - cy
+    rho = vx * vx
+    rho += vy * vy
+    np.sqrt(rho, out=rho)
+    dot = vx * mx
+    dot += vy * my
+    outside = dot < rho * ch
+    if not rho.all():
+        outside |= rho == 0.0
+    dr = rho - arc.radius
+    # unit vector from the foot c + R v / rho to x: +v / rho outside the circle, -v inside
+    f = np.maximum(rho, _TINY, out=rho)
+    np.divide(np.copysign(w, dr), f, out=f)
+    vx *= f
+    vy *= f
+    np.abs(dr, out=dr)
+    dr *= w
+    out = np.flatnonzero(outside)
+    if out.size:  # outside the arc's angle the nearer end is the foot
+        xo, yo, wo = x[out], y[out], w[out]
+        ends = arc.evaluate(np.array([0.0, 1.0]))
+        r0x, r0y, r1x, r1y = xo - ends[0, 0], yo - ends[0, 1], xo - ends[1, 0], yo - ends[1, 1]
+        d0, d1 = np.sqrt(r0x * r0x + r0y * r0y), np.sqrt(r1x * r1x + r1y * r1y)
+        first = d0 <= d1
+        do = np.where(first, d0, d1)
+        fo = wo / np.maximum(do, _TINY)
+        dr[out] = wo * do
+        vx[out] = np.where(first, r0x, r1x) * fo
+        vy[out] = np.where(first, r0y, r1y) * fo
+    return dr, vx, vy

@@ -337,55 +337,79 @@ def _newton_planar(
     tol: float,
     diag: float,
 ) -> tuple[int, FloatArray]:
-    """Damped Newton of :func:`_newton` (same steps, same backtracking on the residual
-    ``hypot(g_a, g_b)``) on coordinates ``px``, ``py`` (updated in place), weights of the
-    rows ``wa``, ``wb`` (:meth:`PlanarField.weights`). Returns iterations, residuals."""
-    ga, gax, gay = field.pair(0, px, py, wa)
-    gb, gbx, gby = field.pair(1, px, py, wb)
+    """The damped Newton of :func:`_newton` (same steps, same backtracking on the residual
+    ``hypot(g_a, g_b)``, converged rows left where they are) on coordinates ``px``, ``py``
+    (updated in place) with the rows' weights ``wa``, ``wb`` (:meth:`PlanarField.weights`).
+    While most rows are unconverged all rows are evaluated (converged ones with a zero step,
+    which they accept unchanged), else the unconverged ones are compacted: no scatter and
+    gather of the whole block. Returns iterations and residuals."""
+    n = px.size
+    res_out = np.empty(n)
+    rows = np.arange(n)  # block rows held in the working arrays below
+    x, y = px, py
+    ga, gax, gay = field.pair(0, x, y, wa)
+    gb, gbx, gby = field.pair(1, x, y, wb)
     res = np.sqrt(ga * ga + gb * gb)
     max_step = 0.1 * diag
-    active = np.arange(px.size)
     it = 0
-    while it < _NEWTON_ITERS:
-        active = active[res[active] > tol]
-        if active.size == 0:
+    while True:
+        hot = res > tol
+        count = int(np.count_nonzero(hot))
+        if count == 0 or it == _NEWTON_ITERS:
             break
+        if 2 * count <= rows.size:  # compact: keep the unconverged rows only
+            done = ~hot
+            px[rows[done]], py[rows[done]], res_out[rows[done]] = x[done], y[done], res[done]
+            keep = np.flatnonzero(hot)
+            rows = rows[keep]
+            x, y, res = x[keep], y[keep], res[keep]
+            ga, gax, gay, gb, gbx, gby = (v[keep] for v in (ga, gax, gay, gb, gbx, gby))
+            wa, wb = tuple(v[keep] for v in wa), tuple(v[keep] for v in wb)
+            hot = np.ones(rows.size, dtype=bool)
+            count = rows.size
         it += 1
-        a_ga, a_gb = ga[active], gb[active]
-        a_ax, a_ay, a_bx, a_by = gax[active], gay[active], gbx[active], gby[active]
-        det = a_ax * a_by - a_ay * a_bx
+        det = gax * gby - gay * gbx
         safe = np.where(np.abs(det) > 1e-300, det, 1e-300)
-        sx = (a_ay * a_gb - a_by * a_ga) / safe
-        sy = (a_bx * a_ga - a_ax * a_gb) / safe
+        sx = (gay * gb - gby * ga) / safe
+        sy = (gbx * ga - gax * gb) / safe
         norm = np.sqrt(sx * sx + sy * sy)
         cap = np.minimum(1.0, max_step / np.maximum(norm, 1e-300))
+        if count < rows.size:
+            cap *= hot  # converged rows: a zero step
         sx *= cap
         sy *= cap
-        lam = np.ones(active.size)
-        todo = np.arange(active.size)
-        for _ in range(12):  # backtracking on the residual
-            sel = active[todo]
-            lt = lam[todo]
-            qx = px[sel] + lt * sx[todo]
-            qy = py[sel] + lt * sy[todo]
-            na, nax, nay = field.pair(0, qx, qy, tuple(w[sel] for w in wa))
-            nb, nbx, nby = field.pair(1, qx, qy, tuple(w[sel] for w in wb))
-            nres = np.sqrt(na * na + nb * nb)
-            ok = nres < res[sel] * (1.0 - 1e-4 * lt) + tol
-            if ok.all():
-                acc = sel
-            else:
-                acc = sel[ok]
-                qx, qy, nres = qx[ok], qy[ok], nres[ok]
-                na, nax, nay, nb, nbx, nby = (v[ok] for v in (na, nax, nay, nb, nbx, nby))
-            px[acc], py[acc], res[acc] = qx, qy, nres
-            ga[acc], gax[acc], gay[acc] = na, nax, nay
-            gb[acc], gbx[acc], gby[acc] = nb, nbx, nby
-            todo = todo[~ok]
+        # the full step for every row, then backtracking (halved steps) where it fails
+        qx, qy = x + sx, y + sy
+        na, nax, nay = field.pair(0, qx, qy, wa)
+        nb, nbx, nby = field.pair(1, qx, qy, wb)
+        nres = np.sqrt(na * na + nb * nb)
+        ok = nres < res * (1.0 - 1e-4) + tol
+        if ok.all():
+            x, y, res, ga, gax, gay, gb, gbx, gby = qx, qy, nres, na, nax, nay, nb, nbx, nby
+            continue
+        for old, new in zip(
+            (x, y, res, ga, gax, gay, gb, gbx, gby), (qx, qy, nres, na, nax, nay, nb, nbx, nby),
+            strict=True,
+        ):  # fmt: skip
+            np.copyto(old, new, where=ok)
+        todo = np.flatnonzero(~ok)
+        lam = 1.0
+        for _ in range(11):
+            lam *= 0.5
+            tx, ty = x[todo] + lam * sx[todo], y[todo] + lam * sy[todo]
+            ta, tax, tay = field.pair(0, tx, ty, tuple(v[todo] for v in wa))
+            tb, tbx, tby = field.pair(1, tx, ty, tuple(v[todo] for v in wb))
+            tres = np.sqrt(ta * ta + tb * tb)
+            good = tres < res[todo] * (1.0 - 1e-4 * lam) + tol
+            acc = todo[good]
+            x[acc], y[acc], res[acc] = tx[good], ty[good], tres[good]
+            ga[acc], gax[acc], gay[acc] = ta[good], tax[good], tay[good]
+            gb[acc], gbx[acc], gby[acc] = tb[good], tbx[good], tby[good]
+            todo = todo[~good]
             if todo.size == 0:
                 break
-            lam[todo] *= 0.5
-    return it, res
+    px[rows], py[rows], res_out[rows] = x, y, res
+    return it, res_out
 
 
 def _wrong_feet(sides: SideDistances, p: FloatArray, tol: float, rows: np.ndarray) -> np.ndarray:
