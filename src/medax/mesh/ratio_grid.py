@@ -127,29 +127,70 @@ def ratio_grid(
     if weighting not in WEIGHTINGS:
         raise ValueError(f"unknown weighting '{weighting}'")
     kinds = (pair_weighting(region, 0, 2, weighting), pair_weighting(region, 1, 3, weighting))
-    grid, _, counts = _grid(region, n1, n2, point_tol * region.diagonal, kinds)
+    tol = point_tol * region.diagonal
+    levels = _levels(n1, n2)
+    grid, _, counts = _grid(region, levels, _side_params(region, levels, tol, kinds), tol, kinds)
     counts["max_residual"] /= region.diagonal
     return grid.reshape(-1, 2), counts
 
 
-def _grid(
-    region: Region, n1: int, n2: int, tol: float, kinds: tuple[str, str]
-) -> tuple[FloatArray, list[FloatArray], dict[str, float]]:
-    """Nodes (n2 + 1, n1 + 1, 2), feet on the tracked sides (each (n2 + 1, n1 + 1)) and counts.
+def _levels(n1: int, n2: int) -> list[tuple[int, int]]:
+    """Division counts of the grid and of its coarse starts, finest first: grids with both
+    counts at least ``4 * _COARSE_MIN`` start from one of about a quarter of the counts."""
+    out = [(n1, n2)]
+    while min(out[-1]) >= 4 * _COARSE_MIN:
+        c1, c2 = out[-1]
+        out.append((max(_COARSE_MIN, -(-c1 // 4)), max(_COARSE_MIN, -(-c2 // 4))))
+    return out
 
-    Large grids start from a coarser one (about a quarter of the divisions, solved the same
-    way) interpolated by bicubic splines in the ratios, with feet interpolated too: Newton
-    then takes small steps with tracked feet, and one global query per side checks them.
+
+def _ratios(n1: int, n2: int) -> tuple[FloatArray, FloatArray]:
+    """The ratios of the node columns (pair (S1, S3): 1 on S3 at i = 0, 0 on S1) and of the
+    node rows (pair (S0, S2): 0 on S0 at j = 0, 1 on S2)."""
+    return 1.0 - np.arange(n1 + 1) / n1, np.arange(n2 + 1) / n2
+
+
+# side k carries the end points of the curves of the pair (a, b) (index into the kinds)
+_SIDE_PAIRS = ((0, 1, 3, 1), (1, 0, 2, 0), (2, 1, 3, 1), (3, 0, 2, 0))
+
+
+def _side_params(
+    region: Region, levels: list[tuple[int, int]], tol: float, kinds: tuple[str, str]
+) -> list[list[FloatArray]]:
+    """Per level, per side, the parameters (in the side's direction) of the boundary nodes;
+    the nodes of all levels on one side are found by one call of :func:`side_nodes`."""
+    out: list[list[FloatArray]] = [[] for _ in levels]
+    for side, a, b, kind in _SIDE_PAIRS:
+        rs = []
+        for n1, n2 in levels:
+            ri, rj = _ratios(n1, n2)
+            rs.append((ri, rj, ri[::-1], rj[::-1])[side])
+        t = side_nodes(region, side, a, b, np.concatenate(rs), tol, kinds[kind])
+        for lev, part in enumerate(np.split(t, np.cumsum([r.size for r in rs])[:-1])):
+            out[lev].append(part)
+    return out
+
+
+def _grid(
+    region: Region,
+    levels: list[tuple[int, int]],
+    side_t: list[list[FloatArray]],
+    tol: float,
+    kinds: tuple[str, str],
+) -> tuple[FloatArray, list[FloatArray], dict[str, float]]:
+    """Nodes (n2 + 1, n1 + 1, 2) of ``levels[0]`` (boundary nodes at ``side_t[0]``), feet on
+    the tracked sides (each (n2 + 1, n1 + 1)) and counts.
+
+    Large grids start from the coarser ``levels[1]`` (solved the same way) interpolated by
+    bicubic splines in the ratios, with feet interpolated too: Newton then takes small
+    steps with tracked feet, and one global query per side checks them.
     """
-    ri = 1.0 - np.arange(n1 + 1) / n1  # pair (S1, S3): ratio 1 on S3 (i = 0), 0 on S1
-    rj = np.arange(n2 + 1) / n2  # pair (S0, S2): ratio 0 on S0 (j = 0), 1 on S2
+    n1, n2 = levels[0]
+    ri, rj = _ratios(n1, n2)
     idx = boundary_indices(n1, n2)
     params = np.full(((n1 + 1) * (n2 + 1), 2), np.nan)
-    # side k carries the end points of the curves of the other pair; in side direction
-    specs = ((0, 1, 3, ri, 1), (1, 0, 2, rj, 0), (2, 1, 3, ri[::-1], 1), (3, 0, 2, rj[::-1], 0))
-    for side, a, b, r, kind in specs:
-        t = side_nodes(region, side, a, b, r, tol, kinds[kind])
-        params[idx[side]] = region.sides[side].evaluate(t)
+    for side in range(4):
+        params[idx[side]] = region.sides[side].evaluate(side_t[0][side])
     params[idx[0][[0, -1]]] = region.corners[[0, 1]]
     params[idx[2][[0, -1]]] = region.corners[[2, 3]]
     grid = params.reshape(n2 + 1, n1 + 1, 2)
@@ -157,9 +198,8 @@ def _grid(
     rb = np.broadcast_to(ri[None, 1:-1], (n2 - 1, n1 - 1)).ravel()
     feet0: list[FloatArray] | None = None
     coarse_counts: dict[str, float] = {}
-    if min(n1, n2) >= 4 * _COARSE_MIN:
-        c1, c2 = max(_COARSE_MIN, -(-n1 // 4)), max(_COARSE_MIN, -(-n2 // 4))
-        cgrid, cfeet, coarse_counts = _grid(region, c1, c2, tol, kinds)
+    if len(levels) > 1:
+        cgrid, cfeet, coarse_counts = _grid(region, levels[1:], side_t[1:], tol, kinds)
         inner, feet0 = _refine_guess(cgrid, cfeet, n1, n2)
     else:
         inner = _coons(grid, n1, n2)[1:-1, 1:-1].reshape(-1, 2)
