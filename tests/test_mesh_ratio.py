@@ -259,3 +259,17 @@ def test_planar_solve_gives_the_general_nodes(name, monkeypatch):
     monkeypatch.setattr(rf.PlanarField, "supports", staticmethod(lambda region, kinds: False))
     slow = mesh_region(r, (60, 52))
     assert np.abs(fast.params - slow.params).max() <= 1e-12 * r.diagonal
+
+
+@pytest.mark.parametrize("dims", [(12, 15, 48, 57), (30, 13, 117, 50)])
+def test_coarse_start_is_the_bicubic_interpolating_spline(dims):
+    """The coarse grid is interpolated by the not-a-knot bicubic spline of FITPACK's
+    RectBivariateSpline (the tensor product, evaluated through sparse basis matrices)."""
+    from scipy.interpolate import RectBivariateSpline
+
+    c1, c2, n1, n2 = dims
+    values = np.random.default_rng(c1).normal(size=(c2 + 1, c1 + 1, 2))
+    uc, vc = np.arange(c1 + 1) / c1, np.arange(c2 + 1) / c2
+    uf, vf = np.arange(1, n1) / n1, np.arange(1, n2) / n2
+    want = [RectBivariateSpline(vc, uc, values[..., d], kx=3, ky=3)(vf, uf) for d in range(2)]
+    np.testing.assert_allclose(rg._bicubic(values, uc, vc, uf, vf), np.stack(want, -1), atol=1e-13)

@@ -20,7 +20,7 @@ import logging
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import RectBivariateSpline
+from scipy.interpolate import BSpline, make_interp_spline
 
 from medax import tolerances
 from medax.errors import MeshError
@@ -241,12 +241,26 @@ def _refine_guess(
     c2, c1 = cgrid.shape[0] - 1, cgrid.shape[1] - 1
     uc, vc = np.arange(c1 + 1) / c1, np.arange(c2 + 1) / c2
     uf, vf = np.arange(1, n1) / n1, np.arange(1, n2) / n2
-    nodes = np.stack(
-        [RectBivariateSpline(vc, uc, cgrid[..., d], kx=3, ky=3)(vf, uf) for d in range(2)],
-        axis=-1,
-    )
+    nodes = _bicubic(cgrid, uc, vc, uf, vf)
     feet = [f if f.size == 0 else _interpolate_feet(f, uf, vf) for f in cfeet]
     return nodes.reshape(-1, 2), feet
+
+
+def _bicubic(
+    values: FloatArray, uc: FloatArray, vc: FloatArray, uf: FloatArray, vf: FloatArray
+) -> FloatArray:
+    """The interpolating bicubic spline (not-a-knot ends, the spline of
+    ``RectBivariateSpline(vc, uc, ., kx=3, ky=3)``) of ``values`` (len(vc), len(uc), d) on
+    the grid ``vf x uf`` (len(vf), len(uf), d): the tensor product's coefficients on the
+    coarse grid, then two sparse basis matrices (four B-splines per point) applied."""
+    cv, cu, d = values.shape
+    kv = make_interp_spline(vc, values.reshape(cv, cu * d), k=3)  # coefficients along v
+    coef_v = kv.c.reshape(cv, cu, d).transpose(1, 0, 2).reshape(cu, cv * d)
+    ku = make_interp_spline(uc, coef_v, k=3)  # ... and along u: (cu, cv * d)
+    at_u = BSpline.design_matrix(uf, ku.t, 3) @ ku.c  # (len(uf), cv * d)
+    at_u = at_u.reshape(uf.size, cv, d).transpose(1, 0, 2).reshape(cv, uf.size * d)
+    out = BSpline.design_matrix(vf, kv.t, 3) @ at_u  # (len(vf), len(uf) * d)
+    return np.asarray(out).reshape(vf.size, uf.size, d)
 
 
 def _interpolate_feet(t: FloatArray, uf: FloatArray, vf: FloatArray) -> FloatArray:
