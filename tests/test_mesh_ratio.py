@@ -273,3 +273,31 @@ def test_coarse_start_is_the_bicubic_interpolating_spline(dims):
     uf, vf = np.arange(1, n1) / n1, np.arange(1, n2) / n2
     want = [RectBivariateSpline(vc, uc, values[..., d], kx=3, ky=3)(vf, uf) for d in range(2)]
     np.testing.assert_allclose(rg._bicubic(values, uc, vc, uf, vf), np.stack(want, -1), atol=1e-13)
+
+
+def test_certify_closest_is_the_documented_rule(monkeypatch):
+    """The blocked certification equals the rule written out on the whole table: no local
+    minimum of the sample distances beyond 1.5 spacings of the foot is nearer than the
+    foot's distance minus the slack, allowing 0.55 sample spacings between samples."""
+    import medax.geometry.curve as gc
+
+    r = REGIONS["wavy"]
+    lo, hi = r.corners.min(axis=0), r.corners.max(axis=0)
+    x = np.random.default_rng(11).uniform(lo, hi, (700, 2))
+    monkeypatch.setattr(gc, "_CERTIFY_BLOCK", 5000)  # several blocks
+    for c in r.sides:
+        ts, pts, _ = c._search
+        t0 = np.random.default_rng(1).uniform(0.0, 1.0, len(x))
+        loc = closest_from(c, x, t0, iters=60)
+        d = np.linalg.norm(x[:, None] - pts[None], axis=2)
+        is_min = np.ones(d.shape, dtype=bool)
+        is_min[:, 1:] &= d[:, 1:] <= d[:, :-1]
+        is_min[:, :-1] &= d[:, :-1] <= d[:, 1:]
+        is_min &= np.abs(ts[None] - loc.t[:, None]) > 1.5 * (ts[1] - ts[0])
+        other = np.where(is_min, d, np.inf).min(axis=1)
+        half = 0.55 * np.linalg.norm(np.diff(pts, axis=0), axis=1).max()
+        want = other - half >= loc.distance - 1e-12
+        got = certify_closest(c, x, loc.t, loc.distance, 1e-12)
+        assert 0 < want.sum() < len(x)
+        assert np.count_nonzero(got != want) <= 2  # (round-off at the margin only)
+        assert not np.any(got & ~want & (other - half < loc.distance - 1e-9))
