@@ -284,7 +284,7 @@ def test_certify_closest_is_the_documented_rule(monkeypatch):
     r = REGIONS["wavy"]
     lo, hi = r.corners.min(axis=0), r.corners.max(axis=0)
     x = np.random.default_rng(11).uniform(lo, hi, (700, 2))
-    monkeypatch.setattr(gc, "_CERTIFY_BLOCK", 5000)  # several blocks
+    monkeypatch.setattr(gc, "_TABLE_BLOCK", 5000)  # several blocks
     for c in r.sides:
         ts, pts, _ = c._search
         t0 = np.random.default_rng(1).uniform(0.0, 1.0, len(x))

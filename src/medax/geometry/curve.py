@@ -191,7 +191,7 @@ def certify_closest(
     near = np.floor(t / dt).astype(np.int64)[:, None] + np.arange(-2, 3)
     near = np.minimum(np.maximum(near, 0), m - 1)
     excluded = np.abs(ts[near] - t[:, None]) <= 1.5 * dt
-    rows = max(1, _CERTIFY_BLOCK // m)  # small blocks: the table stays in cache
+    rows = max(1, _TABLE_BLOCK // m)  # small blocks: the table stays in cache
     is_min = np.empty((rows, m), dtype=bool)
     for s in range(0, n, rows):
         xs = x[s : s + rows]
@@ -235,21 +235,21 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
     return Closest(t=t, foot=foot, distance=dist[rows, best])
 
 
-_BLOCK = 2_000_000  # entries of the point x sample distance table per block
-_CERTIFY_BLOCK = 65_536  # the same in certify_closest (a table in cache is ~3x faster)
+_TREE_ABOVE = 2_000_000  # point x sample table size above which a k-d tree answers (x 50)
+_TABLE_BLOCK = 65_536  # entries per block of the tables actually computed (in cache: ~3x faster)
 
 
 def _candidate_samples(curve: Curve, points: FloatArray, k: int) -> np.ndarray:
     """Indices (n, k) of the ``k`` nearest local minima of the sample distance per point."""
     ts, pts, tree = curve._search
     n, m = points.shape[0], pts.shape[0]
-    if m * n > 50 * _BLOCK:  # very long curves: nearest samples from the k-d tree
+    if m * n > 50 * _TREE_ABOVE:  # very long curves: nearest samples from the k-d tree
         _, idx = tree.query(points, k=4 * k)
         return np.asarray(idx)[:, ::4][:, :k]
     centre = pts.mean(axis=0)  # |x|^2 - 2 x.p + |p|^2 loses digits far from the origin
     pts, points = pts - centre, points - centre
     out = np.empty((n, k), dtype=np.int64)
-    rows = max(1, _BLOCK // m)
+    rows = max(1, _TABLE_BLOCK // m)
     pp = np.einsum("mj,mj->m", pts, pts)
     for s in range(0, n, rows):
         x = points[s : s + rows]
