@@ -203,7 +203,8 @@ def _grid(
         inner, feet0 = _refine_guess(cgrid, cfeet, n1, n2)
     else:
         inner = _coons(grid, n1, n2)[1:-1, 1:-1].reshape(-1, 2)
-    solved, feet, counts = _solve(region, inner, ra, rb, 1e-3 * tol, kinds, feet0)
+    axes = (rj[1:-1], ri[1:-1])
+    solved, feet, counts = _solve(region, inner, ra, rb, 1e-3 * tol, kinds, feet0, axes)
     grid[1:-1, 1:-1] = solved.reshape(n2 - 1, n1 - 1, 2)
     for key in ("newton_iterations", "global_resolved"):
         counts[f"coarse_{key}"] = coarse_counts.get(key, 0) + coarse_counts.get(f"coarse_{key}", 0)
@@ -301,16 +302,19 @@ def _solve(
     tol: float,
     kinds: tuple[str, str],
     feet0: list[FloatArray] | None = None,
+    axes: tuple[FloatArray, FloatArray] | None = None,
 ) -> tuple[FloatArray, list[FloatArray], dict[str, float]]:
     """Solve ``g_a = g_b = 0`` for all rows of ``p`` (n, 2): Newton with tracked feet
     (starting from ``feet0`` if given, else from global ones), then a global check of the
-    feet and a re-solve of the rows whose feet were wrong. Returns nodes, feet, counts."""
+    feet and a re-solve of the rows whose feet were wrong. Returns nodes, feet, counts.
+    ``axes`` ``(u, v)``, if given, says the rows are a grid: ``ra`` is ``u`` repeated
+    ``len(v)`` times each, ``rb`` is ``v`` tiled ``len(u)`` times."""
     n = p.shape[0]
     counts = {"newton_iterations": 0, "global_resolved": 0, "max_residual": 0.0}
     if n > 0 and PlanarField.supports(region, kinds):
         # every foot in closed form: nothing to track or certify
         p, counts["newton_iterations"], res = _solve_planar(
-            PlanarField(region, kinds), p, ra, rb, tol, region.diagonal
+            PlanarField(region, kinds), p, ra, rb, tol, region.diagonal, axes
         )
         _check_residual(region, res, ra, rb, tol, counts)
         return p, [np.empty(0)] * 4, counts
@@ -362,15 +366,27 @@ def _check_residual(
 
 
 def _solve_planar(
-    field: PlanarField, p: FloatArray, ra: FloatArray, rb: FloatArray, tol: float, diag: float
+    field: PlanarField,
+    p: FloatArray,
+    ra: FloatArray,
+    rb: FloatArray,
+    tol: float,
+    diag: float,
+    axes: tuple[FloatArray, FloatArray] | None = None,
 ) -> tuple[FloatArray, int, FloatArray]:
     """:func:`_newton` on the closed-form field, blocks of ``_BLOCK`` nodes at a time (each
     node's iteration is its own: blocking changes no result, only keeps the temporaries
-    small). Returns nodes, iterations (the most of any block) and residuals."""
+    small). With the grid's ``axes`` (see :func:`_solve`) the weights are computed once per
+    ratio, not per node. Returns nodes, iterations (the most of any block) and residuals."""
     n = p.shape[0]
     px, py = p[:, 0].copy(), p[:, 1].copy()
     res = np.empty(n)
-    wa, wb = field.weights(0, ra), field.weights(1, rb)
+    if axes is None:
+        wa, wb = field.weights(0, ra), field.weights(1, rb)
+    else:
+        u, v = axes
+        wa = tuple(np.repeat(w, v.size) for w in field.weights(0, u))
+        wb = tuple(np.tile(w, u.size) for w in field.weights(1, v))
     iters = 0
     for s in range(0, n, _BLOCK):
         e = min(n, s + _BLOCK)
