@@ -32,6 +32,7 @@ from medax.geometry.region import Region
 
 WEIGHTINGS = ("auto", "angle", "distance")
 _TINY = np.finfo(float).tiny
+_EMPTY = np.empty(0)
 
 
 def _sinc(x: FloatArray) -> FloatArray:
@@ -343,29 +344,48 @@ class PlanarField:
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
         """``g`` (n,) of pair ``pair`` and its gradient ``(gx, gy)`` at ``(x, y)``, with the
         rows' weights ``w`` of :meth:`weights`."""
+        return self._pair(pair, x, y, w, True)
+
+    def value(
+        self, pair: int, x: FloatArray, y: FloatArray, w: tuple[FloatArray, ...]
+    ) -> FloatArray:
+        """``g`` alone (the same values as :meth:`pair`, bit for bit)."""
+        return self._pair(pair, x, y, w, False)[0]
+
+    def _pair(
+        self, pair: int, x: FloatArray, y: FloatArray, w: tuple[FloatArray, ...], grad: bool
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
         a, b = (0, 2) if pair == 0 else (1, 3)
         if self.kinds[pair] == "angle":
-            return self._angle_pair(a, b, x, y, w)
-        g, gx, gy = self._term(a, x, y, w[0])
-        hb, hx, hy = self._term(b, x, y, w[1])
+            return self._angle_pair(a, b, x, y, w, grad)
+        g, gx, gy = self._term(a, x, y, w[0], grad)
+        hb, hx, hy = self._term(b, x, y, w[1], grad)
         g -= hb
-        gx -= hx
-        gy -= hy
+        if grad:
+            gx -= hx
+            gy -= hy
         return g, gx, gy
 
     def _term(
-        self, k: int, x: FloatArray, y: FloatArray, w: FloatArray
+        self, k: int, x: FloatArray, y: FloatArray, w: FloatArray, grad: bool
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """``w d`` (n,) and ``w u`` (two (n,)) for side ``k`` of a distance-weighted pair:
-        ``d`` the distance, ``u`` the unit vector from the foot to the point."""
+        """``w d`` (n,) and ``w u`` (two (n,), empty unless ``grad``) for side ``k`` of a
+        distance-weighted pair: ``d`` the distance, ``u`` the unit vector from the foot to
+        the point."""
         curve = self.curves[k]
         if isinstance(curve, Line):
-            return _segment_term(curve, x, y, w)
+            return _segment_term(curve, x, y, w, grad)
         assert isinstance(curve, Arc)
-        return _arc_term(curve, x, y, w)
+        return _arc_term(curve, x, y, w, grad)
 
     def _angle_pair(
-        self, a: int, b: int, x: FloatArray, y: FloatArray, w: tuple[FloatArray, ...]
+        self,
+        a: int,
+        b: int,
+        x: FloatArray,
+        y: FloatArray,
+        w: tuple[FloatArray, ...],
+        grad: bool,
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
         """``g`` and gradient of an angle pair of whole lines: ``u = sign(s) n`` from the
         signed distance ``s``, the foot angle one of three constants by the signs."""
@@ -385,6 +405,8 @@ class PlanarField:
             wb = np.where(case > 0, w[1], np.where(case < 0, w[3], w[5]))
         g = wa * np.abs(sa)
         g -= wb * np.abs(sb)
+        if not grad:
+            return g, _EMPTY, _EMPTY
         ua *= wa
         ub *= wb
         gx = ua * na[0]
@@ -401,7 +423,7 @@ def _unit_normal(line: Line) -> FloatArray:
 
 
 def _segment_term(
-    line: Line, x: FloatArray, y: FloatArray, w: FloatArray
+    line: Line, x: FloatArray, y: FloatArray, w: FloatArray, grad: bool = True
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """``w d``, ``w u`` for a segment (the foot clamped to its ends; ``u = 0`` on it)."""
     ax, ay = float(line.a[0]), float(line.a[1])
@@ -424,6 +446,9 @@ def _segment_term(
     d = rx * rx
     d += ry * ry
     np.sqrt(d, out=d)
+    if not grad:
+        d *= w
+        return d, _EMPTY, _EMPTY
     f = np.maximum(d, _TINY)
     np.divide(w, f, out=f)
     rx *= f
@@ -433,7 +458,7 @@ def _segment_term(
 
 
 def _arc_term(
-    arc: Arc, x: FloatArray, y: FloatArray, w: FloatArray
+    arc: Arc, x: FloatArray, y: FloatArray, w: FloatArray, grad: bool = True
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """``w d``, ``w u`` for an arc: radial inside its angle (``v . m >= |v| cos(h)``, ``m``
     the bisector, ``h`` half the sweep), the nearer end outside it or at the centre."""
@@ -450,11 +475,12 @@ def _arc_term(
     if not rho.all():
         outside |= rho == 0.0
     dr = rho - arc.radius
-    # unit vector from the foot c + R v / rho to x: +v / rho outside the circle, -v inside
-    f = np.maximum(rho, _TINY, out=rho)
-    np.divide(np.copysign(w, dr), f, out=f)
-    vx *= f
-    vy *= f
+    if grad:
+        # unit vector from the foot c + R v / rho to x: +v / rho outside the circle, -v inside
+        f = np.maximum(rho, _TINY, out=rho)
+        np.divide(np.copysign(w, dr), f, out=f)
+        vx *= f
+        vy *= f
     np.abs(dr, out=dr)
     dr *= w
     out = np.flatnonzero(outside)
@@ -465,8 +491,11 @@ def _arc_term(
         d0, d1 = np.sqrt(r0x * r0x + r0y * r0y), np.sqrt(r1x * r1x + r1y * r1y)
         first = d0 <= d1
         do = np.where(first, d0, d1)
-        fo = wo / np.maximum(do, _TINY)
         dr[out] = wo * do
-        vx[out] = np.where(first, r0x, r1x) * fo
-        vy[out] = np.where(first, r0y, r1y) * fo
+        if grad:
+            fo = wo / np.maximum(do, _TINY)
+            vx[out] = np.where(first, r0x, r1x) * fo
+            vy[out] = np.where(first, r0y, r1y) * fo
+    if not grad:
+        return dr, _EMPTY, _EMPTY
     return dr, vx, vy

@@ -410,9 +410,12 @@ def _newton_planar(
     """The damped Newton of :func:`_newton` (same steps, same backtracking on the residual
     ``hypot(g_a, g_b)``, converged rows left where they are) on coordinates ``px``, ``py``
     (updated in place) with the rows' weights ``wa``, ``wb`` (:meth:`PlanarField.weights`).
-    While most rows are unconverged all rows are evaluated (converged ones with a zero step,
-    which they accept unchanged), else the unconverged ones are compacted: no scatter and
-    gather of the whole block. Returns iterations and residuals."""
+    Trial points are evaluated without gradients (most rows converge at their first trial
+    point and never need one); gradients are computed for the rows still unconverged at
+    the start of an iteration. While most rows are unconverged all rows are evaluated
+    (converged ones with a zero step, which they accept unchanged), else the unconverged
+    ones are compacted: no scatter and gather of the whole block. Returns iterations and
+    residuals."""
     n = px.size
     res_out = np.empty(n)
     rows = np.arange(n)  # block rows held in the working arrays below
@@ -420,6 +423,7 @@ def _newton_planar(
     ga, gax, gay = field.pair(0, x, y, wa)
     gb, gbx, gby = field.pair(1, x, y, wb)
     res = np.sqrt(ga * ga + gb * gb)
+    fresh = True  # gradients known at the working points
     max_step = 0.1 * diag
     it = 0
     while True:
@@ -432,49 +436,57 @@ def _newton_planar(
             px[rows[done]], py[rows[done]], res_out[rows[done]] = x[done], y[done], res[done]
             keep = np.flatnonzero(hot)
             rows = rows[keep]
-            x, y, res = x[keep], y[keep], res[keep]
-            ga, gax, gay, gb, gbx, gby = (v[keep] for v in (ga, gax, gay, gb, gbx, gby))
+            x, y, res, ga, gb = x[keep], y[keep], res[keep], ga[keep], gb[keep]
+            if fresh:
+                gax, gay, gbx, gby = gax[keep], gay[keep], gbx[keep], gby[keep]
             wa, wb = tuple(v[keep] for v in wa), tuple(v[keep] for v in wb)
             hot = np.ones(rows.size, dtype=bool)
             count = rows.size
+        if not fresh:  # (the values come out the same as the stored ones)
+            ga, gax, gay = field.pair(0, x, y, wa)
+            gb, gbx, gby = field.pair(1, x, y, wb)
+            fresh = True
         it += 1
         det = gax * gby - gay * gbx
         safe = np.where(np.abs(det) > 1e-300, det, 1e-300)
         sx = (gay * gb - gby * ga) / safe
         sy = (gbx * ga - gax * gb) / safe
-        norm = np.sqrt(sx * sx + sy * sy)
-        cap = np.minimum(1.0, max_step / np.maximum(norm, 1e-300))
-        if count < rows.size:
-            cap *= hot  # converged rows: a zero step
-        sx *= cap
-        sy *= cap
+        n2 = sx * sx + sy * sy
+        if np.any(n2 > max_step * max_step):  # (else the cap is 1 for every row)
+            cap = np.minimum(1.0, max_step / np.maximum(np.sqrt(n2), 1e-300))
+            sx *= cap
+            sy *= cap
+        if count < rows.size:  # converged rows: a zero step
+            sx *= hot
+            sy *= hot
         # the full step for every row, then backtracking (halved steps) where it fails
         qx, qy = x + sx, y + sy
-        na, nax, nay = field.pair(0, qx, qy, wa)
-        nb, nbx, nby = field.pair(1, qx, qy, wb)
+        na, nb = field.value(0, qx, qy, wa), field.value(1, qx, qy, wb)
         nres = np.sqrt(na * na + nb * nb)
         ok = nres < res * (1.0 - 1e-4) + tol
+        fresh = False
         if ok.all():
-            x, y, res, ga, gax, gay, gb, gbx, gby = qx, qy, nres, na, nax, nay, nb, nbx, nby
+            x, y, res, ga, gb = qx, qy, nres, na, nb
             continue
-        for old, new in zip(
-            (x, y, res, ga, gax, gay, gb, gbx, gby), (qx, qy, nres, na, nax, nay, nb, nbx, nby),
-            strict=True,
-        ):  # fmt: skip
+        for old, new in zip((x, y, res, ga, gb), (qx, qy, nres, na, nb), strict=True):
             np.copyto(old, new, where=ok)
         todo = np.flatnonzero(~ok)
         lam = 1.0
         for _ in range(11):
             lam *= 0.5
             tx, ty = x[todo] + lam * sx[todo], y[todo] + lam * sy[todo]
-            ta, tax, tay = field.pair(0, tx, ty, tuple(v[todo] for v in wa))
-            tb, tbx, tby = field.pair(1, tx, ty, tuple(v[todo] for v in wb))
+            ta = field.value(0, tx, ty, tuple(v[todo] for v in wa))
+            tb = field.value(1, tx, ty, tuple(v[todo] for v in wb))
             tres = np.sqrt(ta * ta + tb * tb)
             good = tres < res[todo] * (1.0 - 1e-4 * lam) + tol
             acc = todo[good]
-            x[acc], y[acc], res[acc] = tx[good], ty[good], tres[good]
-            ga[acc], gax[acc], gay[acc] = ta[good], tax[good], tay[good]
-            gb[acc], gbx[acc], gby[acc] = tb[good], tbx[good], tby[good]
+            x[acc], y[acc], res[acc], ga[acc], gb[acc] = (
+                tx[good],
+                ty[good],
+                tres[good],
+                ta[good],
+                tb[good],
+            )
             todo = todo[~good]
             if todo.size == 0:
                 break
