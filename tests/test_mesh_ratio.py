@@ -236,6 +236,7 @@ def test_planar_field_equals_the_general_field(case):
     for pair, (a, b) in enumerate(((0, 2), (1, 3))):
         g, grad, _ = rf.evaluate_field(sides, a, b, ratio, p, kinds[pair])
         fg, fx, fy = field.pair(pair, x, y, field.weights(pair, ratio))
+        assert np.array_equal(field.value(pair, x, y, field.weights(pair, ratio)), fg)
         np.testing.assert_allclose(fg, g, rtol=0, atol=1e-12 * r.diagonal)
         np.testing.assert_allclose(np.column_stack((fx, fy)), grad, rtol=0, atol=1e-12)
 
