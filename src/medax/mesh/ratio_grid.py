@@ -92,9 +92,17 @@ def side_nodes(
         log.warning("region '%s': the ratio is not monotone along side %d", region.name, side)
     lo, hi = s[first - 1], s[first]
 
+    pair = 0 if a == 0 else 1
+    kinds = (weighting, "distance") if pair == 0 else ("distance", weighting)
+    planar = PlanarField(region, kinds) if PlanarField.supports(region, kinds) else None
+    w = planar.weights(pair, ri) if planar is not None else ()
+
     def f(t: FloatArray) -> FloatArray:
         """``g`` on the side: the sign of ``phi - r``."""
-        return evaluate_field(sides, a, b, ri, curve.evaluate(t), weighting)[0]
+        p = curve.evaluate(t)
+        if planar is not None:  # (only the pair (a, b) is evaluated)
+            return planar.value(pair, p[:, 0].copy(), p[:, 1].copy(), w)
+        return evaluate_field(sides, a, b, ri, p, weighting)[0]
 
     flo, fhi = f(lo), f(hi)
     moved = np.zeros(ri.size, dtype=np.int8)  # -1: lo moved last, +1: hi moved last
