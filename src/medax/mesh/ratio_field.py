@@ -295,6 +295,12 @@ class PlanarField:
             raise ValueError(f"region '{region.name}' has no closed-form field")
         self.kinds = kinds
         self.curves = [region.sides[k] for k in range(4)]
+        # per side, the constants of its term (computed once, not per evaluation)
+        self._consts = [
+            _segment_consts(c) if isinstance(c, Line) else _arc_consts(c)  # type: ignore[arg-type]
+            for c in self.curves
+        ]
+        self._normals = [_unit_normal(c) if isinstance(c, Line) else None for c in self.curves]
         # per angle pair: the foot angle when the point is on the inner side of both lines
         # or of neither (sign product +1), of one (-1), or on a line (0)
         self.angles: list[tuple[float, float, float]] = []
@@ -372,11 +378,9 @@ class PlanarField:
         """``w d`` (n,) and ``w u`` (two (n,), empty unless ``grad``) for side ``k`` of a
         distance-weighted pair: ``d`` the distance, ``u`` the unit vector from the foot to
         the point."""
-        curve = self.curves[k]
-        if isinstance(curve, Line):
-            return _segment_term(curve, x, y, w, grad)
-        assert isinstance(curve, Arc)
-        return _arc_term(curve, x, y, w, grad)
+        if isinstance(self.curves[k], Line):
+            return _segment_term(self._consts[k], x, y, w, grad)
+        return _arc_term(self._consts[k], x, y, w, grad)
 
     def _angle_pair(
         self,
@@ -389,9 +393,9 @@ class PlanarField:
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
         """``g`` and gradient of an angle pair of whole lines: ``u = sign(s) n`` from the
         signed distance ``s``, the foot angle one of three constants by the signs."""
-        la, lb = self.curves[a], self.curves[b]
+        la, lb, na, nb = self.curves[a], self.curves[b], self._normals[a], self._normals[b]
         assert isinstance(la, Line) and isinstance(lb, Line)
-        na, nb = _unit_normal(la), _unit_normal(lb)
+        assert na is not None and nb is not None
         sa = (x - la.a[0]) * na[0]
         sa += (y - la.a[1]) * na[1]
         sb = (x - lb.a[0]) * nb[0]
@@ -422,14 +426,20 @@ def _unit_normal(line: Line) -> FloatArray:
     return np.array([-d[1], d[0]]) / float(np.sqrt(d @ d))
 
 
-def _segment_term(
-    line: Line, x: FloatArray, y: FloatArray, w: FloatArray, grad: bool = True
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """``w d``, ``w u`` for a segment (the foot clamped to its ends; ``u = 0`` on it)."""
+def _segment_consts(line: Line) -> tuple[float, ...]:
+    """``(ax, ay, ex, ey, ee)``: start, direction and its squared length."""
     ax, ay = float(line.a[0]), float(line.a[1])
     ex, ey = float(line.b[0]) - ax, float(line.b[1]) - ay
+    return ax, ay, ex, ey, ex * ex + ey * ey
+
+
+def _segment_term(
+    consts: tuple[float, ...], x: FloatArray, y: FloatArray, w: FloatArray, grad: bool = True
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``w d``, ``w u`` for a segment (the foot clamped to its ends; ``u = 0`` on it), from
+    :func:`_segment_consts`."""
+    ax, ay, ex, ey, ee = consts
     dx, dy = x - ax, y - ay
-    ee = ex * ex + ey * ey
     t = dx * ex
     t += dy * ey
     if ee > 0.0:
@@ -457,14 +467,25 @@ def _segment_term(
     return d, rx, ry
 
 
-def _arc_term(
-    arc: Arc, x: FloatArray, y: FloatArray, w: FloatArray, grad: bool = True
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """``w d``, ``w u`` for an arc: radial inside its angle (``v . m >= |v| cos(h)``, ``m``
-    the bisector, ``h`` half the sweep), the nearer end outside it or at the centre."""
-    cx, cy = float(arc.center[0]), float(arc.center[1])
+def _arc_consts(arc: Arc) -> tuple[float, ...]:
+    """``(cx, cy, R, mx, my, cos h, x0, y0, x1, y1)``: centre, radius, the bisector of the
+    arc's angle and the cosine of half the sweep, the end points."""
     mid = arc.a0 + 0.5 * arc.sweep
-    mx, my, ch = np.cos(mid), np.sin(mid), np.cos(0.5 * abs(arc.sweep))
+    ends = arc.evaluate(np.array([0.0, 1.0]))
+    return (
+        float(arc.center[0]), float(arc.center[1]), arc.radius,
+        float(np.cos(mid)), float(np.sin(mid)), float(np.cos(0.5 * abs(arc.sweep))),
+        float(ends[0, 0]), float(ends[0, 1]), float(ends[1, 0]), float(ends[1, 1]),
+    )  # fmt: skip
+
+
+def _arc_term(
+    consts: tuple[float, ...], x: FloatArray, y: FloatArray, w: FloatArray, grad: bool = True
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``w d``, ``w u`` for an arc (constants of :func:`_arc_consts`): radial inside its angle
+    (``v . m >= |v| cos(h)``, ``m`` the bisector, ``h`` half the sweep), the nearer end
+    outside it or at the centre."""
+    cx, cy, radius, mx, my, ch, x0, y0, x1, y1 = consts
     vx, vy = x - cx, y - cy
     rho = vx * vx
     rho += vy * vy
@@ -474,7 +495,7 @@ def _arc_term(
     outside = dot < rho * ch
     if not rho.all():
         outside |= rho == 0.0
-    dr = rho - arc.radius
+    dr = rho - radius
     if grad:
         # unit vector from the foot c + R v / rho to x: +v / rho outside the circle, -v inside
         f = np.maximum(rho, _TINY, out=rho)
@@ -486,8 +507,7 @@ def _arc_term(
     out = np.flatnonzero(outside)
     if out.size:  # outside the arc's angle the nearer end is the foot
         xo, yo, wo = x[out], y[out], w[out]
-        ends = arc.evaluate(np.array([0.0, 1.0]))
-        r0x, r0y, r1x, r1y = xo - ends[0, 0], yo - ends[0, 1], xo - ends[1, 0], yo - ends[1, 1]
+        r0x, r0y, r1x, r1y = xo - x0, yo - y0, xo - x1, yo - y1
         d0, d1 = np.sqrt(r0x * r0x + r0y * r0y), np.sqrt(r1x * r1x + r1y * r1y)
         first = d0 <= d1
         do = np.where(first, d0, d1)
