@@ -64,6 +64,20 @@ def test_bspline_matches_scipy_and_derivative():
     assert np.allclose(c.derivative(t[1:-1]), fd, atol=1e-6)
 
 
+def test_bspline_jet_in_blocks_matches_scipy(monkeypatch):
+    """Value and derivatives of many points at once (several evaluation blocks, one not
+    full) equal scipy's, point by point."""
+    import medax.geometry.bspline as bs
+
+    monkeypatch.setattr(bs, "_HORNER_BLOCK", 1000)
+    c = wavy_spline()
+    knots = np.r_[np.zeros(4), [1 / 3, 2 / 3], np.ones(4)]
+    ref = SciBSpline(knots, c.control_points, 3)
+    t = np.random.default_rng(2).uniform(0.0, 1.0, 4321)
+    for got, nu in zip(c.jet(t), range(3), strict=True):
+        np.testing.assert_allclose(got, ref(t, nu), rtol=0, atol=1e-11)
+
+
 def test_lengths():
     assert CURVES["line"].length() == pytest.approx(5.0)
     arc = Arc(np.zeros(2), 2.0, 0.3, -1.7)

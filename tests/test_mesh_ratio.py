@@ -203,3 +203,102 @@ def test_arc_radial_distances_match_closest_points(sweep):
     c = arc.closest(x)
     np.testing.assert_allclose(d, c.distance, atol=1e-12)
     np.testing.assert_allclose(u, (x - c.foot) / c.distance[:, None], atol=1e-9)
+
+
+def _planar_cases():
+    """(region, weighting) pairs covering every closed-form term: clamped segments, radial
+    arcs (sweeps below and above pi), whole lines of an angle pair (meeting and parallel)."""
+    return [
+        (REGIONS["trapezoid"], "auto"),
+        (REGIONS["trapezoid"], "angle"),
+        (REGIONS["arcs"], "auto"),
+        (REGIONS["annulus_sector"], "auto"),
+        (sector(2.0, 7.0, 150.0), "auto"),
+        (sector(5.0, 5.1, 270.0), "auto"),
+    ]
+
+
+@pytest.mark.parametrize("case", range(6))
+def test_planar_field_equals_the_general_field(case):
+    """The closed-form field of line and arc regions gives the values and gradients of
+    evaluate_field, at points inside and around the region (feet clamped at segment ends,
+    outside an arc's angle, on either side of a whole line)."""
+    r, weighting = _planar_cases()[case]
+    kinds = (rf.pair_weighting(r, 0, 2, weighting), rf.pair_weighting(r, 1, 3, weighting))
+    assert rf.PlanarField.supports(r, kinds)
+    field = rf.PlanarField(r, kinds)
+    sides = rf.SideDistances(r, 0, kinds)
+    lo, hi = r.boundary.min(axis=0), r.boundary.max(axis=0)
+    rng = np.random.default_rng(case)
+    p = rng.uniform(lo - 0.3 * (hi - lo), hi + 0.3 * (hi - lo), (3000, 2))
+    ratio = rng.uniform(0.0, 1.0, 3000)
+    x, y = p[:, 0].copy(), p[:, 1].copy()
+    for pair, (a, b) in enumerate(((0, 2), (1, 3))):
+        g, grad, _ = rf.evaluate_field(sides, a, b, ratio, p, kinds[pair])
+        fg, fx, fy = field.pair(pair, x, y, field.weights(pair, ratio))
+        assert np.array_equal(field.value(pair, x, y, field.weights(pair, ratio)), fg)
+        np.testing.assert_allclose(fg, g, rtol=0, atol=1e-12 * r.diagonal)
+        np.testing.assert_allclose(np.column_stack((fx, fy)), grad, rtol=0, atol=1e-12)
+
+
+def test_planar_field_only_for_closed_form_sides():
+    r = REGIONS["wavy"]
+    assert not rf.PlanarField.supports(r, ("distance", "distance"))
+    assert not rf.PlanarField.supports(REGIONS["arcs"], ("angle", "angle"))  # foot angle varies
+    c = np.array([[0.2, 0], [2.5, 0], [2.0, 3], [0.0, 2.5]], float)
+    cyl = Region.build([Line(c[k], c[(k + 1) % 4]) for k in range(4)], "c", embedding=Cylinder(2.0))
+    assert not rf.PlanarField.supports(cyl, ("distance", "distance"))
+
+
+@pytest.mark.parametrize("name", ["trapezoid", "arcs", "annulus_sector"])
+def test_planar_solve_gives_the_general_nodes(name, monkeypatch):
+    """The closed-form, blocked solve finds the nodes of the general solve (coarse start,
+    several blocks)."""
+    r = REGIONS[name]
+    monkeypatch.setattr(rg, "_BLOCK", 1000)
+    fast = mesh_region(r, (60, 52))
+    monkeypatch.setattr(rf.PlanarField, "supports", staticmethod(lambda region, kinds: False))
+    slow = mesh_region(r, (60, 52))
+    assert np.abs(fast.params - slow.params).max() <= 1e-12 * r.diagonal
+
+
+@pytest.mark.parametrize("dims", [(12, 15, 48, 57), (30, 13, 117, 50)])
+def test_coarse_start_is_the_bicubic_interpolating_spline(dims):
+    """The coarse grid is interpolated by the not-a-knot bicubic spline of FITPACK's
+    RectBivariateSpline (the tensor product, evaluated through sparse basis matrices)."""
+    from scipy.interpolate import RectBivariateSpline
+
+    c1, c2, n1, n2 = dims
+    values = np.random.default_rng(c1).normal(size=(c2 + 1, c1 + 1, 2))
+    uc, vc = np.arange(c1 + 1) / c1, np.arange(c2 + 1) / c2
+    uf, vf = np.arange(1, n1) / n1, np.arange(1, n2) / n2
+    want = [RectBivariateSpline(vc, uc, values[..., d], kx=3, ky=3)(vf, uf) for d in range(2)]
+    np.testing.assert_allclose(rg._bicubic(values, uc, vc, uf, vf), np.stack(want, -1), atol=1e-13)
+
+
+def test_certify_closest_is_the_documented_rule(monkeypatch):
+    """The blocked certification equals the rule written out on the whole table: no local
+    minimum of the sample distances beyond 1.5 spacings of the foot is nearer than the
+    foot's distance minus the slack, allowing 0.55 sample spacings between samples."""
+    import medax.geometry.curve as gc
+
+    r = REGIONS["wavy"]
+    lo, hi = r.corners.min(axis=0), r.corners.max(axis=0)
+    x = np.random.default_rng(11).uniform(lo, hi, (700, 2))
+    monkeypatch.setattr(gc, "_TABLE_BLOCK", 5000)  # several blocks
+    for c in r.sides:
+        ts, pts, _ = c._search
+        t0 = np.random.default_rng(1).uniform(0.0, 1.0, len(x))
+        loc = closest_from(c, x, t0, iters=60)
+        d = np.linalg.norm(x[:, None] - pts[None], axis=2)
+        is_min = np.ones(d.shape, dtype=bool)
+        is_min[:, 1:] &= d[:, 1:] <= d[:, :-1]
+        is_min[:, :-1] &= d[:, :-1] <= d[:, 1:]
+        is_min &= np.abs(ts[None] - loc.t[:, None]) > 1.5 * (ts[1] - ts[0])
+        other = np.where(is_min, d, np.inf).min(axis=1)
+        half = 0.55 * np.linalg.norm(np.diff(pts, axis=0), axis=1).max()
+        want = other - half >= loc.distance - 1e-12
+        got = certify_closest(c, x, loc.t, loc.distance, 1e-12)
+        assert 0 < want.sum() < len(x)
+        assert np.count_nonzero(got != want) <= 2  # (round-off at the margin only)
+        assert not np.any(got & ~want & (other - half < loc.distance - 1e-9))

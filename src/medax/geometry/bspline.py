@@ -22,6 +22,7 @@ def clamped_uniform_knots(n_ctrl: int, degree: int) -> FloatArray:
 #: above this degree the power basis loses digits (6e-10 seen on degree-13 NURBS from
 #: OCCT fillets): evaluate with scipy's de Boor instead
 POWER_BASIS_MAX_DEGREE = 5
+_HORNER_BLOCK = 16384  # points per block of the power-basis evaluation
 
 
 class BSpline(Curve):
@@ -116,11 +117,18 @@ class BSpline(Curve):
         i = np.searchsorted(x, t, side="right") - 1
         i = np.minimum(np.maximum(i, 0), len(x) - 2)
         s = (t - x[i])[:, None, None]
-        c = coefs[i, :, : max(orders) + 1]  # (n, degree+1, orders, dim)
-        v = c[:, 0].copy()
-        for m in range(1, c.shape[1]):
-            v *= s
-            v += c[:, m]
+        top = max(orders) + 1
+        v = np.empty((t.size, top, coefs.shape[-1]))
+        # in blocks of points: the gathered coefficients (n, degree+1, orders, dim) stay
+        # in cache instead of being written to and read back from memory
+        for a in range(0, t.size, _HORNER_BLOCK):
+            b = a + _HORNER_BLOCK
+            c = coefs[i[a:b], :, :top]
+            vb = v[a:b]
+            vb[...] = c[:, 0]
+            for m in range(1, c.shape[1]):
+                vb *= s[a:b]
+                vb += c[:, m]
         return [v[:, nu] for nu in orders]
 
     def jet(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:

@@ -103,18 +103,29 @@ def mesh_region(
 
 
 def _inverted_count(mesh: QuadMesh) -> int:
-    """Quads with a corner that is not counter-clockwise (planar: four cross products over
-    the grid; in space: the scaled Jacobian of the full quality metrics)."""
+    """Quads with a corner that is not counter-clockwise (planar: the cross products of the
+    grid's edges, in bands of rows; in space: the scaled Jacobian of the quality metrics)."""
     if mesh.points.shape[1] != 2:
         return int(np.count_nonzero(mesh.quality().scaled_jacobian <= 0.0))
     g = mesh.grid()
-    ring = (g[:-1, :-1], g[:-1, 1:], g[1:, 1:], g[1:, :-1])  # CCW corners of each quad
-    bad = np.zeros(g[:-1, :-1].shape[:2], dtype=bool)
-    for k in range(4):
-        prev, cur, nxt = ring[k - 1], ring[k], ring[(k + 1) % 4]
-        a, b = nxt - cur, prev - cur
-        bad |= a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0] <= 0.0
-    return int(np.count_nonzero(bad))
+    bad = 0
+    band = max(1, 32768 // g.shape[1])
+    for j0 in range(0, g.shape[0] - 1, band):
+        b = g[j0 : j0 + band + 1]
+        x, y = np.ascontiguousarray(b[..., 0]), np.ascontiguousarray(b[..., 1])
+        # edges along i (hx, hy) and along j (vx, vy); the corner of quad (i, j) at row
+        # jj in {j, j + 1} and column ii in {i, i + 1} turns counter-clockwise when
+        # cross(h[jj, i], v[j, ii]) > 0 (its two edges, both away from it or both towards)
+        hx, hy = np.diff(x, axis=1), np.diff(y, axis=1)
+        vx, vy = np.diff(x, axis=0), np.diff(y, axis=0)
+        flag = np.zeros(vx[:, 1:].shape, dtype=bool)
+        for jj in (slice(None, -1), slice(1, None)):
+            for ii in (slice(None, -1), slice(1, None)):
+                c = hx[jj] * vy[:, ii]
+                c -= hy[jj] * vx[:, ii]
+                flag |= c <= 0.0
+        bad += int(np.count_nonzero(flag))
+    return bad
 
 
 def _paper_grid(

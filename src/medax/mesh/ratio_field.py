@@ -32,6 +32,7 @@ from medax.geometry.region import Region
 
 WEIGHTINGS = ("auto", "angle", "distance")
 _TINY = np.finfo(float).tiny
+_EMPTY = np.empty(0)
 
 
 def _sinc(x: FloatArray) -> FloatArray:
@@ -276,3 +277,245 @@ def _grad_theta(
     s = np.sin(theta)
     ok = s > 1e-8
     return np.where(ok, 1.0 / np.where(ok, s, 1.0), 0.0)[:, None] * dc
+
+
+class PlanarField:
+    """Both equations of the ratio grid in closed form, for planar regions whose four sides
+    all measure distances in closed form: line segments (clamped feet), arcs of a
+    distance-weighted pair (radial, or the nearer end outside the arc's angle), the whole
+    lines of an angle-weighted pair of lines (the foot angle is then one of two constants).
+    The field of :func:`evaluate_field` (same formulas, same conventions at zero distance)
+    on coordinates held as two contiguous arrays ``x``, ``y``, each side's weight folded
+    into its term: no ``(n, 2)`` columns, no foot parameters. The hot path of meshes of
+    line and arc regions.
+    """
+
+    def __init__(self, region: Region, kinds: tuple[str, str]) -> None:
+        if not PlanarField.supports(region, kinds):
+            raise ValueError(f"region '{region.name}' has no closed-form field")
+        self.kinds = kinds
+        self.curves = [region.sides[k] for k in range(4)]
+        # per side, the constants of its term (computed once, not per evaluation)
+        self._consts = [
+            _segment_consts(c) if isinstance(c, Line) else _arc_consts(c)  # type: ignore[arg-type]
+            for c in self.curves
+        ]
+        self._normals = [_unit_normal(c) if isinstance(c, Line) else None for c in self.curves]
+        # per angle pair: the foot angle when the point is on the inner side of both lines
+        # or of neither (sign product +1), of one (-1), or on a line (0)
+        self.angles: list[tuple[float, float, float]] = []
+        for pair, kind in zip(((0, 2), (1, 3)), kinds, strict=True):
+            if kind == "angle":
+                na, nb = (_unit_normal(self.curves[k]) for k in pair)  # type: ignore[arg-type]
+                c = float(na @ nb)
+                self.angles.append(
+                    (
+                        float(np.arccos(np.clip(-c, -1.0, 1.0))),
+                        float(np.arccos(np.clip(c, -1.0, 1.0))),
+                        float(np.arccos(0.0)),
+                    )
+                )
+            else:
+                self.angles.append((0.0, 0.0, 0.0))
+
+    @staticmethod
+    def supports(region: Region, kinds: tuple[str, str]) -> bool:
+        """Whether every side of ``region`` has a closed-form term here."""
+        if not region.embedding.is_identity or region.space_sides is not None:
+            return False
+        for pair, kind in zip(((0, 2), (1, 3)), kinds, strict=True):
+            for k in pair:
+                c = region.sides[k]
+                if c.dim != 2:
+                    return False
+                if kind == "angle" and type(c) is not Line:
+                    return False
+                if kind == "distance" and type(c) not in (Line, Arc):
+                    return False
+        return True
+
+    def weights(self, pair: int, r: FloatArray) -> tuple[FloatArray, ...]:
+        """Per-row weights (non-negative) of pair ``pair`` (0: sides (0, 2), 1: sides
+        (1, 3)) for ratios ``r``: ``(wa, wb)``, or for an angle pair ``(wa, wb)`` at each of
+        the three foot angles of :attr:`angles`."""
+        if self.kinds[pair] == "distance":
+            return (1.0 - r, r)
+        out: list[FloatArray] = []
+        for theta in self.angles[pair]:
+            out.extend(_weights(r, np.full(r.shape, theta)))
+        return tuple(out)
+
+    def pair(
+        self, pair: int, x: FloatArray, y: FloatArray, w: tuple[FloatArray, ...]
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``g`` (n,) of pair ``pair`` and its gradient ``(gx, gy)`` at ``(x, y)``, with the
+        rows' weights ``w`` of :meth:`weights`."""
+        return self._pair(pair, x, y, w, True)
+
+    def value(
+        self, pair: int, x: FloatArray, y: FloatArray, w: tuple[FloatArray, ...]
+    ) -> FloatArray:
+        """``g`` alone (the same values as :meth:`pair`, bit for bit)."""
+        return self._pair(pair, x, y, w, False)[0]
+
+    def _pair(
+        self, pair: int, x: FloatArray, y: FloatArray, w: tuple[FloatArray, ...], grad: bool
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        a, b = (0, 2) if pair == 0 else (1, 3)
+        if self.kinds[pair] == "angle":
+            return self._angle_pair(a, b, x, y, w, grad)
+        g, gx, gy = self._term(a, x, y, w[0], grad)
+        hb, hx, hy = self._term(b, x, y, w[1], grad)
+        g -= hb
+        if grad:
+            gx -= hx
+            gy -= hy
+        return g, gx, gy
+
+    def _term(
+        self, k: int, x: FloatArray, y: FloatArray, w: FloatArray, grad: bool
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``w d`` (n,) and ``w u`` (two (n,), empty unless ``grad``) for side ``k`` of a
+        distance-weighted pair: ``d`` the distance, ``u`` the unit vector from the foot to
+        the point."""
+        if isinstance(self.curves[k], Line):
+            return _segment_term(self._consts[k], x, y, w, grad)
+        return _arc_term(self._consts[k], x, y, w, grad)
+
+    def _angle_pair(
+        self,
+        a: int,
+        b: int,
+        x: FloatArray,
+        y: FloatArray,
+        w: tuple[FloatArray, ...],
+        grad: bool,
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``g`` and gradient of an angle pair of whole lines: ``u = sign(s) n`` from the
+        signed distance ``s``, the foot angle one of three constants by the signs."""
+        la, lb, na, nb = self.curves[a], self.curves[b], self._normals[a], self._normals[b]
+        assert isinstance(la, Line) and isinstance(lb, Line)
+        assert na is not None and nb is not None
+        sa = (x - la.a[0]) * na[0]
+        sa += (y - la.a[1]) * na[1]
+        sb = (x - lb.a[0]) * nb[0]
+        sb += (y - lb.a[1]) * nb[1]
+        ua, ub = np.sign(sa), np.sign(sb)
+        case = ua * ub
+        if case.all():
+            wa, wb = np.where(case > 0, w[0], w[2]), np.where(case > 0, w[1], w[3])
+        else:
+            wa = np.where(case > 0, w[0], np.where(case < 0, w[2], w[4]))
+            wb = np.where(case > 0, w[1], np.where(case < 0, w[3], w[5]))
+        g = wa * np.abs(sa)
+        g -= wb * np.abs(sb)
+        if not grad:
+            return g, _EMPTY, _EMPTY
+        ua *= wa
+        ub *= wb
+        gx = ua * na[0]
+        gx -= ub * nb[0]
+        gy = ua * na[1]
+        gy -= ub * nb[1]
+        return g, gx, gy
+
+
+def _unit_normal(line: Line) -> FloatArray:
+    """The unit normal (2,) to the left of a line side (into a CCW region)."""
+    d = line.b - line.a
+    return np.array([-d[1], d[0]]) / float(np.sqrt(d @ d))
+
+
+def _segment_consts(line: Line) -> tuple[float, ...]:
+    """``(ax, ay, ex, ey, ee)``: start, direction and its squared length."""
+    ax, ay = float(line.a[0]), float(line.a[1])
+    ex, ey = float(line.b[0]) - ax, float(line.b[1]) - ay
+    return ax, ay, ex, ey, ex * ex + ey * ey
+
+
+def _segment_term(
+    consts: tuple[float, ...], x: FloatArray, y: FloatArray, w: FloatArray, grad: bool = True
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``w d``, ``w u`` for a segment (the foot clamped to its ends; ``u = 0`` on it), from
+    :func:`_segment_consts`."""
+    ax, ay, ex, ey, ee = consts
+    dx, dy = x - ax, y - ay
+    t = dx * ex
+    t += dy * ey
+    if ee > 0.0:
+        t *= 1.0 / ee
+        np.maximum(t, 0.0, out=t)
+        np.minimum(t, 1.0, out=t)
+    else:
+        t[:] = 0.0
+    rx = t * ex
+    np.subtract(dx, rx, out=rx)
+    t *= ey
+    np.subtract(dy, t, out=t)
+    ry = t
+    d = rx * rx
+    d += ry * ry
+    np.sqrt(d, out=d)
+    if not grad:
+        d *= w
+        return d, _EMPTY, _EMPTY
+    f = np.maximum(d, _TINY)
+    np.divide(w, f, out=f)
+    rx *= f
+    ry *= f
+    d *= w
+    return d, rx, ry
+
+
+def _arc_consts(arc: Arc) -> tuple[float, ...]:
+    """``(cx, cy, R, mx, my, cos h, x0, y0, x1, y1)``: centre, radius, the bisector of the
+    arc's angle and the cosine of half the sweep, the end points."""
+    mid = arc.a0 + 0.5 * arc.sweep
+    ends = arc.evaluate(np.array([0.0, 1.0]))
+    return (
+        float(arc.center[0]), float(arc.center[1]), arc.radius,
+        float(np.cos(mid)), float(np.sin(mid)), float(np.cos(0.5 * abs(arc.sweep))),
+        float(ends[0, 0]), float(ends[0, 1]), float(ends[1, 0]), float(ends[1, 1]),
+    )  # fmt: skip
+
+
+def _arc_term(
+    consts: tuple[float, ...], x: FloatArray, y: FloatArray, w: FloatArray, grad: bool = True
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``w d``, ``w u`` for an arc (constants of :func:`_arc_consts`): radial inside its angle
+    (``v . m >= |v| cos(h)``, ``m`` the bisector, ``h`` half the sweep), the nearer end
+    outside it or at the centre."""
+    cx, cy, radius, mx, my, ch, x0, y0, x1, y1 = consts
+    vx, vy = x - cx, y - cy
+    rho = vx * vx
+    rho += vy * vy
+    np.sqrt(rho, out=rho)
+    dot = vx * mx
+    dot += vy * my
+    outside = dot < rho * ch
+    if not rho.all():
+        outside |= rho == 0.0
+    dr = rho - radius
+    if grad:
+        # unit vector from the foot c + R v / rho to x: +v / rho outside the circle, -v inside
+        f = np.maximum(rho, _TINY, out=rho)
+        np.divide(np.copysign(w, dr), f, out=f)
+        vx *= f
+        vy *= f
+    np.abs(dr, out=dr)
+    dr *= w
+    out = np.flatnonzero(outside)
+    if out.size:  # outside the arc's angle the nearer end is the foot
+        xo, yo, wo = x[out], y[out], w[out]
+        r0x, r0y, r1x, r1y = xo - x0, yo - y0, xo - x1, yo - y1
+        d0, d1 = np.sqrt(r0x * r0x + r0y * r0y), np.sqrt(r1x * r1x + r1y * r1y)
+        first = d0 <= d1
+        do = np.where(first, d0, d1)
+        dr[out] = wo * do
+        if grad:
+            fo = wo / np.maximum(do, _TINY)
+            vx[out] = np.where(first, r0x, r1x) * fo
+            vy[out] = np.where(first, r0y, r1y) * fo
+    if not grad:
+        return dr, _EMPTY, _EMPTY
+    return dr, vx, vy

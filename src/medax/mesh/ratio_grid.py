@@ -20,7 +20,7 @@ import logging
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import RectBivariateSpline
+from scipy.interpolate import BSpline, make_interp_spline
 
 from medax import tolerances
 from medax.errors import MeshError
@@ -30,6 +30,7 @@ from medax.geometry.region import Region
 from medax.mesh.grid import boundary_indices
 from medax.mesh.ratio_field import (
     WEIGHTINGS,
+    PlanarField,
     SideDistances,
     angular_ratio,
     evaluate_field,
@@ -44,6 +45,7 @@ _GLOBAL_ROUNDS = 3  # re-solves after the global foot check
 _COARSE_MIN = 12  # grids with both counts >= 4x this start from a coarser grid
 _FOOT_JUMP = 0.05  # coarse-cell spread of foot parameters taken as a jump
 _TRACK_STEP = 1e-3  # Newton moves (x diagonal) below which feet are tracked, not searched
+_BLOCK = 32768  # nodes solved together on the closed-form path (temporaries stay in cache)
 
 
 def side_nodes(
@@ -90,9 +92,17 @@ def side_nodes(
         log.warning("region '%s': the ratio is not monotone along side %d", region.name, side)
     lo, hi = s[first - 1], s[first]
 
+    pair = 0 if a == 0 else 1
+    kinds = (weighting, "distance") if pair == 0 else ("distance", weighting)
+    planar = PlanarField(region, kinds) if PlanarField.supports(region, kinds) else None
+    w = planar.weights(pair, ri) if planar is not None else ()
+
     def f(t: FloatArray) -> FloatArray:
         """``g`` on the side: the sign of ``phi - r``."""
-        return evaluate_field(sides, a, b, ri, curve.evaluate(t), weighting)[0]
+        p = curve.evaluate(t)
+        if planar is not None:  # (only the pair (a, b) is evaluated)
+            return planar.value(pair, p[:, 0].copy(), p[:, 1].copy(), w)
+        return evaluate_field(sides, a, b, ri, p, weighting)[0]
 
     flo, fhi = f(lo), f(hi)
     moved = np.zeros(ri.size, dtype=np.int8)  # -1: lo moved last, +1: hi moved last
@@ -125,29 +135,70 @@ def ratio_grid(
     if weighting not in WEIGHTINGS:
         raise ValueError(f"unknown weighting '{weighting}'")
     kinds = (pair_weighting(region, 0, 2, weighting), pair_weighting(region, 1, 3, weighting))
-    grid, _, counts = _grid(region, n1, n2, point_tol * region.diagonal, kinds)
+    tol = point_tol * region.diagonal
+    levels = _levels(n1, n2)
+    grid, _, counts = _grid(region, levels, _side_params(region, levels, tol, kinds), tol, kinds)
     counts["max_residual"] /= region.diagonal
     return grid.reshape(-1, 2), counts
 
 
-def _grid(
-    region: Region, n1: int, n2: int, tol: float, kinds: tuple[str, str]
-) -> tuple[FloatArray, list[FloatArray], dict[str, float]]:
-    """Nodes (n2 + 1, n1 + 1, 2), feet on the tracked sides (each (n2 + 1, n1 + 1)) and counts.
+def _levels(n1: int, n2: int) -> list[tuple[int, int]]:
+    """Division counts of the grid and of its coarse starts, finest first: grids with both
+    counts at least ``4 * _COARSE_MIN`` start from one of about a quarter of the counts."""
+    out = [(n1, n2)]
+    while min(out[-1]) >= 4 * _COARSE_MIN:
+        c1, c2 = out[-1]
+        out.append((max(_COARSE_MIN, -(-c1 // 4)), max(_COARSE_MIN, -(-c2 // 4))))
+    return out
 
-    Large grids start from a coarser one (about a quarter of the divisions, solved the same
-    way) interpolated by bicubic splines in the ratios, with feet interpolated too: Newton
-    then takes small steps with tracked feet, and one global query per side checks them.
+
+def _ratios(n1: int, n2: int) -> tuple[FloatArray, FloatArray]:
+    """The ratios of the node columns (pair (S1, S3): 1 on S3 at i = 0, 0 on S1) and of the
+    node rows (pair (S0, S2): 0 on S0 at j = 0, 1 on S2)."""
+    return 1.0 - np.arange(n1 + 1) / n1, np.arange(n2 + 1) / n2
+
+
+# side k carries the end points of the curves of the pair (a, b) (index into the kinds)
+_SIDE_PAIRS = ((0, 1, 3, 1), (1, 0, 2, 0), (2, 1, 3, 1), (3, 0, 2, 0))
+
+
+def _side_params(
+    region: Region, levels: list[tuple[int, int]], tol: float, kinds: tuple[str, str]
+) -> list[list[FloatArray]]:
+    """Per level, per side, the parameters (in the side's direction) of the boundary nodes;
+    the nodes of all levels on one side are found by one call of :func:`side_nodes`."""
+    out: list[list[FloatArray]] = [[] for _ in levels]
+    for side, a, b, kind in _SIDE_PAIRS:
+        rs = []
+        for n1, n2 in levels:
+            ri, rj = _ratios(n1, n2)
+            rs.append((ri, rj, ri[::-1], rj[::-1])[side])
+        t = side_nodes(region, side, a, b, np.concatenate(rs), tol, kinds[kind])
+        for lev, part in enumerate(np.split(t, np.cumsum([r.size for r in rs])[:-1])):
+            out[lev].append(part)
+    return out
+
+
+def _grid(
+    region: Region,
+    levels: list[tuple[int, int]],
+    side_t: list[list[FloatArray]],
+    tol: float,
+    kinds: tuple[str, str],
+) -> tuple[FloatArray, list[FloatArray], dict[str, float]]:
+    """Nodes (n2 + 1, n1 + 1, 2) of ``levels[0]`` (boundary nodes at ``side_t[0]``), feet on
+    the tracked sides (each (n2 + 1, n1 + 1)) and counts.
+
+    Large grids start from the coarser ``levels[1]`` (solved the same way) interpolated by
+    bicubic splines in the ratios, with feet interpolated too: Newton then takes small
+    steps with tracked feet, and one global query per side checks them.
     """
-    ri = 1.0 - np.arange(n1 + 1) / n1  # pair (S1, S3): ratio 1 on S3 (i = 0), 0 on S1
-    rj = np.arange(n2 + 1) / n2  # pair (S0, S2): ratio 0 on S0 (j = 0), 1 on S2
+    n1, n2 = levels[0]
+    ri, rj = _ratios(n1, n2)
     idx = boundary_indices(n1, n2)
     params = np.full(((n1 + 1) * (n2 + 1), 2), np.nan)
-    # side k carries the end points of the curves of the other pair; in side direction
-    specs = ((0, 1, 3, ri, 1), (1, 0, 2, rj, 0), (2, 1, 3, ri[::-1], 1), (3, 0, 2, rj[::-1], 0))
-    for side, a, b, r, kind in specs:
-        t = side_nodes(region, side, a, b, r, tol, kinds[kind])
-        params[idx[side]] = region.sides[side].evaluate(t)
+    for side in range(4):
+        params[idx[side]] = region.sides[side].evaluate(side_t[0][side])
     params[idx[0][[0, -1]]] = region.corners[[0, 1]]
     params[idx[2][[0, -1]]] = region.corners[[2, 3]]
     grid = params.reshape(n2 + 1, n1 + 1, 2)
@@ -155,13 +206,13 @@ def _grid(
     rb = np.broadcast_to(ri[None, 1:-1], (n2 - 1, n1 - 1)).ravel()
     feet0: list[FloatArray] | None = None
     coarse_counts: dict[str, float] = {}
-    if min(n1, n2) >= 4 * _COARSE_MIN:
-        c1, c2 = max(_COARSE_MIN, -(-n1 // 4)), max(_COARSE_MIN, -(-n2 // 4))
-        cgrid, cfeet, coarse_counts = _grid(region, c1, c2, tol, kinds)
+    if len(levels) > 1:
+        cgrid, cfeet, coarse_counts = _grid(region, levels[1:], side_t[1:], tol, kinds)
         inner, feet0 = _refine_guess(cgrid, cfeet, n1, n2)
     else:
         inner = _coons(grid, n1, n2)[1:-1, 1:-1].reshape(-1, 2)
-    solved, feet, counts = _solve(region, inner, ra, rb, 1e-3 * tol, kinds, feet0)
+    axes = (rj[1:-1], ri[1:-1])
+    solved, feet, counts = _solve(region, inner, ra, rb, 1e-3 * tol, kinds, feet0, axes)
     grid[1:-1, 1:-1] = solved.reshape(n2 - 1, n1 - 1, 2)
     for key in ("newton_iterations", "global_resolved"):
         counts[f"coarse_{key}"] = coarse_counts.get(key, 0) + coarse_counts.get(f"coarse_{key}", 0)
@@ -199,12 +250,26 @@ def _refine_guess(
     c2, c1 = cgrid.shape[0] - 1, cgrid.shape[1] - 1
     uc, vc = np.arange(c1 + 1) / c1, np.arange(c2 + 1) / c2
     uf, vf = np.arange(1, n1) / n1, np.arange(1, n2) / n2
-    nodes = np.stack(
-        [RectBivariateSpline(vc, uc, cgrid[..., d], kx=3, ky=3)(vf, uf) for d in range(2)],
-        axis=-1,
-    )
+    nodes = _bicubic(cgrid, uc, vc, uf, vf)
     feet = [f if f.size == 0 else _interpolate_feet(f, uf, vf) for f in cfeet]
     return nodes.reshape(-1, 2), feet
+
+
+def _bicubic(
+    values: FloatArray, uc: FloatArray, vc: FloatArray, uf: FloatArray, vf: FloatArray
+) -> FloatArray:
+    """The interpolating bicubic spline (not-a-knot ends, the spline of
+    ``RectBivariateSpline(vc, uc, ., kx=3, ky=3)``) of ``values`` (len(vc), len(uc), d) on
+    the grid ``vf x uf`` (len(vf), len(uf), d): the tensor product's coefficients on the
+    coarse grid, then two sparse basis matrices (four B-splines per point) applied."""
+    cv, cu, d = values.shape
+    kv = make_interp_spline(vc, values.reshape(cv, cu * d), k=3)  # coefficients along v
+    coef_v = kv.c.reshape(cv, cu, d).transpose(1, 0, 2).reshape(cu, cv * d)
+    ku = make_interp_spline(uc, coef_v, k=3)  # ... and along u: (cu, cv * d)
+    at_u = BSpline.design_matrix(uf, ku.t, 3) @ ku.c  # (len(uf), cv * d)
+    at_u = at_u.reshape(uf.size, cv, d).transpose(1, 0, 2).reshape(cv, uf.size * d)
+    out = BSpline.design_matrix(vf, kv.t, 3) @ at_u  # (len(vf), len(uf) * d)
+    return np.asarray(out).reshape(vf.size, uf.size, d)
 
 
 def _interpolate_feet(t: FloatArray, uf: FloatArray, vf: FloatArray) -> FloatArray:
@@ -245,12 +310,22 @@ def _solve(
     tol: float,
     kinds: tuple[str, str],
     feet0: list[FloatArray] | None = None,
+    axes: tuple[FloatArray, FloatArray] | None = None,
 ) -> tuple[FloatArray, list[FloatArray], dict[str, float]]:
     """Solve ``g_a = g_b = 0`` for all rows of ``p`` (n, 2): Newton with tracked feet
     (starting from ``feet0`` if given, else from global ones), then a global check of the
-    feet and a re-solve of the rows whose feet were wrong. Returns nodes, feet, counts."""
+    feet and a re-solve of the rows whose feet were wrong. Returns nodes, feet, counts.
+    ``axes`` ``(u, v)``, if given, says the rows are a grid: ``ra`` is ``u`` repeated
+    ``len(v)`` times each, ``rb`` is ``v`` tiled ``len(u)`` times."""
     n = p.shape[0]
     counts = {"newton_iterations": 0, "global_resolved": 0, "max_residual": 0.0}
+    if n > 0 and PlanarField.supports(region, kinds):
+        # every foot in closed form: nothing to track or certify
+        p, counts["newton_iterations"], res = _solve_planar(
+            PlanarField(region, kinds), p, ra, rb, tol, region.diagonal, axes
+        )
+        _check_residual(region, res, ra, rb, tol, counts)
+        return p, [np.empty(0)] * 4, counts
     sides = SideDistances(region, n, kinds)
     if n == 0:
         return p, sides.t, counts
@@ -273,6 +348,19 @@ def _solve(
         counts["global_resolved"] += int(rows.size)
         log.debug("region '%s': %d nodes re-solved from global feet", region.name, rows.size)
     # the feet of every row are now the global ones (to tol): res is the true residual
+    _check_residual(region, res, ra, rb, tol, counts)
+    return p, sides.t, counts
+
+
+def _check_residual(
+    region: Region,
+    res: FloatArray,
+    ra: FloatArray,
+    rb: FloatArray,
+    tol: float,
+    counts: dict[str, float],
+) -> None:
+    """Store the worst residual in ``counts``; raise if a node did not converge."""
     worst = float(res.max())
     counts["max_residual"] = worst
     if worst > 1e3 * tol or not np.isfinite(worst):
@@ -283,7 +371,135 @@ def _solve(
             f"{rb[bad]:.4g} of (S1, S3) do not cross (Newton residual {worst / diag:.2e} x "
             "diagonal); the region is too distorted for a structured grid"
         )
-    return p, sides.t, counts
+
+
+def _solve_planar(
+    field: PlanarField,
+    p: FloatArray,
+    ra: FloatArray,
+    rb: FloatArray,
+    tol: float,
+    diag: float,
+    axes: tuple[FloatArray, FloatArray] | None = None,
+) -> tuple[FloatArray, int, FloatArray]:
+    """:func:`_newton` on the closed-form field, blocks of ``_BLOCK`` nodes at a time (each
+    node's iteration is its own: blocking changes no result, only keeps the temporaries
+    small). With the grid's ``axes`` (see :func:`_solve`) the weights are computed once per
+    ratio, not per node. Returns nodes, iterations (the most of any block) and residuals."""
+    n = p.shape[0]
+    px, py = p[:, 0].copy(), p[:, 1].copy()
+    res = np.empty(n)
+    if axes is None:
+        wa, wb = field.weights(0, ra), field.weights(1, rb)
+    else:
+        u, v = axes
+        wa = tuple(np.repeat(w, v.size) for w in field.weights(0, u))
+        wb = tuple(np.tile(w, u.size) for w in field.weights(1, v))
+    iters = 0
+    for s in range(0, n, _BLOCK):
+        e = min(n, s + _BLOCK)
+        it, res[s:e] = _newton_planar(
+            field, px[s:e], py[s:e], tuple(w[s:e] for w in wa), tuple(w[s:e] for w in wb),
+            tol, diag,
+        )  # fmt: skip
+        iters = max(iters, it)
+    return np.column_stack((px, py)), iters, res
+
+
+def _newton_planar(
+    field: PlanarField,
+    px: FloatArray,
+    py: FloatArray,
+    wa: tuple[FloatArray, ...],
+    wb: tuple[FloatArray, ...],
+    tol: float,
+    diag: float,
+) -> tuple[int, FloatArray]:
+    """The damped Newton of :func:`_newton` (same steps, same backtracking on the residual
+    ``hypot(g_a, g_b)``, converged rows left where they are) on coordinates ``px``, ``py``
+    (updated in place) with the rows' weights ``wa``, ``wb`` (:meth:`PlanarField.weights`).
+    Trial points are evaluated without gradients (most rows converge at their first trial
+    point and never need one); gradients are computed for the rows still unconverged at
+    the start of an iteration. While most rows are unconverged all rows are evaluated
+    (converged ones with a zero step, which they accept unchanged), else the unconverged
+    ones are compacted: no scatter and gather of the whole block. Returns iterations and
+    residuals."""
+    n = px.size
+    res_out = np.empty(n)
+    rows = np.arange(n)  # block rows held in the working arrays below
+    x, y = px, py
+    ga, gax, gay = field.pair(0, x, y, wa)
+    gb, gbx, gby = field.pair(1, x, y, wb)
+    res = np.sqrt(ga * ga + gb * gb)
+    fresh = True  # gradients known at the working points
+    max_step = 0.1 * diag
+    it = 0
+    while True:
+        hot = res > tol
+        count = int(np.count_nonzero(hot))
+        if count == 0 or it == _NEWTON_ITERS:
+            break
+        if 2 * count <= rows.size:  # compact: keep the unconverged rows only
+            done = ~hot
+            px[rows[done]], py[rows[done]], res_out[rows[done]] = x[done], y[done], res[done]
+            keep = np.flatnonzero(hot)
+            rows = rows[keep]
+            x, y, res, ga, gb = x[keep], y[keep], res[keep], ga[keep], gb[keep]
+            if fresh:
+                gax, gay, gbx, gby = gax[keep], gay[keep], gbx[keep], gby[keep]
+            wa, wb = tuple(v[keep] for v in wa), tuple(v[keep] for v in wb)
+            hot = np.ones(rows.size, dtype=bool)
+            count = rows.size
+        if not fresh:  # (the values come out the same as the stored ones)
+            ga, gax, gay = field.pair(0, x, y, wa)
+            gb, gbx, gby = field.pair(1, x, y, wb)
+            fresh = True
+        it += 1
+        det = gax * gby - gay * gbx
+        safe = np.where(np.abs(det) > 1e-300, det, 1e-300)
+        sx = (gay * gb - gby * ga) / safe
+        sy = (gbx * ga - gax * gb) / safe
+        n2 = sx * sx + sy * sy
+        if np.any(n2 > max_step * max_step):  # (else the cap is 1 for every row)
+            cap = np.minimum(1.0, max_step / np.maximum(np.sqrt(n2), 1e-300))
+            sx *= cap
+            sy *= cap
+        if count < rows.size:  # converged rows: a zero step
+            sx *= hot
+            sy *= hot
+        # the full step for every row, then backtracking (halved steps) where it fails
+        qx, qy = x + sx, y + sy
+        na, nb = field.value(0, qx, qy, wa), field.value(1, qx, qy, wb)
+        nres = np.sqrt(na * na + nb * nb)
+        ok = nres < res * (1.0 - 1e-4) + tol
+        fresh = False
+        if ok.all():
+            x, y, res, ga, gb = qx, qy, nres, na, nb
+            continue
+        for old, new in zip((x, y, res, ga, gb), (qx, qy, nres, na, nb), strict=True):
+            np.copyto(old, new, where=ok)
+        todo = np.flatnonzero(~ok)
+        lam = 1.0
+        for _ in range(11):
+            lam *= 0.5
+            tx, ty = x[todo] + lam * sx[todo], y[todo] + lam * sy[todo]
+            ta = field.value(0, tx, ty, tuple(v[todo] for v in wa))
+            tb = field.value(1, tx, ty, tuple(v[todo] for v in wb))
+            tres = np.sqrt(ta * ta + tb * tb)
+            good = tres < res[todo] * (1.0 - 1e-4 * lam) + tol
+            acc = todo[good]
+            x[acc], y[acc], res[acc], ga[acc], gb[acc] = (
+                tx[good],
+                ty[good],
+                tres[good],
+                ta[good],
+                tb[good],
+            )
+            todo = todo[~good]
+            if todo.size == 0:
+                break
+    px[rows], py[rows], res_out[rows] = x, y, res
+    return it, res_out
 
 
 def _wrong_feet(sides: SideDistances, p: FloatArray, tol: float, rows: np.ndarray) -> np.ndarray:
