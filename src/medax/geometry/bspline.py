@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from functools import cached_property
+import math
+from functools import cached_property, lru_cache
 
 import numpy as np
 from scipy.interpolate import BSpline as _ScipyBSpline
@@ -22,6 +23,18 @@ def clamped_uniform_knots(n_ctrl: int, degree: int) -> FloatArray:
 #: above this degree the power basis loses digits (6e-10 seen on degree-13 NURBS from
 #: OCCT fillets): evaluate with scipy's de Boor instead
 POWER_BASIS_MAX_DEGREE = 5
+
+
+@lru_cache(maxsize=8)
+def _bezier_to_power(k: int) -> FloatArray:
+    """(k+1, k+1) matrix taking a degree-``k`` Bezier's control points to its coefficients
+    in powers of the local parameter ``s``, highest power first:
+    ``coef_j = C(k, j) sum_i (-1)^(j-i) C(j, i) P_i``."""
+    m = np.zeros((k + 1, k + 1))
+    for j in range(k + 1):
+        for i in range(j + 1):
+            m[k - j, i] = math.comb(k, j) * math.comb(j, i) * (-1.0) ** (j - i)
+    return m
 
 
 class BSpline(Curve):
@@ -58,11 +71,41 @@ class BSpline(Curve):
             self.weights.shape != (ctrl.shape[0],) or np.any(self.weights <= 0)
         ):
             raise CurveError("B-spline weights must be positive, one per control point")
+
+    @classmethod
+    def from_bezier(cls, control_points: FloatArray, breaks: FloatArray, degree: int) -> BSpline:
+        """The spline made of ``m`` Bezier pieces of ``degree`` joined end to end: control
+        points ``(m * degree + 1, dim)`` (each piece's last is the next one's first), piece
+        ``i`` on ``[breaks[i], breaks[i + 1]]`` (``breaks`` (m + 1,), increasing, 0 to 1).
+        Interior knots have multiplicity ``degree`` (each piece is exactly its Bezier curve;
+        the joints are C0 in the knot structure). The polynomial coefficients are set from
+        the control points in closed form, so no spline evaluation is needed to build it."""
+        ctrl = np.asarray(control_points, dtype=np.float64)
+        x = np.asarray(breaks, dtype=np.float64)
+        k, m = int(degree), len(x) - 1
+        if m < 1 or ctrl.ndim != 2 or ctrl.shape[0] != m * k + 1 or np.any(np.diff(x) <= 0):
+            raise CurveError(
+                f"Bezier pieces: {ctrl.shape} control points for {m} pieces of degree {k} "
+                "(need m * degree + 1) and increasing breaks"
+            )
+        knots = np.concatenate((np.zeros(1), np.repeat(x, k), np.ones(1)))
+        knots[: k + 1], knots[-k - 1 :] = x[0], x[-1]
+        spline = cls(ctrl, k, knots)
+        if k <= POWER_BASIS_MAX_DEGREE:
+            xu = (x - x[0]) / (x[-1] - x[0])  # as __init__ normalises the knots
+            pts = ctrl[np.arange(m)[:, None] * k + np.arange(k + 1)]  # (m, k + 1, dim)
+            c0 = np.einsum("ji,mid->jmd", _bezier_to_power(k), pts)  # powers of s, high first
+            c0 /= (np.diff(xu)[None, :] ** np.arange(k, -1, -1)[:, None])[:, :, None]
+            spline.__dict__["_pieces"] = spline._pack(xu, c0)
+        return spline
+
+    @cached_property
+    def _spl(self) -> _ScipyBSpline:
+        """scipy's B-spline of the same knots (de Boor; homogeneous for a NURBS)."""
         if self.weights is None:
-            self._spl = _ScipyBSpline(kn, ctrl, degree, extrapolate=False)
-        else:
-            hom = np.column_stack((ctrl * self.weights[:, None], self.weights))
-            self._spl = _ScipyBSpline(kn, hom, degree, extrapolate=False)
+            return _ScipyBSpline(self.knots, self.control_points, self.degree, extrapolate=False)
+        hom = np.column_stack((self.control_points * self.weights[:, None], self.weights))
+        return _ScipyBSpline(self.knots, hom, self.degree, extrapolate=False)
 
     @property
     def dim(self) -> int:
@@ -92,7 +135,13 @@ class BSpline(Curve):
         # with the interval to its right)
         taylor = np.array([np.asarray(self._spl(x[:-1], nu)) for nu in range(k + 1)])
         fact = np.array([float(np.prod(np.arange(1, nu + 1))) for nu in range(k + 1)])
-        c0 = (taylor / fact[:, None, None])[::-1]  # highest power first
+        return self._pack(x, (taylor / fact[:, None, None])[::-1])  # highest power first
+
+    def _pack(self, x: FloatArray, c0: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Break points ``x`` (m+1,) and the value coefficients ``c0`` (degree+1, m, dim),
+        highest power first, stacked with those of the first and second derivative as
+        :attr:`_pieces` holds them."""
+        k = self.degree
         powers = np.arange(k, -1, -1, dtype=np.float64)[:, None, None]
         coefs = np.zeros((3, *c0.shape))
         coefs[0] = c0
