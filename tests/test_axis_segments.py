@@ -8,12 +8,12 @@ import math
 import numpy as np
 import pytest
 from scipy.interpolate import BSpline as ScipyBSpline
-from truth import DenseDistance, dense_sides, side_function
 
 from medax.axis import trace_axis
 from medax.errors import CurveError
 from medax.geometry import Arc, BSpline, Line, Region, read_region, region_from_dict
 from medax.geometry import sample_regions_path as samples
+from truth import DenseDistance, dense_sides, side_function
 
 
 def _dense(axis, per_interval: int = 10) -> np.ndarray:
@@ -152,7 +152,11 @@ def test_parabolic_pieces_point_by_point():
 
 
 def test_end_points_on_b1_b2():
-    for corners in (SKEW, [[0, 0], [10, 0], [7.5, 6], [2.5, 6]], [[1, -2], [8, 1], [6, 9], [-3, 4]]):
+    for corners in (
+        SKEW,
+        [[0, 0], [10, 0], [7.5, 6], [2.5, 6]],
+        [[1, -2], [8, 1], [6, 9], [-3, 4]],
+    ):
         reg = _quad(corners)
         c = np.asarray(corners, float)
         for pair in ((0, 2), (1, 3)):
@@ -298,3 +302,25 @@ def test_independent_side_functions_agree_with_the_truth_helpers(regions_spec):
     x = np.array([[3.0, 2.0], [-1.0, 1.0], [12.0, -3.0]])
     ref = DenseDistance(f)(x)
     assert np.allclose(_segment_distance(x, [0, 0], [10, 0]), ref, rtol=0, atol=1e-12)
+
+
+def test_polyline_start_and_end_sides_use_the_side_solver():
+    """B sides of another kind (polylines): the end points come from the Newton solver on
+    the side, then the exact pieces between them."""
+    from medax.geometry import Polyline
+
+    c = np.array([[0.0, 0.0], [10.0, 0.0], [8.0, 6.0], [2.0, 6.0]])
+    sides = [
+        Line(c[0], c[1]),
+        Polyline(np.array([c[1], [10.5, 3.0], c[2]])),
+        Line(c[2], c[3]),
+        Polyline(np.array([c[3], [0.5, 3.5], c[0]])),
+    ]
+    reg = Region.build(sides, name="polyline-b")
+    a = trace_axis(reg, (0, 2))
+    b = trace_axis(reg, (0, 2), closed_form=False, tol=1e-9, point_tol=1e-13)
+    d = a.diagonal
+    assert a.counts.closed_form_pieces >= 2
+    assert np.max(np.linalg.norm(a.points[[0, -1]] - b.points[[0, -1]], axis=1)) <= 1e-12 * d
+    assert np.max(a.spline.closest(b.points).distance) <= 1e-12 * d
+    assert _equidistance(a, _dense(a)) <= 1e-10 * d

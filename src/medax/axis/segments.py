@@ -205,6 +205,10 @@ def _roots(a: float, b: float, c: float) -> list[float]:
     return [q / a] if q == 0.0 else [q / a, c / q]
 
 
+#: the ends whose normal lines bound each foot state (0: at a, 1: interior, 2: at b)
+_BOUNDS = {0: (0,), 1: (0, 2), 2: (2,)}
+
+
 def _follow(s1: _Seg, s2: _Seg, x0: Vec, t: Vec, scale: float) -> list[Piece] | None:
     """The bisector from ``x0`` in direction ``t`` to infinity, piece by piece."""
     segs = (s1, s2)
@@ -218,8 +222,8 @@ def _follow(s1: _Seg, s2: _Seg, x0: Vec, t: Vec, scale: float) -> list[Piece] | 
         p, u, w, tau0 = c
         hits: list[tuple[float, int, int]] = []  # (tau, segment, state at that end)
         for k, s in enumerate(segs):
-            ends = ((s.a, 0),) if st[k] == 0 else (((s.b, 2),) if st[k] == 2 else ((s.a, 0), (s.b, 2)))
-            for e, at in ends:  # crossings of the normal line (x - e) . u_s = 0
+            for at in _BOUNDS[st[k]]:  # crossings of the normal line (x - e) . u_s = 0
+                e = s.a if at == 0 else s.b
                 rs = _roots(_dot(w, s.u), _dot(u, s.u), _dot(_sub(p, e), s.u))
                 hits += [(r, k, at) for r in rs if r > tau0 + tol]
         if not hits:
@@ -246,7 +250,7 @@ def bisector(s1: _Seg, s2: _Seg, scale: float) -> list[Piece] | None:
         return None
     m = (0.5 * (q1[0] + q2[0]), 0.5 * (q1[1] + q2[1]))
     w = ((q2[0] - q1[0]) / dist, (q2[1] - q1[1]) / dist)
-    t = (w[1], -w[0])  # the tracer's tangent (grad turned by -90 degrees): B1 -> B2
+    t = (w[1], -w[0])  # along the bisector (its gradient is along w)
     fwd = _follow(s1, s2, m, t, scale)
     bwd = _follow(s1, s2, m, (-t[0], -t[1]), scale)
     if fwd is None or bwd is None:
@@ -311,8 +315,10 @@ def _on_arc_side(side: Arc, o: Vec, piece: Piece, scale: float) -> list[tuple[fl
         if piece.lo - slack <= r <= piece.hi + slack:
             x = piece.at(r)
             ang = math.atan2(x[1] - c[1], x[0] - c[0])
-            s = ((ang - side.a0) * math.copysign(1.0, side.sweep)) % (2.0 * math.pi) / abs(
-                side.sweep
+            s = (
+                ((ang - side.a0) * math.copysign(1.0, side.sweep))
+                % (2.0 * math.pi)
+                / abs(side.sweep)
             )
             if s > 0.5 * (1.0 + full):  # just before the start, across the cut
                 s -= full
@@ -338,9 +344,13 @@ def _crossings(
 ) -> list[tuple[int, float, float]]:
     """``(piece index, tau, side parameter)`` of the chain's crossings with a start/end side."""
     if isinstance(side, Line):
-        return [(i, r, s) for i, pc in enumerate(chain) for r, s in _on_line_side(side, o, pc, scale)]
+        return [
+            (i, r, s) for i, pc in enumerate(chain) for r, s in _on_line_side(side, o, pc, scale)
+        ]
     if isinstance(side, Arc):
-        return [(i, r, s) for i, pc in enumerate(chain) for r, s in _on_arc_side(side, o, pc, scale)]
+        return [
+            (i, r, s) for i, pc in enumerate(chain) for r, s in _on_arc_side(side, o, pc, scale)
+        ]
     from medax.axis.endpoints import end_point  # any other kind: Newton on the side
 
     s, x = end_point(DistanceField(region, roles), side, "start/end side")
@@ -485,7 +495,8 @@ def _result(
     return MedialAxis(
         region=region, pair=(int(pair[0]), int(pair[1])), roles=roles, method="frame",
         points=xy, space_points=xy, foot1=c1.foot[:npt], foot2=c2.foot[:npt],
-        d1=c1.distance[:npt], d2=c2.distance[:npt], spline=spline, t_start=float(t_start), t_end=float(t_end),
+        d1=c1.distance[:npt], d2=c2.distance[:npt], spline=spline, t_start=float(t_start),
+        t_end=float(t_end),
         max_point_error=point_error, max_curve_error=curve_error, tol=tol, counts=counts,
     )  # fmt: skip
 
