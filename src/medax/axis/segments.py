@@ -391,10 +391,10 @@ def segment_axis(
         and a2.dim == 2
     ):
         return None
-    ends = np.array([a1.a, a1.b, a2.a, a2.b])
-    lo, hi = ends.min(axis=0), ends.max(axis=0)
-    o = (0.5 * float(lo[0] + hi[0]), 0.5 * float(lo[1] + hi[1]))
-    scale = float(math.hypot(*(hi - lo)))  # <= the region's diagonal: checks are stricter
+    xs = [float(a1.a[0]), float(a1.b[0]), float(a2.a[0]), float(a2.b[0])]
+    ys = [float(a1.a[1]), float(a1.b[1]), float(a2.a[1]), float(a2.b[1])]
+    o = (0.5 * (min(xs) + max(xs)), 0.5 * (min(ys) + max(ys)))
+    scale = math.hypot(max(xs) - min(xs), max(ys) - min(ys))  # <= the region's diagonal
     s1, s2 = _seg(a1, o), _seg(a2, o)
     chain = bisector(s1, s2, scale)
     if chain is None:
@@ -446,33 +446,33 @@ def _result(
     u_pts: list[float] = []
     du = prev_speed = prev_span = 0.0
     for i, pc in enumerate(pieces):
-        span = pc.hi - pc.lo
-        x0, d0, d1 = pc.at(pc.lo), pc.tangent(pc.lo), pc.tangent(pc.hi)
+        lo, span = pc.lo, pc.hi - pc.lo
+        d0 = pc.tangent(lo)
         speed = math.hypot(d0[0], d0[1])
         du = span if i == 0 else du * (speed * span) / (prev_speed * prev_span)
+        x0, x2 = pc.at(lo), pc.at(pc.hi)
         if i == 0:
             ctrl.append((x0[0] + ox, x0[1] + oy))
         else:  # the joint: both pieces' ends, equal to rounding
             x1 = pieces[i - 1].at(pieces[i - 1].hi)
             ctrl[-1] = (0.5 * (x0[0] + x1[0]) + ox, 0.5 * (x0[1] + x1[1]) + oy)
-        ctrl.append((x0[0] + 0.5 * span * d0[0] + ox, x0[1] + 0.5 * span * d0[1] + oy))
-        x2 = pc.at(pc.hi)
-        ctrl.append((x2[0] + ox, x2[1] + oy))
+        h = 0.5 * span
+        ctrl += [(x0[0] + h * d0[0] + ox, x0[1] + h * d0[1] + oy), (x2[0] + ox, x2[1] + oy)]
         k = POINTS_LINE if pc.is_line else POINTS_PARABOLA
         pts.append(ctrl[-3])
-        u_pts.append(breaks[-1])
+        u0 = breaks[-1]
+        u_pts.append(u0)
         for j in range(1, k):
-            y = pc.at(pc.lo + span * j / k)
+            y = pc.at(lo + span * j / k)
             pts.append((y[0] + ox, y[1] + oy))
-            u_pts.append(breaks[-1] + du * j / k)
-        breaks.append(breaks[-1] + du)
+            u_pts.append(u0 + du * j / k)
+        breaks.append(u0 + du)
+        d1 = pc.tangent(pc.hi)
         prev_speed, prev_span = math.hypot(d1[0], d1[1]), span
     pts.append(ctrl[-1])
     u_pts.append(breaks[-1])
     total = breaks[-1]
-    knots_at = np.array(breaks) / total
-    knots_at[-1] = 1.0
-    spline = BSpline.from_bezier(np.array(ctrl), knots_at, 2)
+    spline = BSpline.from_bezier(np.array(ctrl), np.array(breaks) / total, 2)
     n = len(pieces)
     xy = np.array(pts)
     uu_pts = np.array(u_pts) / total

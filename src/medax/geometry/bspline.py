@@ -76,27 +76,42 @@ class BSpline(Curve):
     def from_bezier(cls, control_points: FloatArray, breaks: FloatArray, degree: int) -> BSpline:
         """The spline made of ``m`` Bezier pieces of ``degree`` joined end to end: control
         points ``(m * degree + 1, dim)`` (each piece's last is the next one's first), piece
-        ``i`` on ``[breaks[i], breaks[i + 1]]`` (``breaks`` (m + 1,), increasing, 0 to 1).
-        Interior knots have multiplicity ``degree`` (each piece is exactly its Bezier curve;
-        the joints are C0 in the knot structure). The polynomial coefficients are set from
-        the control points in closed form, so no spline evaluation is needed to build it."""
+        ``i`` on ``[breaks[i], breaks[i + 1]]`` (``breaks`` (m + 1,), increasing; mapped onto
+        [0, 1] as every knot domain is). Interior knots have multiplicity ``degree`` (each
+        piece is exactly its Bezier curve; C0 in the knot structure). The polynomial
+        coefficients come from the control points in closed form (no spline evaluation)."""
         ctrl = np.asarray(control_points, dtype=np.float64)
         x = np.asarray(breaks, dtype=np.float64)
         k, m = int(degree), len(x) - 1
-        if m < 1 or ctrl.ndim != 2 or ctrl.shape[0] != m * k + 1 or np.any(np.diff(x) <= 0):
+        if (
+            k < 1
+            or m < 1
+            or ctrl.ndim != 2
+            or ctrl.shape[1] not in (2, 3)
+            or ctrl.shape[0] != m * k + 1
+            or np.any(np.diff(x) <= 0)
+        ):
             raise CurveError(
                 f"Bezier pieces: {ctrl.shape} control points for {m} pieces of degree {k} "
-                "(need m * degree + 1) and increasing breaks"
+                "(need (m * degree + 1, 2|3)) and increasing breaks"
             )
-        knots = np.concatenate((np.zeros(1), np.repeat(x, k), np.ones(1)))
-        knots[: k + 1], knots[-k - 1 :] = x[0], x[-1]
-        spline = cls(ctrl, k, knots)
+        xu = (x - x[0]) / (x[-1] - x[0])  # as __init__ normalises the knot domain
+        mult = np.full(m + 1, k)
+        mult[[0, -1]] = k + 1
+        # the checks above are those of __init__ for these knots: set the fields directly
+        spline = cls.__new__(cls)
+        spline.control_points, spline.degree = ctrl, k
+        spline.knots, spline.weights = np.repeat(xu, mult), None
         if k <= POWER_BASIS_MAX_DEGREE:
-            xu = (x - x[0]) / (x[-1] - x[0])  # as __init__ normalises the knots
             pts = ctrl[np.arange(m)[:, None] * k + np.arange(k + 1)]  # (m, k + 1, dim)
-            c0 = np.einsum("ji,mid->jmd", _bezier_to_power(k), pts)  # powers of s, high first
-            c0 /= (np.diff(xu)[None, :] ** np.arange(k, -1, -1)[:, None])[:, :, None]
-            spline.__dict__["_pieces"] = spline._pack(xu, c0)
+            c = _bezier_to_power(k) @ pts  # powers of (t - x_i) / h_i, highest first
+            c /= (np.diff(xu)[:, None] ** np.arange(k, -1, -1))[:, :, None]
+            coefs = np.zeros((m, k + 1, 3, ctrl.shape[1]))  # the layout of _pieces
+            coefs[:, :, 0] = c
+            coefs[:, 1:, 1] = c[:, :-1] * np.arange(k, 0, -1)[None, :, None]
+            if k >= 2:
+                coefs[:, 2:, 2] = coefs[:, 1:-1, 1] * np.arange(k - 1, 0, -1)[None, :, None]
+            spline.__dict__["_pieces"] = (xu, coefs)
         return spline
 
     @cached_property
