@@ -52,6 +52,7 @@ MAX_PIECES = 12
 POINTS_PARABOLA, POINTS_LINE = 4, 2
 #: check samples per interval between points (the tracer's "10x denser")
 CHECK_SAMPLES = 10
+_FRAC = np.arange(1, CHECK_SAMPLES)[None, :] / CHECK_SAMPLES
 #: relative (x length scale) slack on transitions and on the ends of pieces
 EPS = 1e-11
 
@@ -477,8 +478,7 @@ def _result(
     xy = np.array(pts)
     uu_pts = np.array(u_pts) / total
     # measured errors: at the points and 10x denser on the spline (one query per side)
-    g = np.arange(1, CHECK_SAMPLES) / CHECK_SAMPLES
-    uu = (uu_pts[:-1, None] + g[None, :] * np.diff(uu_pts)[:, None]).ravel()
+    uu = (uu_pts[:-1, None] + _FRAC * np.diff(uu_pts)[:, None]).ravel()
     both = np.concatenate((xy, spline.evaluate(uu)))
     c1 = region.sides[roles.a1].closest(both)
     c2 = region.sides[roles.a2].closest(both)

@@ -37,6 +37,24 @@ def _bezier_to_power(k: int) -> FloatArray:
     return m
 
 
+@lru_cache(maxsize=64)
+def _bezier_layout(
+    m: int, k: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, FloatArray, FloatArray]:
+    """For ``m`` Bezier pieces of degree ``k``: knot multiplicities (m+1,), control point
+    rows of each piece (m, k+1), powers (k+1,) highest first, and the factors taking value
+    to first (k, 1) and first to second (k-1, 1) derivative coefficients."""
+    mult = np.full(m + 1, k)
+    mult[[0, -1]] = k + 1
+    rows = np.arange(m)[:, None] * k + np.arange(k + 1)
+    powers = np.arange(k, -1, -1)
+    d1 = np.arange(k, 0, -1, dtype=np.float64)[:, None]
+    d2 = np.arange(k - 1, 0, -1, dtype=np.float64)[:, None]
+    for a in (mult, rows, powers, d1, d2):
+        a.flags.writeable = False
+    return mult, rows, powers, d1, d2
+
+
 class BSpline(Curve):
     """B-spline ``C(t)`` with control points (m, dim), clamped knots (m + p + 1,) and optional
     positive weights (m,) (then a NURBS). The knot domain is mapped linearly onto ``[0, 1]``."""
@@ -96,21 +114,18 @@ class BSpline(Curve):
                 "(need (m * degree + 1, 2|3)) and increasing breaks"
             )
         xu = (x - x[0]) / (x[-1] - x[0])  # as __init__ normalises the knot domain
-        mult = np.full(m + 1, k)
-        mult[[0, -1]] = k + 1
+        mult, rows, powers, d1, d2 = _bezier_layout(m, k)
         # the checks above are those of __init__ for these knots: set the fields directly
         spline = cls.__new__(cls)
         spline.control_points, spline.degree = ctrl, k
         spline.knots, spline.weights = np.repeat(xu, mult), None
         if k <= POWER_BASIS_MAX_DEGREE:
-            pts = ctrl[np.arange(m)[:, None] * k + np.arange(k + 1)]  # (m, k + 1, dim)
-            c = _bezier_to_power(k) @ pts  # powers of (t - x_i) / h_i, highest first
-            c /= (np.diff(xu)[:, None] ** np.arange(k, -1, -1))[:, :, None]
+            c = _bezier_to_power(k) @ ctrl[rows]  # (m, k+1, dim) in powers of s, highest first
+            c /= (np.diff(xu)[:, None] ** powers)[:, :, None]  # powers of t - x_i
             coefs = np.zeros((m, k + 1, 3, ctrl.shape[1]))  # the layout of _pieces
             coefs[:, :, 0] = c
-            coefs[:, 1:, 1] = c[:, :-1] * np.arange(k, 0, -1)[None, :, None]
-            if k >= 2:
-                coefs[:, 2:, 2] = coefs[:, 1:-1, 1] * np.arange(k - 1, 0, -1)[None, :, None]
+            coefs[:, 1:, 1] = c[:, :-1] * d1
+            coefs[:, 2:, 2] = coefs[:, 1:-1, 1] * d2
             spline.__dict__["_pieces"] = (xu, coefs)
         return spline
 
