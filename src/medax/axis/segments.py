@@ -46,6 +46,8 @@ from medax.geometry.region import PairRoles, Region
 log = logging.getLogger(__name__)
 
 Vec = tuple[float, float]
+#: a crossing with B1/B2: (piece index, tau on it, parameter on the side)
+_Hit = tuple[int, float, float]
 #: more conic pieces than this on the bisector of two segments means something went wrong
 MAX_PIECES = 12
 #: points per piece of the result (intervals): parabolas, lines
@@ -223,10 +225,12 @@ def _follow(s1: _Seg, s2: _Seg, x0: Vec, t: Vec, scale: float) -> list[Piece] | 
         p, u, w, tau0 = c
         hits: list[tuple[float, int, int]] = []  # (tau, segment, state at that end)
         for k, s in enumerate(segs):
+            sx, sy = s.u
+            qa, qb = w[0] * sx + w[1] * sy, u[0] * sx + u[1] * sy
             for at in _BOUNDS[st[k]]:  # crossings of the normal line (x - e) . u_s = 0
                 e = s.a if at == 0 else s.b
-                rs = _roots(_dot(w, s.u), _dot(u, s.u), _dot(_sub(p, e), s.u))
-                hits += [(r, k, at) for r in rs if r > tau0 + tol]
+                qc = (p[0] - e[0]) * sx + (p[1] - e[1]) * sy
+                hits += [(r, k, at) for r in _roots(qa, qb, qc) if r > tau0 + tol]
         if not hits:
             out.append(Piece(p, u, w, tau0, math.inf, st))
             return out
@@ -265,66 +269,71 @@ def bisector(s1: _Seg, s2: _Seg, scale: float) -> list[Piece] | None:
 
 
 # ---- crossings with B1 / B2 ------------------------------------------------------------------
-def _on_line_side(side: Line, o: Vec, piece: Piece, scale: float) -> list[tuple[float, float]]:
-    """``(tau, s)`` where the piece crosses the segment ``side`` (``s`` its parameter)."""
+def _on_line_side(side: Line, o: Vec, chain: list[Piece], scale: float) -> list[_Hit]:
+    """Crossings of the chain with the segment ``side``: a quadratic in ``tau`` per piece."""
     c0 = (float(side.a[0]) - o[0], float(side.a[1]) - o[1])
     d = (float(side.b[0]) - o[0] - c0[0], float(side.b[1]) - o[1] - c0[1])
-    nu = (-d[1], d[0])
-    rs = _roots(_dot(nu, piece.w), _dot(nu, piece.u), _dot(nu, _sub(piece.p, c0)))
-    out = []
-    dd = _dot(d, d)
+    nx, ny = -d[1], d[0]
+    dd = d[0] * d[0] + d[1] * d[1]
     slack = EPS * scale
-    for r in rs:
-        if piece.lo - slack <= r <= piece.hi + slack:
-            s = _dot(_sub(piece.at(r), c0), d) / dd
-            if -EPS <= s <= 1.0 + EPS:
-                out.append((r, min(max(s, 0.0), 1.0)))
+    out = []
+    for i, pc in enumerate(chain):
+        (px, py), (ux, uy), (wx, wy) = pc.p, pc.u, pc.w
+        rs = _roots(nx * wx + ny * wy, nx * ux + ny * uy, nx * (px - c0[0]) + ny * (py - c0[1]))
+        for r in rs:
+            if pc.lo - slack <= r <= pc.hi + slack:
+                x = pc.at(r)
+                s = ((x[0] - c0[0]) * d[0] + (x[1] - c0[1]) * d[1]) / dd
+                if -EPS <= s <= 1.0 + EPS:
+                    out.append((i, r, min(max(s, 0.0), 1.0)))
     return out
 
 
-def _on_arc_side(side: Arc, o: Vec, piece: Piece, scale: float) -> list[tuple[float, float]]:
-    """``(tau, s)`` where the piece crosses the arc ``side``: roots of
-    ``|x(tau) - c|^2 - r^2`` (quadratic on lines, quartic on parabolas)."""
+def _quartic_roots(coef: list[float]) -> list[float]:
+    """Real roots of a quartic (coefficients highest first), polished by Newton."""
+    rs = []
+    for z in np.roots(coef):
+        if abs(z.imag) <= 1e-7 * max(1.0, abs(z.real)):
+            r = float(z.real)
+            for _ in range(3):  # polish (the companion eigenvalues lose a few digits)
+                f = (((coef[0] * r + coef[1]) * r + coef[2]) * r + coef[3]) * r + coef[4]
+                g = ((4.0 * coef[0] * r + 3.0 * coef[1]) * r + 2.0 * coef[2]) * r + coef[3]
+                if g == 0.0:
+                    break
+                r -= f / g
+            rs.append(r)
+    return rs
+
+
+def _on_arc_side(side: Arc, o: Vec, chain: list[Piece], scale: float) -> list[_Hit]:
+    """Crossings of the chain with the arc ``side``: roots of ``|x(tau) - c|^2 - r^2``
+    (quadratic on lines, quartic on parabolas) on the arc's angular range."""
     c = (float(side.center[0]) - o[0], float(side.center[1]) - o[1])
-    q = _sub(piece.p, c)
-    u, w = piece.u, piece.w
-    coef = [
-        _dot(w, w),
-        2.0 * _dot(u, w),
-        _dot(u, u) + 2.0 * _dot(w, q),
-        2.0 * _dot(u, q),
-        _dot(q, q) - side.radius**2,
-    ]
-    if piece.is_line:
-        rs = _roots(coef[2], coef[3], coef[4])
-    else:
-        rs = []
-        for z in np.roots(coef):
-            if abs(z.imag) <= 1e-7 * max(1.0, abs(z.real)):
-                r = float(z.real)
-                for _ in range(3):  # polish (the companion eigenvalues lose a few digits)
-                    f = (((coef[0] * r + coef[1]) * r + coef[2]) * r + coef[3]) * r + coef[4]
-                    g = ((4.0 * coef[0] * r + 3.0 * coef[1]) * r + 2.0 * coef[2]) * r + coef[3]
-                    if g == 0.0:
-                        break
-                    r -= f / g
-                rs.append(r)
-    out = []
+    r2 = side.radius**2
+    sweep, a0 = abs(side.sweep), side.a0
+    sign = math.copysign(1.0, side.sweep)
+    full = 2.0 * math.pi / sweep
     slack = EPS * scale
-    full = 2.0 * math.pi / abs(side.sweep)
-    for r in rs:
-        if piece.lo - slack <= r <= piece.hi + slack:
-            x = piece.at(r)
-            ang = math.atan2(x[1] - c[1], x[0] - c[0])
-            s = (
-                ((ang - side.a0) * math.copysign(1.0, side.sweep))
-                % (2.0 * math.pi)
-                / abs(side.sweep)
-            )
-            if s > 0.5 * (1.0 + full):  # just before the start, across the cut
-                s -= full
-            if -EPS <= s <= 1.0 + EPS:
-                out.append((r, min(max(s, 0.0), 1.0)))
+    out = []
+    for i, pc in enumerate(chain):
+        q = (pc.p[0] - c[0], pc.p[1] - c[1])
+        u, w = pc.u, pc.w
+        a2 = u[0] * u[0] + u[1] * u[1] + 2.0 * (w[0] * q[0] + w[1] * q[1])
+        a1 = 2.0 * (u[0] * q[0] + u[1] * q[1])
+        a0c = q[0] * q[0] + q[1] * q[1] - r2
+        if pc.is_line:
+            rs = _roots(a2, a1, a0c)
+        else:
+            rs = _quartic_roots([_dot(w, w), 2.0 * _dot(u, w), a2, a1, a0c])
+        for r in rs:
+            if pc.lo - slack <= r <= pc.hi + slack:
+                x = pc.at(r)
+                ang = math.atan2(x[1] - c[1], x[0] - c[0])
+                s = ((ang - a0) * sign) % (2.0 * math.pi) / sweep
+                if s > 0.5 * (1.0 + full):  # just before the start, across the cut
+                    s -= full
+                if -EPS <= s <= 1.0 + EPS:
+                    out.append((i, r, min(max(s, 0.0), 1.0)))
     return out
 
 
@@ -342,25 +351,21 @@ def _locate(chain: list[Piece], x: Vec, scale: float) -> list[tuple[int, float]]
 
 def _crossings(
     chain: list[Piece], side: Curve, o: Vec, scale: float, region: Region, roles: PairRoles
-) -> list[tuple[int, float, float]]:
+) -> list[_Hit]:
     """``(piece index, tau, side parameter)`` of the chain's crossings with a start/end side."""
     if isinstance(side, Line):
-        return [
-            (i, r, s) for i, pc in enumerate(chain) for r, s in _on_line_side(side, o, pc, scale)
-        ]
+        return _on_line_side(side, o, chain, scale)
     if isinstance(side, Arc):
-        return [
-            (i, r, s) for i, pc in enumerate(chain) for r, s in _on_arc_side(side, o, pc, scale)
-        ]
+        return _on_arc_side(side, o, chain, scale)
     from medax.axis.endpoints import end_point  # any other kind: Newton on the side
 
     s, x = end_point(DistanceField(region, roles), side, "start/end side")
     return [(i, r, s) for i, r in _locate(chain, (float(x[0]) - o[0], float(x[1]) - o[1]), scale)]
 
 
-def _dedupe(hits: list[tuple[int, float, float]], chain: list[Piece], scale: float) -> list:
+def _dedupe(hits: list[_Hit], chain: list[Piece], scale: float) -> list[_Hit]:
     """One crossing where a root sits on a joint of two pieces (found on both)."""
-    out: list[tuple[int, float, float]] = []
+    out: list[_Hit] = []
     for h in sorted(hits):
         x = chain[h[0]].at(h[1])
         if out:
