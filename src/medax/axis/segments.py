@@ -424,7 +424,26 @@ def segment_axis(
     pieces = [
         pc for pc in pieces if math.hypot(*_sub(pc.at(pc.hi), pc.at(pc.lo))) > tiny
     ] or pieces[:1]
-    return _result(region, pair, roles, pieces, o, t_start, t_end, tol, point_tol, scale)
+    return _result(region, pair, roles, _merge_lines(pieces, scale), o, t_start, t_end, tol,
+                   point_tol, scale)  # fmt: skip
+
+
+def _merge_lines(pieces: list[Piece], scale: float) -> list[Piece]:
+    """Consecutive line pieces as one (the axis is C1, so they lie on one line; e.g. where
+    both feet reach segment ends at once on a symmetric axis): a joint inside a straight
+    line describes nothing. Checked to rounding, else kept apart."""
+    out = [pieces[0]]
+    for pc in pieces[1:]:
+        last = out[-1]
+        if last.is_line and pc.is_line:
+            end = pc.at(pc.hi)
+            hi = _dot(_sub(end, last.p), last.u)
+            y = last.at(hi)
+            if math.hypot(y[0] - end[0], y[1] - end[1]) <= 1e-13 * scale:
+                out[-1] = last._replace(hi=hi)
+                continue
+        out.append(pc)
+    return out
 
 
 def _result(
