@@ -325,3 +325,26 @@ def test_polyline_start_and_end_sides_use_the_side_solver():
     assert np.max(np.linalg.norm(a.points[[0, -1]] - b.points[[0, -1]], axis=1)) <= 1e-12 * d
     assert np.max(a.spline.closest(b.points).distance) <= 1e-12 * d
     assert _equidistance(a, _dense(a)) <= 1e-10 * d
+
+
+def test_thin_sliver_where_the_tracer_strays():
+    """A thin non-convex random quad (found by fuzzing against the tracer): the closed form
+    is equidistant to rounding (dense sampling), ends on B1/B2 exactly, and stays inside.
+    (The tracer's fit stalls here at ~1e-2 x diagonal, with a warning.)"""
+    c = np.array(
+        [
+            [8.671642599902032, 2.8352653624098103],
+            [7.765497554966579, -2.6081880705309324],
+            [9.936783118873667, 6.711959983781561],
+            [4.498415819085341, -8.632097048033913],
+        ]
+    )
+    reg = _quad(c, "sliver")
+    a = trace_axis(reg, (0, 2))
+    d = a.diagonal
+    assert a.counts.closed_form_pieces >= 1
+    assert _equidistance(a, a.points) <= 1e-10 * d
+    assert _equidistance(a, _dense(a)) <= 1e-10 * d
+    assert _line_distance(a.points[:1], c[3], c[0])[0] <= 1e-12 * d
+    assert _line_distance(a.points[-1:], c[1], c[2])[0] <= 1e-12 * d
+    assert np.all(reg.contains(_dense(a)[1:-1]))
