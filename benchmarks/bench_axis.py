@@ -7,10 +7,13 @@ In one run, on every region of ``src/medax/data/regions.json`` and both pairs:
 * a Voronoi bisector peer: ``scipy.spatial.Voronoi`` of ``n`` arc-length-uniform samples of
   each of ``A1`` and ``A2`` only; the ridges separating an ``A1`` sample from an ``A2`` sample
   are chained and clipped to the region, giving the axis polyline from ``B1`` to ``B2``. ``n``
-  doubles until the peer reaches medax's default accuracy (or ``--cap``); at each ``n`` both
+  doubles until the peer reaches medax's accuracy (or ``--cap``, or until the accuracy is out
+  of reach within the cap by the peer's ``n^-2`` trend and a run takes over a second: then
+  its time is a lower bound of its time at equal accuracy); at each ``n`` both
   uniform samples and samples jittered along the curve are tried (uniform ones on straight or
-  concentric sides are cocircular, which makes qhull quadratic), and the faster that reaches
-  the accuracy is timed;
+  concentric sides are cocircular, which makes qhull quadratic; a sampling 4x slower than
+  the other at some ``n`` is dropped for larger ``n``), and the faster that reaches the
+  accuracy is timed;
 * OCCT ``BRepMAT2d_BisectingLocus`` (full medial axis of the planar face bounded by the
   region): its time, how far its nearest branch ends lie from medax's end points on
   ``B1``/``B2``, and how much of medax's axis lies on its bisector graph.
@@ -33,6 +36,7 @@ on every region and pair (reported at each tolerance: the peer's sample count gr
 from __future__ import annotations
 
 import argparse
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -400,14 +404,26 @@ def bench_pair(
         rows.append(Row(name, ps, "medax paper", acc_pap, t_pap, t_pap / t_def, note))
     goal = max(acc_def, ACC_FLOOR)
     n = 64
+    samplings = [False, True]
     while True:  # both samplings at each n; the faster one that reaches the goal counts
-        tried = []
-        for jitter in (False, True):
+        tried, took = [], {}
+        for jitter in samplings:
+            t0 = time.perf_counter()
             poly = voronoi_axis(region, pair, n, jitter)
+            took[jitter] = time.perf_counter() - t0
             tried.append((accuracy(dd, polyline_dense(poly), diag), jitter, len(poly)))
         ok = [tr for tr in tried if tr[0] <= goal]
         if ok or n >= cap:
             break
+        # the goal out of reach within the cap (the peer's error falls like n^-2) and a run
+        # already takes over a second: stop here, the peer's time at this n (less accurate
+        # than medax) is a lower bound of its time at equal accuracy
+        if n * math.sqrt(min(tr[0] for tr in tried) / goal) > cap and min(took.values()) > 1.0:
+            break
+        # a sampling already 4x slower than the other (qhull quadratic on cocircular
+        # samples) only gets slower as n doubles: it is not tried further
+        if len(took) == 2 and max(took.values()) > max(0.05, 4.0 * min(took.values())):
+            samplings = [min(took, key=lambda j: took[j])]
         n *= 2
     timed = []
     for acc_v, jitter, nv in ok or [min(tried)]:
@@ -416,7 +432,7 @@ def bench_pair(
     t_v, acc_v, jitter, nv = min(timed)
     note = f"n={n} per side ({'jittered' if jitter else 'uniform'}), {nv} vertices"
     if acc_v > goal:
-        note += f"; accuracy NOT reached at cap (x{acc_v / goal:.3g} worse)"
+        note += f"; accuracy NOT reached (x{acc_v / goal:.3g} worse; cap or out of reach)"
     rows.append(Row(name, ps, "Voronoi peer", acc_v, t_v, t_v / t_def, note))
     return rows, t_def, ax
 

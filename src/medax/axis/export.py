@@ -41,5 +41,6 @@ def axis_record(axis: MedialAxis) -> dict[str, Any]:
             "corrector_iterations": axis.counts.corrector_iterations,
             "distance_evaluations": axis.counts.distance_evaluations,
             "refinement_rounds": axis.counts.refinements,
+            "closed_form_pieces": axis.counts.closed_form_pieces,
         },
     }

@@ -11,6 +11,7 @@ from medax.axis.endpoints import end_point
 from medax.axis.field import DistanceField
 from medax.axis.refine import fit_and_refine
 from medax.axis.result import MedialAxis, WorkCounts
+from medax.axis.segments import segment_axis
 from medax.axis.trace import TraceStats, trace_frame, trace_paper
 from medax.errors import InputError
 from medax.geometry.fitting import interpolate
@@ -27,6 +28,7 @@ def trace_axis(
     method: str = "frame",
     ratio: float = 0.5,
     point_tol: float = tolerances.POINT_TOL,
+    closed_form: bool = True,
 ) -> MedialAxis:
     """Trace the curve ``d1 / (d1 + d2) = ratio`` (the medial axis for ``ratio = 1/2``)
     between constraints ``A1 = S[pair[0]]`` and ``A2 = S[pair[1]]``, from B1 to B2.
@@ -35,6 +37,10 @@ def trace_axis(
     point, both relative to the region's diagonal. ``method="paper"`` reproduces the paper
     (direction ``e1 + e2``, step = shortest side / 5, the ``|d1 - d2| / 2n`` correction to
     ``0.99 < d1/d2 < 1.01``, a B-spline through the points without refinement).
+
+    With ``closed_form`` (default), ``method="frame"`` and ``ratio = 1/2``, two line-segment
+    constraints of a planar region get the exact axis instead (lines and parabolas, an exact
+    quadratic B-spline: :mod:`medax.axis.segments`); ``closed_form=False`` always traces.
 
     Planar regions are traced in normalised coordinates (centred, unit diagonal) so that
     regions far from the origin or in small units keep their relative accuracy.
@@ -46,6 +52,10 @@ def trace_axis(
     if not tol > 0.0 or not point_tol > 0.0:
         raise InputError(f"tolerances must be positive, got tol={tol}, point_tol={point_tol}")
     roles = pair_roles(pair)
+    if closed_form and method == "frame" and ratio == 0.5:
+        exact = segment_axis(region, (int(pair[0]), int(pair[1])), roles, tol, point_tol)
+        if exact is not None:
+            return exact
     work, offset, scale = normalised_region(region)
     field = DistanceField(work, roles, ratio)
     diag = work.diagonal

@@ -18,6 +18,8 @@ class WorkCounts:
     corrector_iterations: int = 0
     distance_evaluations: int = 0
     refinements: int = 0
+    #: conic pieces of a closed-form axis (two line-segment constraints); 0 when traced
+    closed_form_pieces: int = 0
 
 
 @dataclass(frozen=True)

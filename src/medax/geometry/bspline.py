@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from functools import cached_property
+import math
+from functools import cached_property, lru_cache
 
 import numpy as np
 from scipy.interpolate import BSpline as _ScipyBSpline
@@ -23,6 +24,36 @@ def clamped_uniform_knots(n_ctrl: int, degree: int) -> FloatArray:
 #: OCCT fillets): evaluate with scipy's de Boor instead
 POWER_BASIS_MAX_DEGREE = 5
 _HORNER_BLOCK = 16384  # points per block of the power-basis evaluation
+
+
+@lru_cache(maxsize=8)
+def _bezier_to_power(k: int) -> FloatArray:
+    """(k+1, k+1) matrix taking a degree-``k`` Bezier's control points to its coefficients
+    in powers of the local parameter ``s``, highest power first:
+    ``coef_j = C(k, j) sum_i (-1)^(j-i) C(j, i) P_i``."""
+    m = np.zeros((k + 1, k + 1))
+    for j in range(k + 1):
+        for i in range(j + 1):
+            m[k - j, i] = math.comb(k, j) * math.comb(j, i) * (-1.0) ** (j - i)
+    return m
+
+
+@lru_cache(maxsize=64)
+def _bezier_layout(
+    m: int, k: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, FloatArray, FloatArray]:
+    """For ``m`` Bezier pieces of degree ``k``: knot multiplicities (m+1,), control point
+    rows of each piece (m, k+1), powers (k+1,) highest first, and the factors taking value
+    to first (k, 1) and first to second (k-1, 1) derivative coefficients."""
+    mult = np.full(m + 1, k)
+    mult[[0, -1]] = k + 1
+    rows = np.arange(m)[:, None] * k + np.arange(k + 1)
+    powers = np.arange(k, -1, -1)
+    d1 = np.arange(k, 0, -1, dtype=np.float64)[:, None]
+    d2 = np.arange(k - 1, 0, -1, dtype=np.float64)[:, None]
+    for a in (mult, rows, powers, d1, d2):
+        a.flags.writeable = False
+    return mult, rows, powers, d1, d2
 
 
 class BSpline(Curve):
@@ -59,11 +90,53 @@ class BSpline(Curve):
             self.weights.shape != (ctrl.shape[0],) or np.any(self.weights <= 0)
         ):
             raise CurveError("B-spline weights must be positive, one per control point")
+
+    @classmethod
+    def from_bezier(cls, control_points: FloatArray, breaks: FloatArray, degree: int) -> BSpline:
+        """The spline made of ``m`` Bezier pieces of ``degree`` joined end to end: control
+        points ``(m * degree + 1, dim)`` (each piece's last is the next one's first), piece
+        ``i`` on ``[breaks[i], breaks[i + 1]]`` (``breaks`` (m + 1,), increasing; mapped onto
+        [0, 1] as every knot domain is). Interior knots have multiplicity ``degree`` (each
+        piece is exactly its Bezier curve; C0 in the knot structure). The polynomial
+        coefficients come from the control points in closed form (no spline evaluation)."""
+        ctrl = np.asarray(control_points, dtype=np.float64)
+        x = np.asarray(breaks, dtype=np.float64)
+        k, m = int(degree), len(x) - 1
+        if (
+            k < 1
+            or m < 1
+            or ctrl.ndim != 2
+            or ctrl.shape[1] not in (2, 3)
+            or ctrl.shape[0] != m * k + 1
+            or np.any(np.diff(x) <= 0)
+        ):
+            raise CurveError(
+                f"Bezier pieces: {ctrl.shape} control points for {m} pieces of degree {k} "
+                "(need (m * degree + 1, 2|3)) and increasing breaks"
+            )
+        xu = (x - x[0]) / (x[-1] - x[0])  # as __init__ normalises the knot domain
+        mult, rows, powers, d1, d2 = _bezier_layout(m, k)
+        # the checks above are those of __init__ for these knots: set the fields directly
+        spline = cls.__new__(cls)
+        spline.control_points, spline.degree = ctrl, k
+        spline.knots, spline.weights = np.repeat(xu, mult), None
+        if k <= POWER_BASIS_MAX_DEGREE:
+            c = _bezier_to_power(k) @ ctrl[rows]  # (m, k+1, dim) in powers of s, highest first
+            c /= (np.diff(xu)[:, None] ** powers)[:, :, None]  # powers of t - x_i
+            coefs = np.zeros((m, k + 1, 3, ctrl.shape[1]))  # the layout of _pieces
+            coefs[:, :, 0] = c
+            coefs[:, 1:, 1] = c[:, :-1] * d1
+            coefs[:, 2:, 2] = coefs[:, 1:-1, 1] * d2
+            spline.__dict__["_pieces"] = (xu, coefs)
+        return spline
+
+    @cached_property
+    def _spl(self) -> _ScipyBSpline:
+        """scipy's B-spline of the same knots (de Boor; homogeneous for a NURBS)."""
         if self.weights is None:
-            self._spl = _ScipyBSpline(kn, ctrl, degree, extrapolate=False)
-        else:
-            hom = np.column_stack((ctrl * self.weights[:, None], self.weights))
-            self._spl = _ScipyBSpline(kn, hom, degree, extrapolate=False)
+            return _ScipyBSpline(self.knots, self.control_points, self.degree, extrapolate=False)
+        hom = np.column_stack((self.control_points * self.weights[:, None], self.weights))
+        return _ScipyBSpline(self.knots, hom, self.degree, extrapolate=False)
 
     @property
     def dim(self) -> int:
@@ -93,7 +166,13 @@ class BSpline(Curve):
         # with the interval to its right)
         taylor = np.array([np.asarray(self._spl(x[:-1], nu)) for nu in range(k + 1)])
         fact = np.array([float(np.prod(np.arange(1, nu + 1))) for nu in range(k + 1)])
-        c0 = (taylor / fact[:, None, None])[::-1]  # highest power first
+        return self._pack(x, (taylor / fact[:, None, None])[::-1])  # highest power first
+
+    def _pack(self, x: FloatArray, c0: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Break points ``x`` (m+1,) and the value coefficients ``c0`` (degree+1, m, dim),
+        highest power first, stacked with those of the first and second derivative as
+        :attr:`_pieces` holds them."""
+        k = self.degree
         powers = np.arange(k, -1, -1, dtype=np.float64)[:, None, None]
         coefs = np.zeros((3, *c0.shape))
         coefs[0] = c0
