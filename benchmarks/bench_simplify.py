@@ -134,6 +134,8 @@ def main(argv: list[str]) -> int:
     for f in files:
         for k, cls in enumerate(classify_file(str(f))):
             bench(f"{f.name}[{k}]", cls)
+    box = parts.box_all_fillets()  # corner blends and fitted faces
+    bench("box, 12 edges filleted (8 corners)", classify_solid(heal(box.shape)))
     for n in (2, 8):  # a small one defeaturing finishes, and one with 500+ faces
         part = parts.grid_plate(n, n)
         cls = classify_solid(heal(part.shape))
