@@ -9,6 +9,7 @@ import pytest
 
 from medax.axis import trace_axis
 from medax.geometry import Arc, Line, Region, read_regions, sample_regions_path
+from truth import trapezoid_02_y
 
 
 @pytest.fixture(scope="module")
@@ -18,15 +19,6 @@ def regions() -> dict[str, Region]:
 
 def _spline_dense(axis, per_interval: int = 10) -> np.ndarray:
     return axis.spline.sample(per_interval * (axis.n_points - 1) + 1)
-
-
-def trapezoid_02_y(x: np.ndarray) -> np.ndarray:
-    """Exact axis of the trapezoid between y=0 and the top side (2.5..7.5, 6)."""
-    y = np.full_like(x, 3.0)
-    left, right = x < 2.5, x > 7.5
-    y[left] = ((x[left] - 2.5) ** 2 + 36.0) / 12.0
-    y[right] = ((x[right] - 7.5) ** 2 + 36.0) / 12.0
-    return y
 
 
 def test_trapezoid_13_is_the_line_x5(regions):

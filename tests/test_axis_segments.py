@@ -13,7 +13,7 @@ from medax.axis import trace_axis
 from medax.errors import CurveError
 from medax.geometry import Arc, BSpline, Line, Region, read_region, region_from_dict
 from medax.geometry import sample_regions_path as samples
-from truth import DenseDistance, dense_sides, side_function
+from truth import DenseDistance, dense_sides, side_function, trapezoid_02_y
 
 
 def _dense(axis, per_interval: int = 10) -> np.ndarray:
@@ -78,15 +78,6 @@ def test_trapezoid_13_is_x5_exactly(trapezoid, regions_spec):
     sides = dense_sides(regions_spec["trapezoid"])
     assert np.max(np.abs(sides[1](a.points) - sides[3](a.points))) <= 1e-10 * d
     assert a.max_point_error <= 1e-12 * d and a.max_curve_error <= 1e-12 * d
-
-
-def trapezoid_02_y(x: np.ndarray) -> np.ndarray:
-    """_exact: y = 3 on 2.5 <= x <= 7.5, beyond it the parabolas about the top corners."""
-    y = np.full_like(x, 3.0)
-    left, right = x < 2.5, x > 7.5
-    y[left] = ((x[left] - 2.5) ** 2 + 36.0) / 12.0
-    y[right] = ((x[right] - 7.5) ** 2 + 36.0) / 12.0
-    return y
 
 
 def test_trapezoid_02_line_and_parabolas_exactly(trapezoid, regions_spec):

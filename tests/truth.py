@@ -122,3 +122,12 @@ class Cylinder:
         j[:, 1, 0] = self.r * np.cos(p[:, 0])
         j[:, 2, 1] = 1.0
         return j
+
+
+def trapezoid_02_y(x: np.ndarray) -> np.ndarray:
+    """Exact axis of the trapezoid between y=0 and the top side (2.5..7.5, 6)."""
+    y = np.full_like(x, 3.0)
+    left, right = x < 2.5, x > 7.5
+    y[left] = ((x[left] - 2.5) ** 2 + 36.0) / 12.0
+    y[right] = ((x[right] - 7.5) ** 2 + 36.0) / 12.0
+    return y
