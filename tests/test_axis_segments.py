@@ -339,3 +339,20 @@ def test_thin_sliver_where_the_tracer_strays():
     assert _line_distance(a.points[:1], c[3], c[0])[0] <= 1e-12 * d
     assert _line_distance(a.points[-1:], c[1], c[2])[0] <= 1e-12 * d
     assert np.all(reg.contains(_dense(a)[1:-1]))
+
+
+def test_tracer_refuses_a_lost_trace():
+    """On the sliver the tracer (forced) loses the axis; it says so with a typed error
+    instead of returning points 1e-2 x diagonal off the axis."""
+    from medax.errors import TraceError
+
+    c = np.array(
+        [
+            [8.671642599902032, 2.8352653624098103],
+            [7.765497554966579, -2.6081880705309324],
+            [9.936783118873667, 6.711959983781561],
+            [4.498415819085341, -8.632097048033913],
+        ]
+    )
+    with pytest.raises(TraceError, match="lost the axis"):
+        trace_axis(_quad(c, "sliver"), (0, 2), closed_form=False)

@@ -13,12 +13,17 @@ from medax.axis.refine import fit_and_refine
 from medax.axis.result import MedialAxis, WorkCounts
 from medax.axis.segments import segment_axis
 from medax.axis.trace import TraceStats, trace_frame, trace_paper
-from medax.errors import InputError
+from medax.errors import InputError, TraceError
 from medax.geometry.fitting import interpolate
 from medax.geometry.region import Region, normalised_region, pair_roles
 
 log = logging.getLogger(__name__)
 METHODS = ("frame", "paper")
+#: A traced point farther from the axis than this many point tolerances means the trace
+#: lost the axis (a fuzzed thin non-convex quad gave 6e-3 x diagonal): refused, not returned.
+#: Stalled refinements that end near the tolerance (the paper mesher's sub-traces, ~1e-7)
+#: only warn.
+LOST_FACTOR = 1e4
 
 
 def trace_axis(
@@ -85,6 +90,12 @@ def trace_axis(
         uu = np.linspace(0.0, 1.0, 10 * (len(pts) - 1) + 1)
         curve_error, rounds = float(field(spline.evaluate(uu)).error.max()), 0
     point_error = float(s.error.max())
+    if method == "frame" and point_error > LOST_FACTOR * tol_pt:
+        raise TraceError(
+            f"{region.name} pair {tuple(pair)}: the trace lost the axis (points off it by "
+            f"{point_error / diag:.2e} x diagonal, guarantee {point_tol:g}); the region is "
+            "probably too thin or bent at a reflex corner for the tracer"
+        )
     if method == "frame" and curve_error > tol_cv:
         log.warning(
             "%s pair %s: fitted curve error %.3g exceeds the tolerance %.3g",
