@@ -243,7 +243,7 @@ def simplify(
     if result is None:
         final, groups_out, dev = work, _identity_groups(nfaces), 0.0
         vol1 = vol0
-        valid = check(work).valid
+        valid = check(work, with_volume=False).valid
     else:
         final, dev, vol1, valid = result.shape, result.deviation, result.volume, True
         groups_out = _face_groups(result)
@@ -482,7 +482,7 @@ def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
     except Exception as err:  # OCCT Standard_Failure subclasses, translated here
         return f"OCCT failed while rebuilding ({type(err).__name__}: {err})"
     job.say("validating (analyzer, shell, volume, deviation both ways)")
-    c = check(shape)
+    c = check(shape, with_volume=False)
     if not c.valid:
         return "rebuilt solid not valid (BRepCheck_Analyzer)"
     if c.shells != 1 or not c.closed:

@@ -120,8 +120,9 @@ def _has_swept_faces(shape: Any) -> bool:
     return any(BRepAdaptor_Surface(f).GetType() in swept for f in faces_of(shape))
 
 
-def check(shape: Any) -> Check:
-    """Analyzer validity, number of shells, closedness (no free edges) and volume."""
+def check(shape: Any, with_volume: bool = True) -> Check:
+    """Analyzer validity, number of shells, closedness (no free edges) and volume (NaN
+    without ``with_volume``: the simplifier measures it separately, with two integrators)."""
     from OCP.ShapeAnalysis import ShapeAnalysis_FreeBounds
     from OCP.TopAbs import TopAbs_EDGE
 
@@ -131,7 +132,7 @@ def check(shape: Any) -> Check:
     closed = (
         count(fb.GetClosedWires(), TopAbs_EDGE) == 0 and count(fb.GetOpenWires(), TopAbs_EDGE) == 0
     )
-    return Check(valid, shells, closed, volume(shape))
+    return Check(valid, shells, closed, volume(shape) if with_volume else float("nan"))
 
 
 def face_samples(face: Any, n: int = 12) -> Array:
