@@ -50,13 +50,16 @@ HeightFn = Callable[[FloatArray, FloatArray], tuple[FloatArray, np.ndarray, np.n
 class TensorFit:
     """``z(x, y) = sum_ij c_ij Bx_i(x) By_j(y)``: clamped cubic knot vectors ``tx``, ``ty``
     (with repeats), coefficients ``coef`` (nx, ny), measured ``error`` (max |z - h| on the
-    check grid where ``inside``, length unit) and the ``spacing`` used."""
+    check grid where ``inside``, length unit), the ``spacing`` used and ``volume``, the
+    signed integral of ``z - h`` over ``inside`` (length unit cubed, midpoint rule on the
+    check grid)."""
 
     tx: FloatArray
     ty: FloatArray
     coef: FloatArray
     error: float
     spacing: float
+    volume: float = 0.0
 
     def __call__(self, x: FloatArray, y: FloatArray) -> FloatArray:
         """Heights on the tensor grid ``x`` (n,) by ``y`` (m,), shape (n, m)."""
@@ -176,7 +179,13 @@ def _fit_once(x_range, y_range, xb, yb, fine_x, fine_y, h: HeightFn, step: float
     fit = TensorFit(tx, ty, coef, 0.0, step)
     xc, yc = _samples(tx, CHECK_PER_SPAN), _samples(ty, CHECK_PER_SPAN)
     zc, okc, inside = h(*np.meshgrid(xc, yc, indexing="ij"))
-    err = np.abs(fit(xc, yc) - zc)[inside & okc]
+    diff = fit(xc, yc) - zc
+    use = inside & okc
     missing = bool(np.any(inside & ~okc))
-    error = float("inf") if missing else float(err.max(initial=0.0))
-    return TensorFit(tx, ty, coef, error, step)
+    error = float("inf") if missing else float(np.abs(diff[use]).max(initial=0.0))
+    # signed volume between fit and data over the face: midpoint rule on the check cells
+    # (the samples sit at the centres of CHECK_PER_SPAN equal cells of every span)
+    wx = np.repeat(np.diff(np.unique(tx)) / CHECK_PER_SPAN, CHECK_PER_SPAN)
+    wy = np.repeat(np.diff(np.unique(ty)) / CHECK_PER_SPAN, CHECK_PER_SPAN)
+    volume = float(np.sum(np.where(use, diff, 0.0) * np.outer(wx, wy)))
+    return TensorFit(tx, ty, coef, error, step, volume)

@@ -61,11 +61,15 @@ class _Member:
 @dataclass(frozen=True)
 class FittedSurface:
     """The fitted ``surface`` (``Geom_BSplineSurface``), its measured ``error`` (largest
-    height error on the face, length unit) and the knot ``spacing`` that reached it."""
+    height error on the face, length unit), the knot ``spacing`` that reached it and
+    ``volume_change``: the signed volume between the fitted and the original surface over
+    the face, positive where the solid grows (length unit cubed; a second measure of the
+    volume change, independent of OCCT's integrators)."""
 
     surface: Any
     error: float
     spacing: float
+    volume_change: float = 0.0
 
 
 def _wire_polygon(wire: Any, frame: tuple[Array, Array, Array]) -> Array:
@@ -321,7 +325,23 @@ def graph_surface(
             f"fitted surface error {fit.error:.2e} above {fit_tol:.2e} (curvature jumps off the "
             "knot lines, e.g. along circles, or a step at a cross edge)"
         )
-    return FittedSurface(_bspline_surface(fit, o, ex, ey, n), fit.error, fit.spacing)
+    outward = _outward_sign(plane_face, n)
+    return FittedSurface(
+        _bspline_surface(fit, o, ex, ey, n),
+        fit.error,
+        fit.spacing,
+        outward * fit.volume if outward else float("nan"),
+    )
+
+
+def _outward_sign(plane_face: Any, n: Array) -> float:
+    """+1 when ``n`` is the solid's outward normal on ``plane_face``, else -1 (heights along
+    ``n`` then grow the solid); 0 when it cannot be told (no volume estimate then)."""
+    from medax.cad.simplify.occ import face_inside_point, face_normal_at
+
+    p = face_inside_point(plane_face)
+    out = None if p is None else face_normal_at(plane_face, p)
+    return 0.0 if out is None else float(np.sign(out @ n))
 
 
 def _bspline_surface(fit: TensorFit, o: Array, ex: Array, ey: Array, n: Array) -> Any:

@@ -82,6 +82,7 @@ class SimplifyResult:
     time_s: float
     medial_error: float = 0.0
     fit_error: float = 0.0
+    fit_volume_rel_change: float = 0.0
     notes: list[str] = field(default_factory=list)
 
     @property
@@ -106,6 +107,7 @@ class SimplifyResult:
             },
             "diagonal": self.diagonal,
             "medial_equidistance_error": self.medial_error,
+            "fit_volume_rel_change": self.fit_volume_rel_change,
             "max_fit_error": {
                 "absolute": self.fit_error,
                 "relative_to_diagonal": self.fit_error / self.diagonal,
@@ -136,6 +138,7 @@ class _Attempt:
     halves_origin: dict[int, list[int]]
     kinds: dict[int, str]
     fit_error: float = 0.0
+    fit_dv: float = 0.0
 
 
 @dataclass
@@ -265,6 +268,7 @@ def simplify(
         time_s=time.perf_counter() - t0,
         medial_error=max((job.medials[f].error for f in removed if f in job.medials), default=0.0),
         fit_error=result.fit_error if result is not None else 0.0,
+        fit_volume_rel_change=result.fit_dv if result is not None else 0.0,
         notes=notes,
     )
 
@@ -463,6 +467,7 @@ def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
         job.say(f"splitting {len(sel)} fillets and {len(csel)} corner blends along medial curves")
         split, groups = _split(job, sel, csel)
         used: dict[int, Any] = {}
+        fitted_dv = 0.0
         for g in groups:
             if g.support is None:
                 continue
@@ -473,8 +478,10 @@ def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
                     return f"face {g.support}: {fs}"
                 used[g.support] = fs.surface
                 fit_err = max(fit_err, fs.error)
+                fitted_dv += fs.volume_change
             else:
                 used[g.support] = ms.surface
+        expected = fitted_dv / job.vol0 if fit_err > 0 else None
         job.say(f"rebuilding: {len(groups)} faces")
         shape, faces = build_solid(split, groups, used, job.btol)
     except CadError as err:
@@ -487,7 +494,7 @@ def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
         return "rebuilt solid not valid (BRepCheck_Analyzer)"
     if c.shells != 1 or not c.closed:
         return f"rebuilt solid has {c.shells} shells / free edges"
-    dv, why = volume_change(shape, job.vol0, VOLUME_TOL)
+    dv, why = volume_change(shape, job.vol0, VOLUME_TOL, expected)
     if why:
         return why
     dev = 0.0
@@ -504,7 +511,16 @@ def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
         return f"surface deviation {dev / diag:.2e} x diagonal (> {tol:g})"
     halves_origin = {g.id: [split.origin[k] for k in g.halves] for g in groups}
     return _Attempt(
-        shape, groups, faces, dev, job.vol0 * (1 + dv), split.origin, halves_origin, kinds, fit_err
+        shape,
+        groups,
+        faces,
+        dev,
+        job.vol0 * (1 + dv),
+        split.origin,
+        halves_origin,
+        kinds,
+        fit_err,
+        expected or 0.0,
     )
 
 
