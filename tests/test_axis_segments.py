@@ -341,18 +341,42 @@ def test_thin_sliver_where_the_tracer_strays():
     assert np.all(reg.contains(_dense(a)[1:-1]))
 
 
-def test_tracer_refuses_a_lost_trace():
-    """On the sliver the tracer (forced) loses the axis; it says so with a typed error
-    instead of returning points 1e-2 x diagonal off the axis."""
+SLIVER = np.array(
+    [
+        [8.671642599902032, 2.8352653624098103],
+        [7.765497554966579, -2.6081880705309324],
+        [9.936783118873667, 6.711959983781561],
+        [4.498415819085341, -8.632097048033913],
+    ]
+)
+
+
+def test_tracer_follows_the_sliver():
+    """The tracer (forced) on the sliver: its first step was the shortest side / 5, longer
+    than the whole axis (0.9 of a 17-long region), and it lost the axis (6e-3 x diagonal);
+    with the first step at most half the chord it matches the closed form."""
+    reg = _quad(SLIVER, "sliver")
+    a = trace_axis(reg, (0, 2), closed_form=False)
+    b = trace_axis(reg, (0, 2))
+    d = a.diagonal
+    assert a.counts.closed_form_pieces == 0
+    assert _equidistance(a, a.points) <= 1e-10 * d
+    assert _equidistance(a, _dense(a)) <= 1e-6 * d
+    assert np.linalg.norm(a.points[0] - b.points[0]) <= 1e-12 * d
+    assert np.linalg.norm(a.points[-1] - b.points[-1]) <= 1e-12 * d
+
+
+def test_tracer_refuses_a_lost_trace(monkeypatch):
+    """With the old first step (past the end of the axis) the trace is lost; it says so
+    with a typed error instead of returning points 6e-3 x diagonal off the axis."""
+    import medax.axis.medial as medial
     from medax.errors import TraceError
 
-    c = np.array(
-        [
-            [8.671642599902032, 2.8352653624098103],
-            [7.765497554966579, -2.6081880705309324],
-            [9.936783118873667, 6.711959983781561],
-            [4.498415819085341, -8.632097048033913],
-        ]
-    )
+    real = medial.trace_frame
+
+    def past_the_end(field, p0, p1, h0, **kw):
+        return real(field, p0, p1, h0=1.25 * float(np.linalg.norm(p1 - p0)), **kw)
+
+    monkeypatch.setattr(medial, "trace_frame", past_the_end)
     with pytest.raises(TraceError, match="lost the axis"):
-        trace_axis(_quad(c, "sliver"), (0, 2), closed_form=False)
+        trace_axis(_quad(SLIVER, "sliver"), (0, 2), closed_form=False)

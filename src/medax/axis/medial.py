@@ -71,8 +71,11 @@ def trace_axis(
     shortest = float(work.side_lengths().min())
     stats = TraceStats()
     if method == "frame":
+        # the paper's first step (shortest side / 5), but at most half the chord: on a thin
+        # non-convex quad the axis was shorter than one such step and the trace was lost
         pts = trace_frame(
-            field, p0, p1, h0=shortest / 5.0, h_min=1e-7 * diag, h_max=0.1 * diag,
+            field, p0, p1, h0=min(shortest / 5.0, 0.5 * float(np.linalg.norm(p1 - p0))),
+            h_min=1e-7 * diag, h_max=0.1 * diag,
             tol=tol_pt, stats=stats,
         )  # fmt: skip
         fit = fit_and_refine(field, pts, tol_pt, tol_cv)
