@@ -16,9 +16,10 @@ from OCP.TopoDS import TopoDS
 
 from medax.cad.simplify import parts as P
 from medax.cad.simplify import simplify, specs_from_blend_faces
-from medax.cad.simplify.occ import count, edge_points, faces_of, max_normal_angle, shape_map
+from medax.cad.simplify.occ import count, edge_points, max_normal_angle, shape_map
 from medax.cad.simplify.specs import edge_face_map
-from medax.cad.simplify.validate import check, face_samples, max_distance
+from medax.cad.simplify.validate import check
+from truth import boundary_distances
 
 A, B, H, R = 40.0, 30.0, 20.0, 4.0
 
@@ -57,11 +58,8 @@ def test_box12_shape_unchanged_both_ways(box12):
     """Old and new boundaries within 1e-5 x diagonal of each other (the issue's fitted
     target), measured on the whole solids, not the pipeline's per-group check."""
     part, r = box12
-    old_faces, new_faces = list(faces_of(part.shape)), list(faces_of(r.shape))
-    old_pts = np.vstack([face_samples(f, 9) for f in old_faces])
-    new_pts = np.vstack([face_samples(f, 24) for f in new_faces])
-    assert max_distance(old_pts, new_faces) <= 1e-5 * r.diagonal
-    assert max_distance(new_pts, old_faces) <= 1e-5 * r.diagonal
+    old_to_new, new_to_old = boundary_distances(part.shape, r.shape, 9, 24)
+    assert old_to_new <= 1e-5 * r.diagonal and new_to_old <= 1e-5 * r.diagonal
     # the fit's own measured error is reported and within its share of the tolerance
     assert 0 < r.fit_error <= 1e-6 * r.diagonal
 
@@ -120,7 +118,7 @@ def test_torus_heights_match_occt_intersections():
 
     centre, axis, big, small = np.array([1.0, 2.0, 3.0]), np.array([0.0, 0.0, 1.0]), 10.0, 2.0
     dummy = Path(np.zeros((3, 2)))
-    m = _Member("torus", centre, axis, small, dummy, (), np.zeros((1, 2)), big)
+    m = _Member("torus", centre, axis, small, dummy, (), (np.zeros((1, 2)),), big)
     n = np.array([0.0, 0.0, -1.0])  # looking down onto the torus' top
     rng = np.random.default_rng(5)
     ang = rng.uniform(0, 2 * np.pi, 200)

@@ -14,6 +14,7 @@ from medax.cad.simplify import parts as P
 from medax.cad.simplify import simplify, specs_from_blend_faces, specs_from_classification
 from medax.cad.simplify.occ import count, faces_of
 from medax.cad.simplify.validate import check, face_samples, max_distance
+from truth import boundary_distances
 
 
 def _run(part: P.BuiltPart):
@@ -58,11 +59,8 @@ def test_box4_new_faces_cover_old_surface(box4):
     """Every point of the old boundary lies on the new boundary and vice versa (BRepExtrema
     on the whole solids, not the per-group check of the pipeline)."""
     part, r = box4
-    old_faces, new_faces = list(faces_of(part.shape)), list(faces_of(r.shape))
-    old_pts = np.vstack([face_samples(f, 6) for f in old_faces])
-    new_pts = np.vstack([face_samples(f, 6) for f in new_faces])
-    assert max_distance(old_pts, new_faces) <= 1e-7 * r.diagonal
-    assert max_distance(new_pts, old_faces) <= 1e-7 * r.diagonal
+    old_to_new, new_to_old = boundary_distances(part.shape, r.shape, 6, 6)
+    assert old_to_new <= 1e-7 * r.diagonal and new_to_old <= 1e-7 * r.diagonal
 
 
 def test_box4_face_groups(box4):

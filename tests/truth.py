@@ -131,3 +131,17 @@ def trapezoid_02_y(x: np.ndarray) -> np.ndarray:
     y[left] = ((x[left] - 2.5) ** 2 + 36.0) / 12.0
     y[right] = ((x[right] - 7.5) ** 2 + 36.0) / 12.0
     return y
+
+
+def boundary_distances(old: object, new: object, n_old: int, n_new: int) -> tuple[float, float]:
+    """(old -> new, new -> old) largest distances between two solids' boundaries, from
+    ``n x n`` samples per face measured against all faces of the other solid (BRepExtrema
+    where a foot falls outside), not the simplifier's per-group check. Imports OCP lazily:
+    the axis tests that share this module run without it."""
+    from medax.cad.simplify.occ import faces_of
+    from medax.cad.simplify.validate import face_samples, max_distance
+
+    old_faces, new_faces = list(faces_of(old)), list(faces_of(new))
+    old_pts = np.vstack([face_samples(f, n_old) for f in old_faces])
+    new_pts = np.vstack([face_samples(f, n_new) for f in new_faces])
+    return max_distance(old_pts, new_faces), max_distance(new_pts, old_faces)

@@ -21,13 +21,9 @@ from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge
 from OCP.GC import GC_MakeArcOfCircle
 from OCP.GeomAbs import GeomAbs_Plane, GeomAbs_Sphere
-from OCP.gp import gp_Ax2, gp_Circ, gp_Dir, gp_Pnt
+from OCP.gp import gp_Ax2, gp_Circ, gp_Dir
 
-from medax.cad.simplify.occ import Array, face_inside_point, face_normal_at, xyz
-
-
-def _p(a: Array) -> gp_Pnt:
-    return gp_Pnt(float(a[0]), float(a[1]), float(a[2]))
+from medax.cad.simplify.occ import Array, face_inside_point, face_normal_at, pnt, xyz
 
 
 def plane_normal(face: Any) -> Array | None:
@@ -74,8 +70,8 @@ def corner_arcs(
         if np.linalg.norm(axis) < 1e-12 * r * r:
             return "corner blend: a fillet's medial curve ends at the corner's centre"
         axis /= np.linalg.norm(axis)
-        frame = gp_Ax2(_p(c), gp_Dir(*map(float, axis)), gp_Dir(*map(float, (m - c) / r)))
-        arc = GC_MakeArcOfCircle(gp_Circ(frame, r), _p(m), _p(centre), True).Value()
+        frame = gp_Ax2(pnt(c), gp_Dir(*map(float, axis)), gp_Dir(*map(float, (m - c) / r)))
+        arc = GC_MakeArcOfCircle(gp_Circ(frame, r), pnt(m), pnt(centre), True).Value()
         mk = BRepBuilderAPI_MakeEdge(arc)
         if not mk.IsDone():
             return "corner blend: could not build a split arc"

@@ -6,8 +6,9 @@ plane's normal over the plane: the plane piece at ``h = 0``, each fillet half or
 rising or falling to its medial curve (a half turns the normal by less than 90 degrees, so the
 graph is single-valued). The height is known exactly: at every grid point the line along the
 normal is intersected in closed form with the surface of the member face above it (plane,
-cylinder or sphere), the member found by point-in-polygon on the members' projected
-boundaries; just outside the face, with the nearest member's surface. The fit
+cylinder, sphere; a torus by a batched quartic), the member found by point-in-polygon on the
+members' projected boundaries; outside the face there is no data (a tiny penalty continues
+the fit there: the pieces' own continuations disagree beyond their edges). The fit
 (:func:`medax.geometry.tensor_fit.fit_height`) puts C1 knots on the projected straight edges
 parallel to the frame's axes (where the curvature jumps) and measures its own error on a
 grid 7 points per knot span; the result is one cubic ``Geom_BSplineSurface`` whose control
@@ -36,7 +37,14 @@ from OCP.TopAbs import TopAbs_REVERSED, TopAbs_WIRE
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS
 
-from medax.cad.simplify.occ import Array, edge_points, edges_of, xyz
+from medax.cad.simplify.occ import (
+    Array,
+    edge_points,
+    edges_of,
+    face_inside_point,
+    face_normal_at,
+    xyz,
+)
 from medax.geometry.tensor_fit import TensorFit, fit_height, greville
 
 #: Samples per edge for the projected member boundaries.
@@ -54,8 +62,13 @@ class _Member:
     radius: float  # cylinder, sphere: radius; torus: minor radius
     outer: Path
     inner: tuple[Path, ...]
-    boundary: Array  # (k, 2) projected boundary samples
+    edges: tuple[Array, ...]  # projected samples (EDGE_SAMPLES, 2) of each boundary edge
     major: float = 0.0  # torus: major radius
+
+    @property
+    def boundary(self) -> Array:
+        """All projected boundary samples, (k, 2)."""
+        return np.vstack(self.edges)
 
 
 @dataclass(frozen=True)
@@ -72,22 +85,27 @@ class FittedSurface:
     volume_change: float = 0.0
 
 
-def _wire_polygon(wire: Any, frame: tuple[Array, Array, Array]) -> Array:
+def _wire_edges(wire: Any, frame: tuple[Array, Array, Array]) -> list[Array]:
+    """Projected samples (EDGE_SAMPLES, 2) of each edge of ``wire``, in order and following
+    the wire (degenerated pole edges left out)."""
     o, ex, ey = frame
-    pts = []
+    out = []
     exp = BRepTools_WireExplorer(TopoDS.Wire(wire))
     while exp.More():
         e = exp.Current()
-        if BRep_Tool.Degenerated_s(e):
-            exp.Next()
-            continue
-        p = edge_points(e, EDGE_SAMPLES)
-        if e.Orientation() == TopAbs_REVERSED:
-            p = p[::-1]
-        pts.append(p[:-1])
+        if not BRep_Tool.Degenerated_s(e):
+            p = edge_points(e, EDGE_SAMPLES)
+            if e.Orientation() == TopAbs_REVERSED:
+                p = p[::-1]
+            q = p - o
+            out.append(np.column_stack([q @ ex, q @ ey]))
         exp.Next()
-    q = np.vstack(pts) - o
-    return np.column_stack([q @ ex, q @ ey])
+    return out
+
+
+def _polygon(edges: list[Array]) -> Path:
+    """The closed polygon of a wire's consecutive edge samples."""
+    return Path(np.vstack([e[:-1] for e in edges]))
 
 
 def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
@@ -112,31 +130,18 @@ def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
     else:
         return "fitted merge takes plane, cylinder, sphere and torus pieces only"
     outer_wire = BRepTools.OuterWire_s(face)
-    outer = _wire_polygon(outer_wire, frame)
+    outer = _wire_edges(outer_wire, frame)
+    edges = list(outer)
     inner = []
     exp = TopExp_Explorer(face, TopAbs_WIRE)
     while exp.More():
         w = exp.Current()
         if not w.IsSame(outer_wire):
-            inner.append(Path(_wire_polygon(w, frame)))
+            hole = _wire_edges(w, frame)
+            inner.append(_polygon(hole))
+            edges += hole
         exp.Next()
-    o, ex, ey = frame
-    bnd = (
-        np.vstack(
-            [edge_points(e, EDGE_SAMPLES) for e in edges_of(face) if not BRep_Tool.Degenerated_s(e)]
-        )
-        - o
-    )
-    return _Member(
-        m[0],
-        m[1],
-        m[2],
-        m[3],
-        Path(outer),
-        tuple(inner),
-        np.column_stack([bnd @ ex, bnd @ ey]),
-        major,
-    )
+    return _Member(m[0], m[1], m[2], m[3], _polygon(outer), tuple(inner), tuple(edges), major)
 
 
 def _heights(m: _Member, q: Array, n: Array) -> tuple[Array, np.ndarray]:
@@ -235,21 +240,17 @@ def _frame(plane_face: Any, members: Sequence[Any]) -> tuple[Array, Array, Array
 
 
 def _breaks(members: Sequence[_Member], tol: float) -> tuple[list[float], list[float]]:
-    """Coordinates of projected straight boundary pieces parallel to the frame's axes."""
+    """Coordinates of projected straight boundary edges parallel to the frame's axes."""
     xs: list[float] = []
     ys: list[float] = []
     for m in members:
-        for poly in [m.outer, *m.inner]:
-            v = np.asarray(poly.vertices, dtype=float)
-            k = EDGE_SAMPLES - 1
-            for s in range(0, len(v), k):  # one projected edge per EDGE_SAMPLES - 1 points
-                seg = v[s : s + k + 1] if s + k < len(v) else np.vstack([v[s:], v[:1]])
-                if len(seg) < 3 or np.ptp(seg, axis=0).max() < tol:
-                    continue
-                if np.ptp(seg[:, 0]) < tol:
-                    xs.append(float(seg[:, 0].mean()))
-                if np.ptp(seg[:, 1]) < tol:
-                    ys.append(float(seg[:, 1].mean()))
+        for e in m.edges:
+            if np.ptp(e, axis=0).max() < tol:
+                continue  # an edge seen end-on
+            if np.ptp(e[:, 0]) < tol:
+                xs.append(float(e[:, 0].mean()))
+            if np.ptp(e[:, 1]) < tol:
+                ys.append(float(e[:, 1].mean()))
     return _dedup(xs, tol), _dedup(ys, tol)
 
 
@@ -285,10 +286,11 @@ def graph_surface(
     if not curved:
         return "no curved piece to merge"
     rmin = min(curved)
-    allb = np.vstack([m.boundary for m in ms])
+    bnds = [m.boundary for m in ms]
+    allb = np.vstack(bnds)
     margin = 0.25 * rmin
     lo, hi = allb.min(axis=0) - margin, allb.max(axis=0) + margin
-    boxes = [(m.boundary.min(axis=0) - geom_tol, m.boundary.max(axis=0) + geom_tol) for m in ms]
+    boxes = [(b.min(axis=0) - geom_tol, b.max(axis=0) + geom_tol) for b in bnds]
 
     def h(x: Array, y: Array) -> tuple[Array, np.ndarray, np.ndarray]:
         pts = np.column_stack([x.ravel(), y.ravel()])
@@ -337,8 +339,6 @@ def graph_surface(
 def _outward_sign(plane_face: Any, n: Array) -> float:
     """+1 when ``n`` is the solid's outward normal on ``plane_face``, else -1 (heights along
     ``n`` then grow the solid); 0 when it cannot be told (no volume estimate then)."""
-    from medax.cad.simplify.occ import face_inside_point, face_normal_at
-
     p = face_inside_point(plane_face)
     out = None if p is None else face_normal_at(plane_face, p)
     return 0.0 if out is None else float(np.sign(out @ n))

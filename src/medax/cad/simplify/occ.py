@@ -78,6 +78,11 @@ def xyz(p: Any) -> Array:
     return np.array([p.X(), p.Y(), p.Z()])
 
 
+def pnt(a: Array) -> gp_Pnt:
+    """``gp_Pnt`` of a point (3,) (the inverse of :func:`xyz`)."""
+    return gp_Pnt(float(a[0]), float(a[1]), float(a[2]))
+
+
 def vertex_point(v: Any) -> Array:
     """Position of a vertex, (3,)."""
     return xyz(BRep_Tool.Pnt_s(v))

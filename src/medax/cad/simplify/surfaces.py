@@ -29,10 +29,10 @@ from OCP.Geom import (
 )
 from OCP.GeomAbs import GeomAbs_Cone, GeomAbs_Cylinder, GeomAbs_Plane, GeomAbs_Torus
 from OCP.GeomConvert import GeomConvert, GeomConvert_CompCurveToBSplineCurve
-from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt
+from OCP.gp import gp_Ax1, gp_Dir
 
 from medax.cad.simplify.medial import Medial
-from medax.cad.simplify.occ import Array, edge_points, edges_of, xyz
+from medax.cad.simplify.occ import Array, edge_points, edges_of, pnt, xyz
 
 #: Free ends of the profile are extended by this fraction of the profile's length.
 FREE_END_EXTENSION = 0.1
@@ -60,10 +60,6 @@ class MergedSurface:
     profile: Any
 
 
-def _p(a: Array) -> gp_Pnt:
-    return gp_Pnt(float(a[0]), float(a[1]), float(a[2]))
-
-
 def _axis(ad: Any) -> tuple[Array, Array]:
     kind = ad.GetType()
     ax = {
@@ -80,7 +76,7 @@ def _half_params(half: Half) -> tuple[float, float, float]:
     from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
 
     p = edge_points(half.edge, 3)[1]
-    u, v = GeomAPI_ProjectPointOnSurf(_p(p), surf).LowerDistanceParameters()
+    u, v = GeomAPI_ProjectPointOnSurf(pnt(p), surf).LowerDistanceParameters()
     cross, along = (u, v) if half.medial.iso == "u" else (v, u)
     mid = half.medial.mid
     # bring the edge parameter within half a period of mid (periodic directions)
@@ -137,12 +133,12 @@ def _chain(
     if 0 in at:
         a = at[0][::-1]
         a[-1] = q0
-        pieces.append(GC_MakeArcOfCircle(_p(a[0]), _p(a[1]), _p(a[2])).Value())
-    pieces.append(GC_MakeSegment(_p(q0), _p(q1)).Value())
+        pieces.append(GC_MakeArcOfCircle(pnt(a[0]), pnt(a[1]), pnt(a[2])).Value())
+    pieces.append(GC_MakeSegment(pnt(q0), pnt(q1)).Value())
     if 1 in at:
         a = at[1].copy()
         a[0] = q1
-        pieces.append(GC_MakeArcOfCircle(_p(a[0]), _p(a[1]), _p(a[2])).Value())
+        pieces.append(GC_MakeArcOfCircle(pnt(a[0]), pnt(a[1]), pnt(a[2])).Value())
     return pieces
 
 
@@ -169,7 +165,7 @@ def _point_in_face(face: Any, p: Array, tol: float) -> bool:
     from OCP.BRepClass import BRepClass_FaceClassifier
     from OCP.TopAbs import TopAbs_OUT
 
-    return BRepClass_FaceClassifier(face, _p(p), tol).State() != TopAbs_OUT
+    return BRepClass_FaceClassifier(face, pnt(p), tol).State() != TopAbs_OUT
 
 
 def merged_surface(support: Any, halves: list[Half], tol: float) -> MergedSurface | str:
@@ -212,7 +208,7 @@ def _extrusion(support: Any, halves: list[Half], hads: list[Any], tol: float) ->
     ext_surf = Geom_SurfaceOfLinearExtrusion(profile, gp_Dir(*map(float, d)))
     # finite along d: the group's extent along d plus a margin (projections need bounds)
     along = np.concatenate([(pts - o) @ d] + [(_boundary_samples(h.face) - o) @ d for h in halves])
-    o_v = float(_p(o).XYZ().Dot(gp_Dir(*map(float, d)).XYZ()))
+    o_v = float(pnt(o).XYZ().Dot(gp_Dir(*map(float, d)).XYZ()))
     lo, hi = float(along.min()), float(along.max())
     margin = 0.1 * (hi - lo) + 10 * tol
     v0 = lo - margin + o_v - float(xyz(profile.StartPoint()) @ d)
@@ -274,5 +270,5 @@ def _revolution(support: Any, halves: list[Half], hads: list[Any], tol: float) -
     if isinstance(pieces, str):
         return pieces
     profile = _join(pieces, tol)
-    surf = Geom_SurfaceOfRevolution(profile, gp_Ax1(_p(c), gp_Dir(*map(float, a))))
+    surf = Geom_SurfaceOfRevolution(profile, gp_Ax1(pnt(c), gp_Dir(*map(float, a))))
     return MergedSurface(surf, "revolution", profile)

@@ -48,7 +48,7 @@ def volume(shape: Any) -> float:
     the adaptive integrator where there are fitted B-spline faces (Gauss-Kronrod took 32 s
     on the six faces of the simplified 12-edge box, the adaptive one 1 s)."""
     props = GProp_GProps()
-    if _has_fitted_faces(shape):
+    if _has_bspline_faces(shape):
         BRepGProp.VolumeProperties_s(shape, props, VOLUME_EPS)
     else:
         BRepGProp.VolumePropertiesGK_s(shape, props, VOLUME_EPS)
@@ -82,21 +82,21 @@ def volume_change(
     copy, integrated to ``tol / 100``: ~3x faster than 1e-10 there), else (their larger
     change, reason). On fitted faces ``expected`` (the relative change the fits measured
     themselves) may stand in for the slow Gauss-Kronrod second opinion."""
-    if _has_fitted_faces(shape) and expected is not None and np.isfinite(expected):
+    bspline, swept = _has_bspline_faces(shape), _has_swept_faces(shape)
+    if bspline and expected is not None and np.isfinite(expected):
         # a second measure independent of OCCT: the fits' own signed volumes against the
         # exact heights (``expected``, relative); the adaptive integrator must agree with it
         # (on a NURBS copy when there are swept faces too: as built, the adaptive integrator
         # was 1.5e-4 off on the rounded box chain's revolved faces)
         from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
 
-        swept = _has_swept_faces(shape)
         target = BRepBuilderAPI_NurbsConvert(shape, True).Shape() if swept else shape
         props = GProp_GProps()
         BRepGProp.VolumeProperties_s(target, props, 1e-2 * tol)
         d_ad = (float(props.Mass()) - before) / before
         if abs(d_ad) <= tol and abs(d_ad - expected) <= 0.1 * tol:
             return d_ad, ""
-    if _has_fitted_faces(shape):
+    if bspline:
         # on fitted B-spline faces (many knot spans) Gauss-Kronrod to 1e-10 took 200 s on
         # six faces, to 1e-8 31 s, to 1e-6 5 s (then 2e-7 off); the adaptive integrator
         # 0.25 s to 1e-8 (agreeing with Gauss-Kronrod to 1e-8 within 4e-10)
@@ -108,7 +108,7 @@ def volume_change(
     # :func:`volumes`): the NURBS copy first, the faces as built only when the two disagree
     # there (the 64-boss grid: Gauss-Kronrod 1.3e-4 off on the copy, both within 1e-7 on
     # the faces as built)
-    for nurbs in (True, False) if _has_swept_faces(shape) else (False, True):
+    for nurbs in (True, False) if swept else (False, True):
         gk, ad = volumes(shape, nurbs, 1e-2 * tol if nurbs else VOLUME_EPS)
         d_gk, d_ad = (gk - before) / before, (ad - before) / before
         if max(abs(d_gk), abs(d_ad)) <= tol:
@@ -122,8 +122,9 @@ def volume_change(
     ), f"volume changed by {max(abs(d_gk), abs(d_ad)):.2e} (> {tol:g})"
 
 
-def _has_fitted_faces(shape: Any) -> bool:
-    """Whether ``shape`` has a face on a B-spline surface (the fitted merged faces)."""
+def _has_bspline_faces(shape: Any) -> bool:
+    """Whether ``shape`` has a face on a B-spline surface (the fitted merged faces, or
+    freeform faces of the input)."""
     from OCP.GeomAbs import GeomAbs_BSplineSurface
 
     return any(BRepAdaptor_Surface(f).GetType() == GeomAbs_BSplineSurface for f in faces_of(shape))
