@@ -81,8 +81,10 @@ def build_groups(
     """Groups of the split solid.
 
     ``fillets`` maps each simplified fillet (original face index) to its two supporting
-    faces (original indices); ``corners`` each split corner blend to its supporting faces
-    (each piece goes to the one whose normal is nearest to the piece's own). Raises
+    faces (original indices); a supporting face may itself be a simplified fillet (a fillet
+    on a fillet, split by a bridge): each piece then joins the one half of it that it
+    touches. ``corners`` maps each split corner blend to its supporting faces (each piece
+    goes to the one whose normal is nearest to the piece's own). Raises
     :class:`CadError` when a half does not touch exactly one supporting face or a boundary
     cannot be chained.
     """
@@ -109,7 +111,6 @@ def build_groups(
         return out
 
     support_of: dict[int, int] = {}
-    halves: dict[int, list[int]] = {}
     for blend, supports in fillets.items():
         for k in split.pieces(blend):
             touching = [j for j in face_nbrs(k) if split.origin[j] in supports]
@@ -118,10 +119,14 @@ def build_groups(
                 raise CadError(
                     f"fillet face {blend}: a half touches {len(origins)} supporting faces"
                 )
+            (o,) = origins
+            if o in fillets and len(touching) != 1:  # riding on a fillet: on one of its halves
+                raise CadError(f"fillet face {blend}: a piece touches both halves of fillet {o}")
             for j in touching:
                 parent[find(k)] = find(j)
-            halves.setdefault(split.origin[touching[0]], []).append(k)
         for s in supports:
+            if s in fillets:  # a simplified fillet: its halves go to its own supports
+                continue
             for j in split.pieces(s)[1:]:
                 parent[find(j)] = find(split.pieces(s)[0])
             for j in split.pieces(s):
@@ -133,7 +138,6 @@ def build_groups(
             if not any(find(j) == root for j in face_nbrs(k)):
                 raise CadError(f"corner blend {corner}: a piece does not touch face {s}'s group")
             parent[find(k)] = find(split.pieces(s)[0])
-            halves.setdefault(s, []).append(k)
     roots = sorted({find(k) for k in range(nface)})
     gid = {r: i for i, r in enumerate(roots)}
     group_of = [gid[find(k)] for k in range(nface)]
@@ -143,8 +147,10 @@ def build_groups(
         g.members.append(k)
         if k in support_of:
             g.support = support_of[k]
-    for s, ks in halves.items():
-        groups[group_of[split.pieces(s)[0]]].halves.extend(ks)
+    blends = set(fillets) | set(corners or {})
+    for k in range(nface):
+        if split.origin[k] in blends:
+            groups[group_of[k]].halves.append(k)
 
     # integer adjacency, computed once: edge -> faces, vertex -> edges
     edge_faces = {

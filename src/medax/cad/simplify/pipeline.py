@@ -22,6 +22,7 @@ from OCP.GeomAbs import GeomAbs_Plane
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
 from OCP.TopoDS import TopoDS
 
+from medax.cad.simplify.bridge import bridge_edge
 from medax.cad.simplify.corner import corner_arcs, plane_normal
 from medax.cad.simplify.fitted import FittedSurface, graph_surface
 from medax.cad.simplify.groups import Group, build_groups
@@ -144,7 +145,8 @@ class _Attempt:
 @dataclass
 class _Job:
     """State shared by the steps of one :func:`simplify` run: the working copy and its
-    maps, the medial curves, corner arcs, merged surfaces, fitted-surface cache, the fillets
+    maps, the medial curves, corner arcs, bridges ((rider, base) -> edge), merged surfaces,
+    fitted-surface cache, the fillets
     still tried (``specs``), the blends kept with their reasons, and tolerances."""
 
     work: Any
@@ -159,6 +161,7 @@ class _Job:
     specs: dict[int, FilletSpec] = field(default_factory=dict)
     corners: dict[int, CornerSpec] = field(default_factory=dict)
     arcs: dict[int, list[Any]] = field(default_factory=dict)
+    bridges: dict[tuple[int, int], Any] = field(default_factory=dict)
     surfaces: dict[int, MergedSurface | str] = field(default_factory=dict)
     cache: dict[tuple[int, ...], FittedSurface | str] = field(default_factory=dict)
 
@@ -208,6 +211,7 @@ def simplify(
         else:
             job.medials[spec.face] = m
     _corners(job, blends)
+    _bridges(job, blends)
     _keep_next_to_corners(work, blends, job.medials, kept)
     say(f"{len(job.medials)} fillets with a medial curve, {len(job.corners)} corner blends split")
     job.specs = {s.face: s for s in blends.fillets if s.face in job.medials}
@@ -323,6 +327,40 @@ def _corners(job: _Job, blends: BlendInput) -> None:
         job.corners[cs.face], job.arcs[cs.face] = cs, r[0]
 
 
+def _bridges(job: _Job, blends: BlendInput) -> None:
+    """Bridges of the fillets that ride on another fillet with a medial curve (see
+    :mod:`.bridge`) into ``job.bridges``; a rider without one is kept."""
+    by_face = {s.face: s for s in blends.fillets}
+    for spec in blends.fillets:
+        for base, e in zip(spec.supporting, spec.smooth_edges, strict=True):
+            if spec.face not in job.medials or base not in job.medials:
+                continue
+            planes = tuple(job.face(s) for s in by_face[base].supporting)
+            r = bridge_edge(
+                job.face(spec.face),
+                job.medials[spec.face],
+                job.medials[base],
+                TopoDS.Edge(job.emap.FindKey(e + 1)),
+                (planes[0], planes[1]),
+                job.btol,
+            )
+            if isinstance(r, str):
+                job.medials.pop(spec.face)
+                job.kept[spec.face] = f"rides on fillet {base}: {r}"
+                break
+            job.bridges[(spec.face, base)] = r[0]
+
+
+def _riders(specs: dict[int, FilletSpec]) -> dict[int, list[int]]:
+    """Simplified fillet -> the simplified fillets that ride on it (have it as support)."""
+    out: dict[int, list[int]] = {}
+    for s in specs.values():
+        for base in s.supporting:
+            if base in specs:
+                out.setdefault(base, []).append(s.face)
+    return out
+
+
 def _cascade(specs: dict[int, FilletSpec], corners: dict[int, CornerSpec], kept) -> None:  # type: ignore[no-untyped-def]
     """A corner blend goes only with all its fillets, and a fillet only with its corners:
     drop both ways until nothing changes."""
@@ -359,13 +397,18 @@ def _refresh_surfaces(job: _Job) -> None:
     while True:
         _cascade(specs, job.corners, kept)
         with_corner = {s for cs in job.corners.values() for s in cs.supporting}
+        with_corner |= {s for base in _riders(specs) for s in specs[base].supporting}
         surfaces: dict[int, MergedSurface | str] = {}
         failed = False
         for sup, hs in _halves_of(specs).items():
+            if sup in specs:  # a simplified fillet: its riders' pieces go to its supports
+                continue
             support = job.face(sup)
             planar = BRepAdaptor_Surface(support).GetType() == GeomAbs_Plane
             if sup in with_corner:
-                ms: MergedSurface | str = FITTED if planar else "corner pieces on a curved face"
+                ms: MergedSurface | str = (
+                    FITTED if planar else "corner or bridged pieces on a curved face"
+                )
             else:
                 halves = [
                     Half(job.face(f), job.medials[f], TopoDS.Edge(job.emap.FindKey(e + 1)))
@@ -410,6 +453,7 @@ def _split(job: _Job, sel: dict[int, FilletSpec], csel: dict[int, CornerSpec]) -
     """The working solid split along the medial curves of ``sel`` and the arcs of ``csel``,
     and its groups."""
     tools = [job.medials[f].edge for f in sel] + [e for c in csel for e in job.arcs[c]]
+    tools += [e for (f, base), e in job.bridges.items() if f in sel and base in sel]
     split = split_along(job.work, tools)
     groups = build_groups(
         split,
@@ -541,6 +585,9 @@ def _clusters(specs: dict[int, FilletSpec]) -> list[list[int]]:
             comp.append(x)
             for sup in specs[x].supporting:
                 stack.extend(y for y, _ in by_sup[sup])
+                if sup in specs:  # x rides on fillet sup
+                    stack.append(sup)
+            stack.extend(y for y, _ in by_sup.get(x, []))  # fillets riding on x
         out.append(comp)
     return out
 
