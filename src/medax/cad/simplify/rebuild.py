@@ -35,6 +35,7 @@ from medax.cad.simplify.occ import (
     face_normal_at,
     xyz,
 )
+from medax.cad.simplify.projection import GridProjection
 from medax.cad.simplify.split import SplitResult
 from medax.errors import CadError
 
@@ -82,10 +83,13 @@ def _pcurve_error(pc: Any, c: Any, surf: Any, f: float, l: float, n: int = 41) -
     return err
 
 
-def _fitted_pcurve(c: Any, surf: Any, f: float, l: float, tol: float) -> Any | None:
+def _fitted_pcurve(
+    c: Any, surf: Any, f: float, l: float, tol: float, grid: GridProjection | None = None
+) -> Any | None:
     """pcurve by projecting samples and fitting a 2-D B-spline on the edge's own parameter,
     span by span of the 3-D curve's knots (joined curves are only G1 at their joints); the
-    spans are concatenated with a C0 knot at each break so the parameter is kept."""
+    spans are concatenated with a C0 knot at each break so the parameter is kept. ``grid``:
+    the surface's grid projection when it has one (B-spline surfaces; much faster)."""
     from OCP.collections import Array1_double, Array1_gp_Pnt2d
     from OCP.Geom2dAPI import Geom2dAPI_PointsToBSpline
     from OCP.GeomAbs import GeomAbs_C2
@@ -108,10 +112,14 @@ def _fitted_pcurve(c: Any, surf: Any, f: float, l: float, tol: float) -> Any | N
         ts = np.linspace(a, b, 25)
         pts, pars = Array1_gp_Pnt2d(1, ts.size), Array1_double(1, ts.size)
         for i, t in enumerate(ts):
-            proj.Init(c.Value(float(t)), surf, *bounds)
-            if proj.NbPoints() == 0:
-                return None
-            u, v = proj.LowerDistanceParameters()
+            if grid is not None:
+                grid.Perform(c.Value(float(t)))
+                u, v = grid.LowerDistanceParameters()
+            else:
+                proj.Init(c.Value(float(t)), surf, *bounds)
+                if proj.NbPoints() == 0:
+                    return None
+                u, v = proj.LowerDistanceParameters()
             if prev_u is not None and surf.IsUPeriodic():  # stay on one sheet
                 per = surf.UPeriod()
                 u += per * round((prev_u - u) / per)
@@ -167,6 +175,7 @@ def _add_pcurves(face: Any, surf: Any, tol: float) -> None:
     from OCP.TopLoc import TopLoc_Location
 
     builder = BRep_Builder()
+    grid: GridProjection | None = None
     for e in edges_of(face):
         if BRep_Tool.CurveOnSurface_s(TopoDS.Edge(e), surf, TopLoc_Location(), 0.0, 0.0):
             continue  # an original edge of an original surface: its pcurve is there
@@ -174,7 +183,10 @@ def _add_pcurves(face: Any, surf: Any, tol: float) -> None:
         pc = GeomProjLib.Curve2d_s(c, f, l, surf, tol)
         err = float("inf") if pc is None else _pcurve_error(pc, c, surf, f, l)
         if err > 0.1 * tol:
-            alt = _fitted_pcurve(c, surf, f, l, tol)
+            if grid is None:
+                u0, u1, v0, v1 = (float(x) for x in surf.Bounds())
+                grid = GridProjection.of(surf, (u0, u1, v0, v1))
+            alt = _fitted_pcurve(c, surf, f, l, tol, grid)
             if alt is not None and _pcurve_error(alt, c, surf, f, l) < err:
                 pc = alt
         if pc is None:

@@ -26,6 +26,7 @@ from OCP.IntTools import IntTools_FClass2d
 from OCP.TopAbs import TopAbs_IN, TopAbs_OUT, TopAbs_SHELL
 
 from medax.cad.simplify.occ import Array, compound, count, faces_of, uv_bounds, xyz
+from medax.cad.simplify.projection import GridProjection
 
 #: Relative accuracy asked of the volume integration.
 VOLUME_EPS = 1e-10
@@ -224,11 +225,23 @@ class _ExtrusionProjection:
         return self.dist
 
 
+def _edge_tolerance(face: Any) -> float:
+    """The largest tolerance of ``face``'s edges (at least 1e-9): feet on a boundary edge
+    then count as on the face from both sides, whatever its two pcurves' small errors."""
+    from OCP.BRep import BRep_Tool
+
+    from medax.cad.simplify.occ import edges_of
+
+    return max([1e-9] + [BRep_Tool.Tolerance_s(e) for e in edges_of(face)])
+
+
 def max_distance(points: Array, faces: Sequence[Any], enough: float = 0.0) -> float:
     """Largest distance from ``points`` (n, 3) to the union of ``faces``.
 
-    Each point is projected on each face's surface (``GeomAPI_ProjectPointOnSurf``); a foot
-    inside the face (face classifier) gives the distance. A point with no foot inside any
+    Each point is projected on each face's surface (``GeomAPI_ProjectPointOnSurf``; through
+    the profile on extrusions, from a grid start on B-spline surfaces: :mod:`.projection`);
+    a foot inside the face (face classifier, to the face's edge tolerance) gives the
+    distance. A point with no foot inside any
     face is measured exactly with ``BRepExtrema_DistShapeShape`` against all ``faces``.
     A point whose distance to some face is ``<= enough`` is not tried on the others (the
     result is then an upper bound, exact whenever it is above ``enough``).
@@ -239,13 +252,14 @@ def max_distance(points: Array, faces: Sequence[Any], enough: float = 0.0) -> fl
     prepared: list[tuple[Any, Any, Any]] = []
     for f in faces:
         surf = BRep_Tool.Surface_s(f)
-        proj = _ExtrusionProjection.of(surf)
+        u0, u1, v0, v1 = uv_bounds(f)
+        du, dv = 0.1 * (u1 - u0), 0.1 * (v1 - v0)
+        wide = (u0 - du, u1 + du, v0 - dv, v1 + dv)
+        proj: Any = _ExtrusionProjection.of(surf) or GridProjection.of(surf, wide)
         if proj is None:
-            u0, u1, v0, v1 = uv_bounds(f)
-            du, dv = 0.1 * (u1 - u0), 0.1 * (v1 - v0)
             proj = GeomAPI_ProjectPointOnSurf()
-            proj.Init(surf, u0 - du, u1 + du, v0 - dv, v1 + dv)
-        prepared.append((proj, surf, IntTools_FClass2d(f, 1e-9)))
+            proj.Init(surf, *wide)
+        prepared.append((proj, surf, IntTools_FClass2d(f, _edge_tolerance(f))))
     target = None
     worst = 0.0
     for p in points:

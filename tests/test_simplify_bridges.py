@@ -1,0 +1,88 @@
+"""A fillet riding on a fillet: the box with rounded vertical edges (r = 4) whose top loop of
+cylinders and tori (r = 1.5) was filleted after them (the classifier's ``rounded_box_chain``).
+
+Truth: OCCT's validity check, distances between the old and new boundaries measured with
+BRepExtrema on the whole solids, and the box's symmetry: the new edge between two side faces
+(the vertical fillet's medial line continued by the bridge over the torus) lies in the
+bisector plane of the two side planes, checked against the planes' coordinates.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
+from OCP.TopoDS import TopoDS
+
+from medax.cad.simplify import simplify, specs_from_classification
+from medax.cad.simplify.occ import edge_points, shape_map
+from medax.cad.simplify.specs import edge_face_map
+from medax.cad.simplify.validate import check, face_samples
+from truth import boundary_distances
+
+#: the box: x in [0, 30], y in [0, 20], z in [0, 10]; the side planes by coordinate
+SIDES = {("x", 0.0), ("x", 30.0), ("y", 0.0), ("y", 20.0)}
+
+
+@pytest.fixture(scope="module")
+def chain():
+    from medax.cad.classify import classify_solid
+    from medax.cad.parts import rounded_box_chain
+    from medax.cad.reader import heal
+
+    cls = classify_solid(heal(rounded_box_chain().shape))
+    return cls, simplify(cls.shape, specs_from_classification(cls))
+
+
+def test_every_fillet_removed(chain):
+    cls, r = chain
+    assert len(cls.blends) == 12
+    assert (r.faces_before, r.faces_after) == (18, 6) and not r.blends_kept
+    c = check(r.shape)
+    assert c.valid and c.shells == 1 and c.closed
+    assert abs(r.volume_rel_change) <= 1e-6
+    old_to_new, new_to_old = boundary_distances(cls.shape, r.shape, 9, 24)
+    assert max(old_to_new, new_to_old) <= 1e-5 * r.diagonal
+
+
+def test_each_torus_is_shared_by_both_side_faces(chain):
+    """The lower half of each corner torus is split by its bridge: the torus is absorbed by
+    the top face and by both side faces next to its vertical fillet."""
+    _, r = chain
+    tori = [g for g in r.face_groups if 5 in g.halves]  # a torus of the top loop
+    assert len(tori) == 3  # the top face and two side faces
+    assert all(g.surface == "fitted" for g in tori)
+
+
+def _side(face) -> tuple[str, float] | None:
+    """The side plane a result face lies on (its samples away from the fillets)."""
+    pts = face_samples(face, 9)
+    for axis, value in SIDES:
+        k = "xyz".index(axis)
+        if np.sum(np.abs(pts[:, k] - value) < 1e-4) >= 0.25 * len(pts):
+            return axis, value
+    return None
+
+
+def test_side_faces_meet_on_the_bisector_planes(chain):
+    """Every point of an edge between two side faces is equidistant from their planes
+    (to 1e-9 x diagonal): the medial line of the vertical fillet, then the bridge."""
+    _, r = chain
+    emap = shape_map(r.shape, TopAbs_EDGE)
+    e2f = edge_face_map(r.shape)
+    assert shape_map(r.shape, TopAbs_FACE).Size() == 6
+    found = 0
+    for i in range(1, emap.Size() + 1):
+        e = TopoDS.Edge(emap.FindKey(i))
+        sides = [_side(TopoDS.Face(f)) for f in e2f.FindFromKey(e)]
+        if None in sides or len(sides) != 2:
+            continue
+        (a1, v1), (a2, v2) = sides  # type: ignore[misc]
+        assert a1 != a2
+        pts = edge_points(e, 41)
+        d1 = np.abs(pts[:, "xyz".index(a1)] - v1)
+        d2 = np.abs(pts[:, "xyz".index(a2)] - v2)
+        assert np.max(np.abs(d1 - d2)) <= 1e-9 * r.diagonal
+        assert pts[:, 2].max() > 10.0 - 1.5 + 0.1  # the edge climbs over the torus
+        found += 1
+    assert found == 4
