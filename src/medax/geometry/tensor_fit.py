@@ -10,7 +10,8 @@ Knots: double (C1) knots at prescribed *breaks* (lines ``x = const`` / ``y = con
 the height's curvature jumps: the smooth edges between a plane and a fillet, the cross
 edges between a fillet and a corner blend), so the spline converges at its full order on
 both sides; between breaks, spans of at most ``spacing`` where the height is curved in that
-direction and a single span where it is linear (flat strips cost nothing). The spacing is
+direction and a single span where it is linear (flat strips cost nothing; a curved strip in
+a wide flat interval gets breaks of its own, so only the strip is fine). The spacing is
 halved until the error, measured on a grid 7 points per span (not the fitting samples),
 is within the tolerance. scipy has no constrained/penalised tensor-product fit on a masked
 grid (``LSQBivariateSpline`` takes no penalty and fails on large empty areas), hence this.
@@ -104,21 +105,50 @@ def _second_diff(n: int) -> sp.spmatrix:
 
 
 def _curved(
-    lo: float, hi: float, breaks: Sequence[float], h: HeightFn, other: FloatArray, axis: int
-) -> list[bool]:
-    """Per interval between breaks: is the height curved along this axis there? (Second
-    differences of 9 samples across the interval, at every ``other`` coordinate.)"""
+    lo: float,
+    hi: float,
+    breaks: Sequence[float],
+    h: HeightFn,
+    other: FloatArray,
+    axis: int,
+    spacing: float,
+) -> tuple[list[float], list[bool]]:
+    """Where is the height curved along this axis? Each interval between breaks is probed
+    with second differences of samples at most ``spacing`` apart, at every ``other``
+    coordinate; a curved part that does not fill its interval gets breaks of its own at its
+    ends (padded by two samples), so only it gets fine spans (a fillet strip on a wide
+    plate). Returns the breaks (the given ones and those) and a flag per interval."""
     pts = [lo, *breaks, hi]
-    out = []
-    for a, b in zip(pts[:-1], pts[1:], strict=True):
-        s = np.linspace(a, b, 9)
+    out_breaks: list[float] = []
+    flags: list[bool] = []
+    for k, (a, b) in enumerate(zip(pts[:-1], pts[1:], strict=True)):
+        n = int(np.clip(np.ceil((b - a) / spacing) + 1, 9, 4000))
+        s = np.linspace(a, b, n)
         x, y = (s, other) if axis == 0 else (other, s)
         z, ok, _ = h(*np.meshgrid(x, y, indexing="ij"))
-        d2 = np.diff(z, n=2, axis=axis)
-        ok2 = ok[:-2] & ok[1:-1] & ok[2:] if axis == 0 else ok[:, :-2] & ok[:, 1:-1] & ok[:, 2:]
-        scale = max(b - a, 1e-300)
-        out.append(bool(np.any(np.abs(d2[ok2]) > 1e-12 * scale)))
-    return out
+        if axis == 1:
+            z, ok = z.T, ok.T
+        d2 = np.diff(z, n=2, axis=0)
+        ok2 = ok[:-2] & ok[1:-1] & ok[2:]
+        scale = max((b - a) / (n - 1), 1e-300)
+        hit = np.flatnonzero(np.any(ok2 & (np.abs(d2) > 1e-12 * scale), axis=1))
+        if k > 0:
+            out_breaks.append(a)
+        if hit.size == 0:
+            flags.append(False)
+            continue
+        ca, cb = s[max(hit[0] - 2, 0)], s[min(hit[-1] + 4, n - 1)]
+        wide = 0.05 * (b - a)  # a curved part nearly filling its interval: keep it whole
+        if ca - a > wide:
+            out_breaks.append(float(ca))
+            flags.append(False)
+        if b - cb > wide:
+            flags.append(True)
+            out_breaks.append(float(cb))
+            flags.append(False)
+        else:
+            flags.append(True)
+    return out_breaks, flags
 
 
 def fit_height(
@@ -143,8 +173,8 @@ def fit_height(
     yb = sorted(b for b in set(y_breaks) if y0 < b < y1)
     probe_y = np.linspace(y0, y1, 41)
     probe_x = np.linspace(x0, x1, 41)
-    fine_x = _curved(x0, x1, xb, h, probe_y, 0)
-    fine_y = _curved(y0, y1, yb, h, probe_x, 1)
+    xb, fine_x = _curved(x0, x1, xb, h, probe_y, 0, spacing)
+    yb, fine_y = _curved(y0, y1, yb, h, probe_x, 1, spacing)
     best: TensorFit | None = None
     step = spacing
     errors: list[float] = []

@@ -27,6 +27,7 @@ from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Curve, BRepAdaptor_Surface
 from OCP.BRepTools import BRepTools, BRepTools_WireExplorer
 from OCP.GeomAbs import (
+    GeomAbs_BSplineSurface,
     GeomAbs_Cylinder,
     GeomAbs_Line,
     GeomAbs_Plane,
@@ -43,8 +44,10 @@ from medax.cad.simplify.occ import (
     edges_of,
     face_inside_point,
     face_normal_at,
+    uv_bounds,
     xyz,
 )
+from medax.geometry.nurbs_surface import NurbsSurface, graph_heights
 from medax.geometry.tensor_fit import TensorFit, fit_height, greville
 
 #: Samples per edge for the projected member boundaries.
@@ -56,7 +59,7 @@ MAX_SLOPE_ANGLE = np.radians(70.0)
 
 @dataclass(frozen=True)
 class _Member:
-    kind: str  # "plane" | "cylinder" | "sphere" | "torus"
+    kind: str  # "plane" | "cylinder" | "sphere" | "torus" | "nurbs"
     centre: Array  # a point of the plane / the axis / the centre
     axis: Array  # the plane's normal / the cylinder's or torus' axis (unused for spheres)
     radius: float  # cylinder, sphere: radius; torus: minor radius
@@ -64,6 +67,9 @@ class _Member:
     inner: tuple[Path, ...]
     edges: tuple[Array, ...]  # projected samples (EDGE_SAMPLES, 2) of each boundary edge
     major: float = 0.0  # torus: major radius
+    nurbs: NurbsSurface | None = None  # freeform pieces: the surface
+    uv_box: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)  # and the face's UV box
+    plane_axes: tuple[Array, Array] = (np.zeros(3), np.zeros(3))  # the frame's ex, ey
 
     @property
     def boundary(self) -> Array:
@@ -112,6 +118,7 @@ def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
     ad = BRepAdaptor_Surface(face)
     kind = ad.GetType()
     major = 0.0
+    nurbs: NurbsSurface | None = None
     if kind == GeomAbs_Plane:
         ax = ad.Plane().Axis()
         m = ("plane", xyz(ax.Location()), xyz(ax.Direction()), 0.0)
@@ -127,8 +134,14 @@ def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
         ax = tor.Axis()
         m = ("torus", xyz(ax.Location()), xyz(ax.Direction()), float(tor.MinorRadius()))
         major = float(tor.MajorRadius())
+    elif kind == GeomAbs_BSplineSurface:
+        got = _nurbs(ad)
+        if isinstance(got, str):
+            return got
+        nurbs = got
+        m = ("nurbs", np.zeros(3), np.zeros(3), _min_radius(ad))
     else:
-        return "fitted merge takes plane, cylinder, sphere and torus pieces only"
+        return "fitted merge takes plane, cylinder, sphere, torus and B-spline pieces only"
     outer_wire = BRepTools.OuterWire_s(face)
     outer = _wire_edges(outer_wire, frame)
     edges = list(outer)
@@ -141,7 +154,51 @@ def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
             inner.append(_polygon(hole))
             edges += hole
         exp.Next()
-    return _Member(m[0], m[1], m[2], m[3], _polygon(outer), tuple(inner), tuple(edges), major)
+    free = nurbs is not None
+    return _Member(
+        m[0],
+        m[1],
+        m[2],
+        m[3],
+        _polygon(outer),
+        tuple(inner),
+        tuple(edges),
+        major,
+        nurbs,
+        uv_bounds(face) if free else (0.0, 0.0, 0.0, 0.0),
+        (frame[1], frame[2]),
+    )
+
+
+def _nurbs(ad: Any) -> NurbsSurface | str:
+    """The numpy copy of a non-periodic B-spline face surface (``BRepAdaptor_Surface``)."""
+    bs = ad.BSpline()
+    if bs.IsUPeriodic() or bs.IsVPeriodic():
+        return "periodic B-spline pieces are not supported by the fitted merge"
+    nu, nv = bs.NbUPoles(), bs.NbVPoles()
+    poles = np.array([[xyz(bs.Pole(i, j)) for j in range(1, nv + 1)] for i in range(1, nu + 1)])
+    weights = np.array([[bs.Weight(i, j) for j in range(1, nv + 1)] for i in range(1, nu + 1)])
+
+    def flat(n: int, knot: Any, mult: Any) -> Array:
+        return np.repeat([knot(i) for i in range(1, n + 1)], [mult(i) for i in range(1, n + 1)])
+
+    tu = flat(bs.NbUKnots(), bs.UKnot, bs.UMultiplicity)
+    tv = flat(bs.NbVKnots(), bs.VKnot, bs.VMultiplicity)
+    return NurbsSurface(poles, weights, tu, tv, bs.UDegree(), bs.VDegree())
+
+
+def _min_radius(ad: Any, n: int = 7) -> float:
+    """Smallest principal curvature radius at ``n x n`` samples of a face's surface
+    (``BRepAdaptor_Surface``)."""
+    from OCP.BRepLProp import BRepLProp_SLProps
+
+    kmax = 0.0
+    for u in np.linspace(ad.FirstUParameter(), ad.LastUParameter(), n):
+        for v in np.linspace(ad.FirstVParameter(), ad.LastVParameter(), n):
+            props = BRepLProp_SLProps(ad, float(u), float(v), 2, 1e-9)
+            if props.IsCurvatureDefined():
+                kmax = max(kmax, abs(props.MaxCurvature()), abs(props.MinCurvature()))
+    return 1.0 / kmax if kmax > 0 else float("inf")
 
 
 def _heights(m: _Member, q: Array, n: Array) -> tuple[Array, np.ndarray]:
@@ -154,6 +211,13 @@ def _heights(m: _Member, q: Array, n: Array) -> tuple[Array, np.ndarray]:
         return ((m.centre - q) @ m.axis) / den, np.ones(len(q), bool)
     if m.kind == "torus":
         return _torus_heights(m, q, n)
+    if m.nurbs is not None:
+        ex, ey = m.plane_axes
+        zero = np.zeros(3)
+        xy = np.column_stack([q @ ex, q @ ey])
+        scale = float(np.ptp(m.nurbs.poles.reshape(-1, 3), axis=0).max())
+        t, ok, normal = graph_heights(m.nurbs, (zero, ex, ey, n), xy, m.uv_box, 1e-12 * scale)
+        return t - q @ n, ok & (np.abs(normal @ n) >= np.cos(MAX_SLOPE_ANGLE))
     w = q - m.centre
     if m.kind == "cylinder":
         w = w - np.outer(w @ m.axis, m.axis)
@@ -218,25 +282,53 @@ def _torus_heights(m: _Member, q: Array, n: Array) -> tuple[Array, np.ndarray]:
     return t, ok & (cos >= np.cos(MAX_SLOPE_ANGLE))
 
 
-def _frame(plane_face: Any, members: Sequence[Any]) -> tuple[Array, Array, Array, Array]:
-    """(origin, ex, ey, n): n the plane's normal, ex along the group's longest straight edge
-    normal to n (so the edges of box-like parts lie on knot lines)."""
+def _frame(
+    plane_face: Any, members: Sequence[Any], tol: float
+) -> tuple[Array, Array, Array, Array]:
+    """(origin, ex, ey, n): n the plane's normal, ex along the group's longest straight
+    smooth edge (an edge two members share: where the curvature jumps, so it lies on a knot
+    line; a variable-radius fillet's contact line may be oblique to the face's own edges),
+    else along its longest straight edge normal to n (box-like parts: every edge on a knot
+    line). Straight: a line, or samples within ``tol`` of their chord."""
     pl = BRepAdaptor_Surface(plane_face).Plane()
     o, n = xyz(pl.Location()), xyz(pl.Axis().Direction())
     ex = xyz(pl.XAxis().Direction())
-    best = 0.0
+    seen: dict[Any, int] = {}
+    edges: list[Any] = []
     for f in members:
         for e in edges_of(f):
-            c = BRepAdaptor_Curve(e)
-            if c.GetType() != GeomAbs_Line:
-                continue
-            d = xyz(c.Line().Direction())
-            length = abs(c.LastParameter() - c.FirstParameter())
-            if abs(d @ n) < 1e-9 and length > best:
-                best, ex = length, d
+            key = e.TShape()
+            seen[key] = seen.get(key, 0) + 1
+            edges.append(e)
+    best = (False, 0.0)
+    for e in edges:
+        d = _straight_direction(e, tol)
+        if d is None or abs(d @ n) > 1e-9 * float(np.linalg.norm(d)):
+            continue
+        length = float(np.linalg.norm(d))
+        rank = (seen[e.TShape()] > 1, length)
+        if rank > best:
+            best, ex = rank, d / length
     ex = ex - (ex @ n) * n
     ex /= np.linalg.norm(ex)
     return o, ex, np.cross(n, ex), n
+
+
+def _straight_direction(edge: Any, tol: float) -> Array | None:
+    """End-to-end vector of a straight edge (a line, or 9 samples within ``tol`` of the
+    chord), else None."""
+    c = BRepAdaptor_Curve(edge)
+    if c.GetType() == GeomAbs_Line:
+        d = xyz(c.Line().Direction())
+        return d * abs(c.LastParameter() - c.FirstParameter())
+    p = edge_points(edge, 9)
+    chord = p[-1] - p[0]
+    length = float(np.linalg.norm(chord))
+    if length < 100 * tol:
+        return None
+    w = p - p[0]
+    off = w - np.outer(w @ chord / length**2, chord)
+    return chord if float(np.abs(off).max()) <= tol else None
 
 
 def _breaks(members: Sequence[_Member], tol: float) -> tuple[list[float], list[float]]:
@@ -274,7 +366,7 @@ def graph_surface(
     (str) when the pieces are not a height field over the plane or the fit misses ``fit_tol``.
     ``geom_tol``: length tolerance of the geometric tests. With ``probe`` only the coarsest
     fit is made and only a face that is no height field is refused (a cheap first check)."""
-    o, ex, ey, n = _frame(plane_face, members)
+    o, ex, ey, n = _frame(plane_face, members, geom_tol)
     frame = (o, ex, ey)
     ms: list[_Member] = []
     for f in members:

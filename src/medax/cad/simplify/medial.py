@@ -57,12 +57,11 @@ def medial_curve(face: Any, edge1: Any, edge2: Any, rel_tol: float = 1e-9) -> Me
     """
     ad = BRepAdaptor_Surface(face)
     kind = ad.GetType()
+    radius = None
     if kind == GeomAbs_Cylinder:
         radius = ad.Cylinder().Radius()
     elif kind == GeomAbs_Torus:
         radius = ad.Torus().MinorRadius()
-    else:
-        return "not a cylinder or torus fillet (variable radius or freeform): not supported"
     surf = BRep_Tool.Surface_s(face)
     u0, u1, v0, v1 = uv_bounds(face)
     ends = []
@@ -97,7 +96,7 @@ def medial_curve(face: Any, edge1: Any, edge2: Any, rel_tol: float = 1e-9) -> Me
     edge = mk.Edge()
     # Equidistance, measured with BRepExtrema at samples inside the face.
     a, b = (lo, hi) if full else (lo + (hi - lo) * EXTEND, hi - (hi - lo) * EXTEND)
-    err = 0.0
+    err, near = 0.0, float("inf")
     for t in np.linspace(a, b, 9):
         p = curve.Value(float(t))
         vtx = BRepBuilderAPI_MakeVertex(p).Vertex()
@@ -105,7 +104,9 @@ def medial_curve(face: Any, edge1: Any, edge2: Any, rel_tol: float = 1e-9) -> Me
         for e in (edge1, edge2):
             ext = BRepExtrema_DistShapeShape(vtx, e)
             d.append(ext.Value())
-        err = max(err, abs(d[0] - d[1]))
+        err, near = max(err, abs(d[0] - d[1])), min(near, *d)
+    if radius is None:  # a variable-radius or freeform blend: the scale is its half-width
+        radius = near
     if err > rel_tol * radius:
         return f"mid iso-line not equidistant ({err:.2e} > {rel_tol:g} x radius)"
     return Medial(edge, iso, float(mid), float(err), float(radius))

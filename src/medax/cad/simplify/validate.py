@@ -241,10 +241,12 @@ def max_distance(points: Array, faces: Sequence[Any], enough: float = 0.0) -> fl
     Each point is projected on each face's surface (``GeomAPI_ProjectPointOnSurf``; through
     the profile on extrusions, from a grid start on B-spline surfaces: :mod:`.projection`);
     a foot inside the face (face classifier, to the face's edge tolerance) gives the
-    distance. A point with no foot inside any
-    face is measured exactly with ``BRepExtrema_DistShapeShape`` against all ``faces``.
-    A point whose distance to some face is ``<= enough`` is not tried on the others (the
-    result is then an upper bound, exact whenever it is above ``enough``).
+    distance. A point with no foot inside any face, or whose nearest foot is farther than
+    ``enough`` and 1e-6 of the points' extent (a foot exactly on a shared edge may be OUT of
+    both faces there, so only a far face answers), is measured exactly with
+    ``BRepExtrema_DistShapeShape`` against all ``faces``. A point whose distance to some
+    face is ``<= enough`` is not tried on the others (the result is then an upper bound,
+    exact whenever it is above ``enough``).
     """
     from OCP.BRep import BRep_Tool
     from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
@@ -262,6 +264,8 @@ def max_distance(points: Array, faces: Sequence[Any], enough: float = 0.0) -> fl
         prepared.append((proj, surf, IntTools_FClass2d(f, _edge_tolerance(f))))
     target = None
     worst = 0.0
+    extent = float(np.ptp(points, axis=0).max()) if len(points) else 0.0
+    confirm = max(enough, 1e-6 * extent)
     for p in points:
         gp = gp_Pnt(*map(float, p))
         best = float("inf")
@@ -274,14 +278,14 @@ def max_distance(points: Array, faces: Sequence[Any], enough: float = 0.0) -> fl
                 best = min(best, float(proj.LowerDistance()))
                 if best <= enough:
                     break
-        if best == float("inf"):
+        if best > confirm:
             if target is None:
                 target = compound(faces)
             v = BRepBuilderAPI_MakeVertex(gp).Vertex()
             d = BRepExtrema_DistShapeShape(v, target)
             if not d.IsDone():
                 return float("inf")
-            best = float(d.Value())
+            best = min(best, float(d.Value()))
         worst = max(worst, best)
     return worst
 
