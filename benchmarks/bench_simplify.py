@@ -6,7 +6,7 @@ medax removed none) with ``BRepAlgoAPI_Defeaturing``. Printed per part: faces af
 validity, relative volume change (defeaturing changes the shape; medax must not) and the
 time ratio medax / defeaturing.
 
-    .venv/bin/python benchmarks/bench_simplify.py [PART.step ...]
+    .venv/bin/python benchmarks/bench_simplify.py [PART.step ...] [--parts box12,grid8,...]
 """
 
 from __future__ import annotations
@@ -125,21 +125,55 @@ def _ratio(a: float, b: float | str) -> str:
     return f"< {a / DEFEATURE_TIMEOUT:.2f} (defeaturing {b} after {DEFEATURE_TIMEOUT:.0f} s)"
 
 
-def main(argv: list[str]) -> int:
-    from medax.cad.classify import classify_file, classify_solid
-    from medax.cad.reader import heal
+#: The generated and catalogue parts, by the name ``--parts`` takes.
+GENERATED = ("box12", "rounded_chain", "variable", "boss_grid", "grid2", "grid8")
+
+
+def _generated(name: str) -> tuple[str, Any]:
+    """(label, shape) of a generated part."""
+    from medax.cad import parts as catalogue
     from medax.cad.simplify import parts
 
-    files = [Path(a) for a in argv] or sorted(SHARED.glob("*.st*p"))
+    if name == "box12":
+        return "box, 12 edges filleted (8 corners)", parts.box_all_fillets().shape
+    if name == "rounded_chain":
+        return "rounded box + top chain (tori on fillets)", catalogue.rounded_box_chain().shape
+    if name == "variable":
+        return "box, variable-radius fillet (B-spline)", catalogue.variable_radius_box().shape
+    if name == "boss_grid":
+        return "plate, 8x8 bosses, top + root fillets", catalogue.boss_grid(8).shape
+    n = int(name[4:])
+    part = parts.grid_plate(n, n)
+    return f"grid plate {n}x{n} ({len(part.blends)} fillets)", part.shape
+
+
+def main(argv: list[str]) -> int:
+    import argparse
+
+    from medax.cad.classify import classify_file, classify_solid
+    from medax.cad.reader import heal
+
+    ap = argparse.ArgumentParser(
+        description="medax simplify against BRepAlgoAPI_Defeaturing removing the same faces, "
+        "in the same run: faces after, validity, volume change, deviation, time ratio."
+    )
+    ap.add_argument("files", nargs="*", help="STEP parts (default: ../shared/bench/cad/*.st*p)")
+    ap.add_argument(
+        "--parts",
+        default=",".join(GENERATED),
+        help=f"generated parts to run, comma-separated from {','.join(GENERATED)} "
+        "('' for none; grid8 has 586 faces: the 500-face target)",
+    )
+    args = ap.parse_args(argv)
+    files = [Path(a) for a in args.files] or sorted(SHARED.glob("*.st*p"))
     for f in files:
         for k, cls in enumerate(classify_file(str(f))):
             bench(f"{f.name}[{k}]", cls)
-    box = parts.box_all_fillets()  # corner blends and fitted faces
-    bench("box, 12 edges filleted (8 corners)", classify_solid(heal(box.shape)))
-    for n in (2, 8):  # a small one defeaturing finishes, and one with 500+ faces
-        part = parts.grid_plate(n, n)
-        cls = classify_solid(heal(part.shape))
-        bench(f"grid plate {n}x{n} ({len(part.blends)} fillets)", cls)
+    for name in filter(None, args.parts.split(",")):
+        if name not in GENERATED:
+            ap.error(f"unknown part {name!r} (expected one of {', '.join(GENERATED)})")
+        label, shape = _generated(name)
+        bench(label, classify_solid(heal(shape)))
     return 0
 
 

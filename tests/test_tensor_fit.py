@@ -61,3 +61,30 @@ def test_linear_height_is_exact_and_greville_reproduces_x():
     t = fit.tx
     g = greville(t)
     assert g[0] == t[0] and g[-1] == t[-1] and np.all(np.diff(g) > 0)
+
+
+def _strip(x, y):
+    """A cylinder of radius 1 rising over x < 1 (a fillet strip along y), flat beyond."""
+    d = np.maximum(1.0 - x, 0.0)
+    z = 1.0 - np.sqrt(np.maximum(1.0 - d * d, 0.0))
+    inside = x >= 1.0 - np.sqrt(0.5)
+    return z, inside.copy(), inside
+
+
+def test_a_curved_strip_gets_fine_spans_only_there():
+    """On a 50-wide plate whose height is curved only over x < 1, fine spans stay on the
+    strip (plus a padding of two probe samples) and the fit still meets its tolerance."""
+    fit = fit_height((0.2, 50.0), (0.0, 20.0), [1.0], [], _strip, 1e-6, 0.25)
+    assert fit is not None and fit.error <= 1e-6
+    knots = np.unique(fit.tx)
+    assert np.sum(knots < 1.0) >= 8  # fine on the strip
+    assert np.sum(knots > 2.0) <= 2  # one span over the flat 48 units (and the end)
+    assert np.unique(fit.ty).size == 2  # straight along y: a single span
+
+
+def test_a_fit_too_large_to_solve_is_refused():
+    def waves(x, y):
+        z = np.sin(x) * np.cos(y)
+        return z, np.ones(z.shape, bool), np.ones(z.shape, bool)
+
+    assert fit_height((0.0, 100.0), (0.0, 100.0), [], [], waves, 0.0, 0.05, levels=1) is None

@@ -37,6 +37,9 @@ SAMPLES_PER_SPAN = 4
 CHECK_PER_SPAN = 7
 #: Refinement stops when two halvings of the spacing did not divide the error by 1 / STALL.
 STALL = 0.25
+#: Largest number of coefficients of one fit (a finer level is not tried): 8e4 unknowns
+#: take SuperLU about a second; a plate under many bosses would otherwise ask for 10^6.
+MAX_COEFFICIENTS = 80_000
 #: Weight of the second-difference penalty (data rows have weight 1). It only has to make
 #: the coefficients without data determinate: larger values bias the fit (measured on the
 #: 12-edge box: 1e-6 -> 1e-4 error, 1e-9 -> 1.5e-5, 1e-12 -> 3e-6 at the same knots).
@@ -160,10 +163,11 @@ def fit_height(
     tol: float,
     spacing: float,
     levels: int = 5,
-) -> TensorFit:
+) -> TensorFit | None:
     """Fit ``h`` on the rectangle to ``tol`` (length unit), starting at ``spacing`` and
     halving it at most ``levels - 1`` times; the best fit is returned with its measured
-    error (the caller decides whether it is good enough).
+    error (the caller decides whether it is good enough), None when even the first level
+    has more than ``MAX_COEFFICIENTS``.
 
     ``x_breaks``/``y_breaks``: coordinates strictly inside the ranges where the height's
     curvature may jump (C1 knots there).
@@ -179,6 +183,10 @@ def fit_height(
     step = spacing
     errors: list[float] = []
     for _ in range(levels):
+        nx = _knots(x0, x1, xb, fine_x, step).size - DEGREE - 1
+        ny = _knots(y0, y1, yb, fine_y, step).size - DEGREE - 1
+        if nx * ny > MAX_COEFFICIENTS:
+            break  # too large to solve: keep the best one (None when even the first is)
         fit = _fit_once(x_range, y_range, xb, yb, fine_x, fine_y, h, step)
         if best is None or fit.error < best.error:
             best = fit
@@ -188,7 +196,6 @@ def fit_height(
             break  # not converging (a step or a kink in the data): more knots won't help
         errors.append(fit.error)
         step /= 2
-    assert best is not None
     return best
 
 

@@ -48,7 +48,7 @@ from medax.cad.simplify.occ import (
     xyz,
 )
 from medax.geometry.nurbs_surface import NurbsSurface, graph_heights
-from medax.geometry.tensor_fit import TensorFit, fit_height, greville
+from medax.geometry.tensor_fit import MAX_COEFFICIENTS, TensorFit, fit_height, greville
 
 #: Samples per edge for the projected member boundaries.
 EDGE_SAMPLES = 48
@@ -412,6 +412,11 @@ def graph_surface(
     xb, yb = _breaks(ms, geom_tol)
     levels = 1 if probe else 4
     fit = fit_height((lo[0], hi[0]), (lo[1], hi[1]), xb, yb, h, fit_tol, rmin / 4, levels=levels)
+    if fit is None:
+        return (
+            f"the fitted surface would need more than {MAX_COEFFICIENTS} coefficients "
+            "(curved pieces spread over the whole face, e.g. many filleted bosses)"
+        )
     if not np.isfinite(fit.error):
         return "the merged face is not a height field over its plane (steep or undefined)"
     if fit.error > fit_tol and not probe:
