@@ -7,6 +7,7 @@ import logging
 import numpy as np
 
 from medax import tolerances
+from medax.axis.conics import conic_axis
 from medax.axis.endpoints import end_point
 from medax.axis.field import DistanceField
 from medax.axis.refine import fit_and_refine
@@ -58,7 +59,10 @@ def trace_axis(
         raise InputError(f"tolerances must be positive, got tol={tol}, point_tol={point_tol}")
     roles = pair_roles(pair)
     if closed_form and method == "frame" and ratio == 0.5:
-        exact = segment_axis(region, (int(pair[0]), int(pair[1])), roles, tol, point_tol)
+        ij = (int(pair[0]), int(pair[1]))
+        exact = segment_axis(region, ij, roles, tol, point_tol)
+        if exact is None:
+            exact = conic_axis(region, ij, roles, tol, point_tol)
         if exact is not None:
             return exact
     work, offset, scale = normalised_region(region)
