@@ -31,7 +31,7 @@ import math
 
 import numpy as np
 
-from medax.axis.endpoints import end_point
+from medax.axis.endpoints import end_points
 from medax.axis.field import DistanceField
 from medax.axis.result import MedialAxis, WorkCounts
 from medax.errors import TraceError
@@ -322,8 +322,11 @@ def conic_axis(
     a: Sides = (a1, a2)
     field = DistanceField(work, roles)
     try:
-        s0, p0 = end_point(field, work.sides[roles.b1], f"side {roles.b1} (B1)")
-        s1, p1 = end_point(field, work.sides[roles.b2], f"side {roles.b2} (B2)")
+        (s0, s1), (p0, p1) = end_points(
+            field,
+            (work.sides[roles.b1], work.sides[roles.b2]),
+            (f"side {roles.b1} (B1)", f"side {roles.b2} (B2)"),
+        )
     except TraceError:
         return None  # the tracer reports it
     for seq in _breakpoints(a, np.stack((p0, p1)), field):
