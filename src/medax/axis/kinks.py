@@ -16,17 +16,22 @@ from medax.geometry.curve import closest_near
 
 #: a foot point moving this many times faster than the axis point marks a kink
 KINK_SPEED = 25.0
+#: ... and is worth a Newton attempt (most kinks then show on the tracer's sparse points,
+#: before refinement piles points up around them; a failed attempt only costs rows of the
+#: round's vectorised Newton)
+KINK_TRY = 4.0
 #: half-width (curve parameter) of the branch bracket for local distances
 BRANCH_WIDTH = 0.02
 
 
-def kink_intervals(s: FieldSample, scale: float) -> np.ndarray:
-    """Intervals ``i`` (between points i and i+1) across which a foot point jumps."""
+def kink_intervals(s: FieldSample, scale: float, speed: float = KINK_SPEED) -> np.ndarray:
+    """Intervals ``i`` (between points i and i+1) across which a foot point moves more than
+    ``speed`` times as far as the axis point (it jumps)."""
     dx = np.linalg.norm(np.diff(s.x, axis=0), axis=1)
     jump = np.maximum(
         np.linalg.norm(np.diff(s.q1, axis=0), axis=1), np.linalg.norm(np.diff(s.q2, axis=0), axis=1)
     )
-    return np.nonzero((jump > KINK_SPEED * dx) & (jump > 1e-6 * scale))[0]
+    return np.nonzero((jump > speed * dx) & (jump > 1e-6 * scale))[0]
 
 
 def locate_kinks(
