@@ -264,8 +264,11 @@ def test_paper_method_and_other_ratios_still_trace(trapezoid):
 
 
 def test_curved_constraints_are_traced(regions_spec):
+    """B-spline constraints are traced; arcs too when the closed forms are turned off."""
+    wavy = region_from_dict(regions_spec["wavy"], "wavy")
+    assert trace_axis(wavy, (0, 2)).counts.closed_form_pieces == 0
     reg = region_from_dict(regions_spec["annulus_sector"], "annulus_sector")
-    assert trace_axis(reg, (1, 3)).counts.closed_form_pieces == 0
+    assert trace_axis(reg, (1, 3), closed_form=False).counts.closed_form_pieces == 0
 
 
 def test_from_bezier_matches_scipy_and_checks_its_input():

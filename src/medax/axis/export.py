@@ -8,8 +8,18 @@ from medax.axis.result import MedialAxis
 
 
 def axis_record(axis: MedialAxis) -> dict[str, Any]:
-    """A JSON-ready dict: region, pair, points (B1 -> B2), spline, errors, counts."""
+    """A JSON-ready dict: region, pair, points (B1 -> B2), spline, errors, counts.
+
+    The spline's ``weights`` (one per control point) are written when it is rational (the
+    closed-form axis of arc constraints: conic pieces)."""
     diag = axis.diagonal
+    spline: dict[str, Any] = {
+        "degree": axis.spline.degree,
+        "knots": axis.spline.knots.tolist(),
+        "control_points": axis.spline.control_points.tolist(),
+    }
+    if axis.spline.weights is not None:
+        spline["weights"] = axis.spline.weights.tolist()
     return {
         "region": axis.region.name,
         "pair": list(axis.pair),
@@ -23,11 +33,7 @@ def axis_record(axis: MedialAxis) -> dict[str, Any]:
         "distances": axis.d1.tolist(),
         "t_start": axis.t_start,
         "t_end": axis.t_end,
-        "spline": {
-            "degree": axis.spline.degree,
-            "knots": axis.spline.knots.tolist(),
-            "control_points": axis.spline.control_points.tolist(),
-        },
+        "spline": spline,
         "max_point_error": axis.max_point_error,
         "max_curve_error": axis.max_curve_error,
         "max_point_error_rel": axis.max_point_error / diag,

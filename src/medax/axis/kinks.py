@@ -16,66 +16,101 @@ from medax.geometry.curve import closest_near
 
 #: a foot point moving this many times faster than the axis point marks a kink
 KINK_SPEED = 25.0
+#: ... and is worth a Newton attempt (most kinks then show on the tracer's sparse points,
+#: before refinement piles points up around them; a failed attempt only costs rows of the
+#: round's vectorised Newton)
+KINK_TRY = 4.0
 #: half-width (curve parameter) of the branch bracket for local distances
 BRANCH_WIDTH = 0.02
 
 
-def kink_intervals(s: FieldSample, scale: float) -> np.ndarray:
-    """Intervals ``i`` (between points i and i+1) across which a foot point jumps."""
+def kink_intervals(s: FieldSample, scale: float, speed: float = KINK_SPEED) -> np.ndarray:
+    """Intervals ``i`` (between points i and i+1) across which a foot point moves more than
+    ``speed`` times as far as the axis point (it jumps)."""
     dx = np.linalg.norm(np.diff(s.x, axis=0), axis=1)
     jump = np.maximum(
         np.linalg.norm(np.diff(s.q1, axis=0), axis=1), np.linalg.norm(np.diff(s.q2, axis=0), axis=1)
     )
-    return np.nonzero((jump > KINK_SPEED * dx) & (jump > 1e-6 * scale))[0]
+    return np.nonzero((jump > speed * dx) & (jump > 1e-6 * scale))[0]
 
 
-def locate_kink(
-    field: DistanceField, s: FieldSample, p: FloatArray, i: int, tol: float, iters: int = 40
-) -> FloatArray | None:
-    """The kink (2,) between axis points ``p[i]``, ``p[i+1]`` (parameter plane), or ``None``
-    when Newton does not confirm one (then the interval is simply refined).
-
-    Called once per detected kink (a handful per axis), so a small loop is fine here.
-    """
-    jumps_a1 = np.linalg.norm(s.q1[i + 1] - s.q1[i]) >= np.linalg.norm(s.q2[i + 1] - s.q2[i])
-    jumping, other = (field.a1, field.a2) if jumps_a1 else (field.a2, field.a1)
-    t_par = s.t1 if jumps_a1 else s.t2
-    ta, tb = np.array([t_par[i]]), np.array([t_par[i + 1]])
-    r = field.ratio
-    wj, wo = (1.0 - r, r) if jumps_a1 else (r, 1.0 - r)  # weights of jumping / other distance
+def locate_kinks(
+    field: DistanceField,
+    s: FieldSample,
+    p: FloatArray,
+    intervals: list[int],
+    tol: float,
+    iters: int = 40,
+) -> list[FloatArray | None]:
+    """The kinks (2,) between axis points ``p[i]``, ``p[i+1]`` (parameter plane) for each
+    ``i`` of ``intervals``, or ``None`` where Newton does not confirm one (then the interval
+    is simply refined). All kinks of a round are solved at once, grouped by the constraint
+    whose foot jumps."""
+    out: list[FloatArray | None] = [None] * len(intervals)
+    if not intervals:
+        return out
+    idx = np.asarray(intervals, dtype=np.int64)
+    jumps_a1 = np.linalg.norm(s.q1[idx + 1] - s.q1[idx], axis=1) >= np.linalg.norm(
+        s.q2[idx + 1] - s.q2[idx], axis=1
+    )
     emb = field.region.embedding
-    q = 0.5 * (p[i] + p[i + 1])
-    for _ in range(iters):
-        x = emb.evaluate(q[None, :])
-        ca = closest_near(jumping, x, ta, BRANCH_WIDTH)
-        cb = closest_near(jumping, x, tb, BRANCH_WIDTH)
-        co = other.closest(x)
-        ta, tb = ca.t, cb.t
-        da, db, do = ca.distance[0], cb.distance[0], co.distance[0]
-        ua, ub, uo = ((x - c.foot)[0] / max(c.distance[0], 1e-300) for c in (ca, cb, co))
-        f = np.array([wj * da - wo * do, wj * db - wo * do])
-        jac = emb.jacobian(q[None, :])[0]
-        m = np.array([(wj * ua - wo * uo) @ jac, (wj * ub - wo * uo) @ jac])
-        if np.max(np.abs(f)) * 2.0 <= tol:
-            break
-        try:
-            step = np.linalg.solve(m, f)
-        except np.linalg.LinAlgError:
-            return None
-        q = q - step
-    else:
-        return None
-    if abs(ta[0] - tb[0]) < 1e-9:  # both branches converged to one: no kink after all
-        return None
-    # it must lie in its interval: Newton can also find a crossing of the two branches'
-    # fields far away (not on this piece of the axis)
+    r = field.ratio
+    for flag in (True, False):
+        rows = np.flatnonzero(jumps_a1 == flag)
+        if rows.size == 0:
+            continue
+        ii = idx[rows]
+        jumping, other = (field.a1, field.a2) if flag else (field.a2, field.a1)
+        t_par = s.t1 if flag else s.t2
+        ta, tb = t_par[ii].copy(), t_par[ii + 1].copy()
+        wj, wo = (1.0 - r, r) if flag else (r, 1.0 - r)  # weights of jumping / other distance
+        q = 0.5 * (p[ii] + p[ii + 1])
+        conv = np.zeros(len(ii), dtype=bool)
+        act = np.arange(len(ii))
+        for _ in range(iters):
+            x = emb.evaluate(q[act])
+            ca = closest_near(jumping, x, ta[act], BRANCH_WIDTH)
+            cb = closest_near(jumping, x, tb[act], BRANCH_WIDTH)
+            co = other.closest(x)
+            ta[act], tb[act] = ca.t, cb.t
+            ua, ub, uo = (
+                (x - c.foot) / np.maximum(c.distance, 1e-300)[:, None] for c in (ca, cb, co)
+            )
+            f0 = wj * ca.distance - wo * co.distance
+            f1 = wj * cb.distance - wo * co.distance
+            jac = emb.jacobian(q[act])
+            ga = np.einsum("mi,mij->mj", wj * ua - wo * uo, jac)
+            gb = np.einsum("mi,mij->mj", wj * ub - wo * uo, jac)
+            done = 2.0 * np.maximum(np.abs(f0), np.abs(f1)) <= tol
+            conv[act[done]] = True
+            det = ga[:, 0] * gb[:, 1] - ga[:, 1] * gb[:, 0]
+            move = ~done & (det != 0.0) & np.isfinite(det)  # singular rows: no kink
+            with np.errstate(divide="ignore", invalid="ignore"):
+                step = np.column_stack(
+                    (f0 * gb[:, 1] - f1 * ga[:, 1], ga[:, 0] * f1 - gb[:, 0] * f0)
+                )
+                step /= det[:, None]
+            q[act[move]] -= step[move]
+            act = act[move]
+            if act.size == 0:
+                break
+        good = np.flatnonzero(conv)
+        if good.size == 0:
+            continue
+        # the kink must be on the axis of the full (global) field
+        on_axis = field(q[good]).error <= tol
+        for j, ok in zip(good.tolist(), on_axis.tolist(), strict=True):
+            i = int(ii[j])
+            if ok and _in_interval(p, i, q[j]) and abs(ta[j] - tb[j]) >= 1e-9:
+                out[int(rows[j])] = q[j]
+    return out
+
+
+def _in_interval(p: FloatArray, i: int, q: FloatArray) -> bool:
+    """Whether ``q`` (2,) lies along the interval ``p[i]``, ``p[i+1]`` (Newton can also find
+    a crossing of the two branches' fields far away, not on this piece of the axis)."""
     ab = p[i + 1] - p[i]
     along = float((q - p[i]) @ ab / (ab @ ab))
-    if not (1e-9 < along < 1.0 - 1e-9) or np.linalg.norm(q - p[i] - along * ab) > np.linalg.norm(
-        ab
-    ):
-        return None
-    # the kink must be on the axis of the full (global) field
-    if field(q[None, :]).error[0] > tol:
-        return None
-    return q
+    return 1e-9 < along < 1.0 - 1e-9 and bool(
+        np.linalg.norm(q - p[i] - along * ab) <= np.linalg.norm(ab)
+    )

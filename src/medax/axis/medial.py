@@ -7,7 +7,8 @@ import logging
 import numpy as np
 
 from medax import tolerances
-from medax.axis.endpoints import end_point
+from medax.axis.conics import conic_axis
+from medax.axis.endpoints import end_points
 from medax.axis.field import DistanceField
 from medax.axis.refine import fit_and_refine
 from medax.axis.result import MedialAxis, WorkCounts
@@ -58,7 +59,10 @@ def trace_axis(
         raise InputError(f"tolerances must be positive, got tol={tol}, point_tol={point_tol}")
     roles = pair_roles(pair)
     if closed_form and method == "frame" and ratio == 0.5:
-        exact = segment_axis(region, (int(pair[0]), int(pair[1])), roles, tol, point_tol)
+        ij = (int(pair[0]), int(pair[1]))
+        exact = segment_axis(region, ij, roles, tol, point_tol)
+        if exact is None:
+            exact = conic_axis(region, ij, roles, tol, point_tol)
         if exact is not None:
             return exact
     work, offset, scale = normalised_region(region)
@@ -66,8 +70,9 @@ def trace_axis(
     diag = work.diagonal
     tol_pt, tol_cv = point_tol * diag, tol * diag
     b1, b2 = work.sides[roles.b1], work.sides[roles.b2]
-    s0, p0 = end_point(field, b1, f"side {roles.b1} (B1)")
-    s1, p1 = end_point(field, b2, f"side {roles.b2} (B2)")
+    (s0, s1), (p0, p1) = end_points(
+        field, (b1, b2), (f"side {roles.b1} (B1)", f"side {roles.b2} (B2)")
+    )
     shortest = float(work.side_lengths().min())
     stats = TraceStats()
     if method == "frame":

@@ -14,7 +14,7 @@ import numpy as np
 
 from medax.axis.correct import correct_newton
 from medax.axis.field import DistanceField, FieldSample
-from medax.axis.kinks import kink_intervals, locate_kink
+from medax.axis.kinks import KINK_TRY, kink_intervals, locate_kinks
 from medax.axis.transitions import locate_transitions, transition_intervals
 from medax.geometry._types import FloatArray
 from medax.geometry.bspline import BSpline
@@ -98,8 +98,12 @@ def fit_and_refine(
         # 2. breaks where the axis is not smooth: kinks (a foot jumps between branches of a
         # constraint) and transitions (a foot reaches its constraint's end)
         jumps = kink_intervals(s, scale)
-        kinks = [i for i in jumps if i not in tried and i not in breaks and i + 1 not in breaks]
-        found = [(i, locate_kink(field, s, pts, i, tol_point)) for i in kinks]
+        kinks = [
+            i
+            for i in kink_intervals(s, scale, KINK_TRY)
+            if i not in tried and i not in breaks and i + 1 not in breaks
+        ]
+        found = list(zip(kinks, locate_kinks(field, s, pts, kinks, tol_point), strict=True))
         tried |= set(kinks)
         trans = [
             f

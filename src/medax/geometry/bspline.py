@@ -193,10 +193,18 @@ class BSpline(Curve):
         if self.degree > POWER_BASIS_MAX_DEGREE:
             return [np.asarray(self._spl(t, nu)) for nu in orders]
         x, coefs = self._pieces
-        i = np.searchsorted(x, t, side="right") - 1
-        i = np.minimum(np.maximum(i, 0), len(x) - 2)
+        # the span of each t in [0, 1] (x[0] = 0, x[-1] = 1): counted among the interior
+        # breaks only, it needs no clipping
+        i = np.searchsorted(x[1:-1], t, side="right")
         s = (t - x[i])[:, None, None]
         top = max(orders) + 1
+        if t.size <= _HORNER_BLOCK:  # one block: no staging array
+            c = coefs[i, :, :top]
+            w = c[:, 0].copy()
+            for m in range(1, c.shape[1]):
+                w *= s
+                w += c[:, m]
+            return [w[:, nu] for nu in orders]
         v = np.empty((t.size, top, coefs.shape[-1]))
         # in blocks of points: the gathered coefficients (n, degree+1, orders, dim) stay
         # in cache instead of being written to and read back from memory

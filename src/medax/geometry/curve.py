@@ -105,6 +105,15 @@ class Curve(ABC):
         pts = self.evaluate(t)
         return t, pts, cKDTree(pts)
 
+    @cached_property
+    def _table(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The search samples centred on their mean (|x|^2 - 2 x.p + |p|^2 loses digits far
+        from the origin): centre (dim,), centred samples (m, dim), their squared norms (m,)."""
+        pts = self._search[1]
+        centre = pts.mean(axis=0)
+        c = pts - centre
+        return centre, c, np.einsum("mj,mj->m", c, c)
+
     def closest(self, points: FloatArray) -> Closest:
         """Global closest points on the curve for ``points`` of shape ``(n, dim)``.
 
@@ -175,16 +184,13 @@ def certify_closest(
     nearer than ``s - h / 2``. Cheaper than :meth:`Curve.closest` (no refinement); rows not
     certified need the full query.
     """
-    ts, pts, _ = curve._search
-    # centred on the samples: |x|^2 - 2 x.p + |p|^2 loses digits far from the origin
-    centre = pts.mean(axis=0)
-    pts = pts - centre
+    ts = curve._search[0]
+    centre, pts, pp = curve._table  # centred on the samples
     x = np.asarray(points, dtype=np.float64) - centre
     t = np.asarray(t, dtype=np.float64)
     n, m = x.shape[0], pts.shape[0]
     half = 0.55 * float(np.max(np.linalg.norm(np.diff(pts, axis=0), axis=1)))
     dt = ts[1] - ts[0]
-    pp = np.einsum("mj,mj->m", pts, pts)
     pt2 = -2.0 * pts.T
     ok = np.empty(n, dtype=bool)
     # the samples within 1.5 spacings of the foot (excluded): among the 5 nearest indices
@@ -246,11 +252,10 @@ def _candidate_samples(curve: Curve, points: FloatArray, k: int) -> np.ndarray:
     if m * n > 50 * _TREE_ABOVE:  # very long curves: nearest samples from the k-d tree
         _, idx = tree.query(points, k=4 * k)
         return np.asarray(idx)[:, ::4][:, :k]
-    centre = pts.mean(axis=0)  # |x|^2 - 2 x.p + |p|^2 loses digits far from the origin
-    pts, points = pts - centre, points - centre
+    centre, pts, pp = curve._table
+    points = points - centre
     out = np.empty((n, k), dtype=np.int64)
     rows = max(1, _TABLE_BLOCK // m)
-    pp = np.einsum("mj,mj->m", pts, pts)
     for s in range(0, n, rows):
         x = points[s : s + rows]
         # |x - p|^2 up to the per-row constant |x|^2 (which does not change the minima)
@@ -307,8 +312,8 @@ def _bracketed_newton(
         aa, bb = a[ia], b[ia]
         aa = np.where(g < 0.0, sa, aa)
         bb = np.where(g > 0.0, sa, bb)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            step = np.where(dg > 0.0, g / dg, np.inf)
+        # g / dg where dg > 0, else inf (a bisection below); no division warnings
+        step = np.divide(g, dg, out=np.full_like(g, np.inf), where=dg > 0.0)
         new = sa - step
         # the distance is stationary at the foot: |dt| < 1e-10 leaves it exact to round-off
         small = np.abs(step) <= 1e-10
