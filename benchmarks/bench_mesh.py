@@ -173,8 +173,8 @@ def main() -> int:
             for label, pts, quads, t in rows:
                 s = stats(pts, quads)
                 res[label] = s
-                print(f"{name:15s} {n:4d} {label:12s} {t:8.3f} {s['sj_min']:7.3f} {s['sj_p5']:7.3f}"
-                      f" {s['ang_min']:7.2f} {s['ang_p5']:7.2f} {s['inv']:4d}  "
+                print(f"{name:15s} {n:4d} {label:12s} {t:8.3f} {s['sj_min']:7.3f} {s['sj_p5']:7.4f}"
+                      f" {s['ang_min']:8.4f} {s['ang_p5']:7.2f} {s['inv']:4d}  "
                       f"{t / t_gmsh:7.2f}")  # fmt: skip
             a, g = res["medax ratio"], res["gmsh TFI"]
             ok = a["sj_p5"] >= g["sj_p5"] - 1e-12 and a["ang_min"] >= g["ang_min"] - 1e-9
