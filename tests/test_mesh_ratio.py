@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from medax.geometry import Arc, Line, Region, read_regions, sample_regions_path
-from medax.geometry.curve import certify_closest, closest_from
+from medax.geometry.curve import certify_closest, closest_from, track_closest
 from medax.mesh import ratio_field as rf
 from medax.mesh import ratio_grid as rg
 from medax.mesh.grid import boundary_indices
@@ -122,6 +122,22 @@ def test_closest_from_converges_to_the_nearby_foot():
     local = closest_from(c, x, t + rng.uniform(-0.01, 0.01, t.size))
     np.testing.assert_allclose(local.t, t, atol=1e-9)
     np.testing.assert_allclose(local.distance, 0.05, atol=1e-12)
+
+
+def test_track_closest_gives_exact_feet_from_nearby_starts():
+    """Points at a known normal offset of a wavy side: from starts 1e-2 and 1e-7 away the
+    tracked feet are the known ones, their points on the curve and the distances exact
+    (the Taylor foot of the last step)."""
+    c = REGIONS["wavy"].sides[0]
+    rng = np.random.default_rng(6)
+    t = rng.uniform(0.05, 0.95, 300)
+    normal = c.derivative(t)[:, ::-1] * np.array([1.0, -1.0])
+    x = c.evaluate(t) + 0.05 * normal / np.linalg.norm(normal, axis=1)[:, None]
+    for err in (1e-2, 1e-7):
+        got = track_closest(c, x, t + rng.uniform(-err, err, t.size))
+        np.testing.assert_allclose(got.t, t, atol=1e-12)
+        np.testing.assert_allclose(got.distance, 0.05, atol=1e-14)
+        np.testing.assert_allclose(got.foot, c.evaluate(t), atol=1e-14)
 
 
 def test_certify_closest_never_certifies_a_wrong_foot():

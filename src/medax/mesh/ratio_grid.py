@@ -72,7 +72,7 @@ def ratio_grid(
     tol = point_tol * region.diagonal
     levels = _levels(n1, n2)
     sides = side_params(region, levels, tol, kinds, boundary)
-    grid, _, counts = _grid(region, levels, sides, tol, kinds)
+    grid, _, counts = _grid(region, levels, sides, tol, kinds, with_feet=False)
     counts["max_residual"] /= region.diagonal
     return grid.reshape(-1, 2), counts
 
@@ -93,10 +93,12 @@ def _grid(
     side_t: list[list[tuple[FloatArray, FloatArray]]],
     tol: float,
     kinds: tuple[str, str],
+    with_feet: bool = True,
 ) -> tuple[FloatArray, list[FloatArray], dict[str, float]]:
     """Nodes (n2 + 1, n1 + 1, 2) of ``levels[0]`` (boundary nodes and their ratios:
     ``side_t[0]``, see :func:`~medax.mesh.boundary_nodes.side_params`), feet on
-    the tracked sides (each (n2 + 1, n1 + 1)) and counts.
+    the tracked sides (each (n2 + 1, n1 + 1); none unless ``with_feet``: only a coarse
+    start needs them) and counts.
 
     Large grids start from the coarser ``levels[1]`` (solved the same way) interpolated by
     bicubic splines in the ratios, with feet interpolated too: Newton then takes small
@@ -122,7 +124,7 @@ def _grid(
     grid[1:-1, 1:-1] = solved.reshape(n2 - 1, n1 - 1, 2)
     for key in ("newton_iterations", "global_resolved"):
         counts[f"coarse_{key}"] = coarse_counts.get(key, 0) + coarse_counts.get(f"coarse_{key}", 0)
-    return grid, _full_feet(region, grid, feet, kinds), counts
+    return grid, _full_feet(region, grid, feet, kinds) if with_feet else [], counts
 
 
 def _targets(
@@ -532,13 +534,9 @@ def _newton(
     backtracking on the residual ``hypot(g_a, g_b)``. Returns nodes, iterations, residuals."""
     p = p.copy()
     system = _System(sides, ra_all[rows], rb_all[rows], rows, kinds)
-    # rows whose feet are known (interpolated or reset to global ones) start tracked
-    known = np.ones(rows.size, dtype=bool)
-    for k, tracked in enumerate(sides.tracked):
-        if tracked:
-            known &= np.isfinite(sides.t[k][rows])
+    # every row starts tracked (a side without a foot yet, NaN, is queried globally)
     all_rows = np.arange(rows.size)
-    v = system.evaluate(p, all_rows, known)
+    v = system.evaluate(p, all_rows, np.ones(rows.size, dtype=bool))
     system.accept(all_rows, v)
     res = np.hypot(v.ga, v.gb)
     diag = sides.region.diagonal
