@@ -127,6 +127,9 @@ def closest_near(curve: Curve, points: FloatArray, t0: FloatArray, width: float)
     return Closest(t=t, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
 
 
+_TRACK_BLOCK = 16384  # points per block of track_closest
+
+
 def has_closed_form_closest(curve: Curve) -> bool:
     """True where ``curve`` answers closest-point queries in closed form (lines, arcs,
     polylines): cheap and global, so nothing is gained by warm starts."""
@@ -177,6 +180,18 @@ def track_closest(
     x = np.asarray(points, dtype=np.float64)
     t = np.minimum(np.maximum(np.asarray(t0, dtype=np.float64), 0.0), 1.0)
     foot = np.empty_like(x)
+    for s in range(0, t.size, _TRACK_BLOCK):  # blocks: the temporaries stay in cache
+        e = min(t.size, s + _TRACK_BLOCK)
+        t[s:e], foot[s:e] = _track_block(curve, x[s:e], t[s:e], step_tol, iters)
+    return Closest(t=t, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
+
+
+def _track_block(
+    curve: Curve, x: FloatArray, t: FloatArray, step_tol: float, iters: int
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`track_closest` on one block: feet (n,) and foot points (n, dim)."""
+    t = t.copy()
+    foot = np.empty_like(x)
     rows: np.ndarray | None = None  # rows still moving (None: all)
     for it in range(iters):
         tr = t if rows is None else t[rows]
@@ -217,7 +232,7 @@ def track_closest(
         idx = np.flatnonzero(done) if rows is None else rows[done]
         foot[idx] = c2[done]
         rows = np.flatnonzero(~done) if rows is None else rows[~done]
-    return Closest(t=t, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
+    return t, foot
 
 
 def certify_closest(
