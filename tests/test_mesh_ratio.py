@@ -322,3 +322,22 @@ def test_certify_closest_is_the_documented_rule(monkeypatch):
         assert 0 < want.sum() < len(x)
         assert np.count_nonzero(got != want) <= 2  # (round-off at the margin only)
         assert not np.any(got & ~want & (other - half < loc.distance - 1e-9))
+
+
+def test_targets_blend_and_separable_rows():
+    """Interior targets are the linear blends of the boundary ratios; rows (columns) whose
+    two end values agree to round-off come back as one value each, equal to the blend."""
+    n1, n2 = 5, 4
+    rng = np.random.default_rng(9)
+    rows, cols = np.sort(rng.uniform(0, 1, n2 + 1)), np.sort(rng.uniform(0, 1, n1 + 1))[::-1]
+    t1, t2 = np.zeros(n1 + 1), np.zeros(n2 + 1)
+    sides = [(t1, cols), (t2, rows), (t1, cols[::-1] + 1e-17), (t2, rows[::-1])]
+    ra, rb, (ur, vc) = rg._targets(sides, n1, n2)
+    np.testing.assert_allclose(ur, rows[1:-1], atol=1e-15)
+    np.testing.assert_allclose(vc, cols[1:-1], atol=1e-15)
+    np.testing.assert_allclose(ra.reshape(n2 - 1, n1 - 1), rows[1:-1, None] + 0 * cols[None, 1:-1])
+    bent = [(t1, cols), (t2, rows), (t1, cols[::-1] + 0.01), (t2, rows[::-1])]
+    _, rb2, (ur2, vc2) = rg._targets(bent, n1, n2)
+    assert ur2 is not None and vc2 is None
+    v = (np.arange(1, n2) / n2)[:, None]
+    np.testing.assert_allclose(rb2.reshape(n2 - 1, n1 - 1), cols[None, 1:-1] + 0.01 * v)

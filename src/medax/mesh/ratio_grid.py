@@ -51,6 +51,7 @@ _GLOBAL_ROUNDS = 3  # re-solves after the global foot check
 _COARSE_MIN = 12  # grids with both counts >= 4x this start from a coarser grid
 _FOOT_JUMP = 0.05  # coarse-cell spread of foot parameters taken as a jump
 _TRACK_STEP = 1e-3  # Newton moves (x diagonal) below which feet are tracked, not searched
+_SAME = 1e-15  # boundary ratios at both ends of a node row or column taken as one value
 _BLOCK = 32768  # nodes solved together on the closed-form path (temporaries stay in cache)
 
 
@@ -112,7 +113,7 @@ def _grid(
     params[idx[0][[0, -1]]] = region.corners[[0, 1]]
     params[idx[2][[0, -1]]] = region.corners[[2, 3]]
     grid = params.reshape(n2 + 1, n1 + 1, 2)
-    ra, rb = _targets(side_t[0], n1, n2)
+    ra, rb, axes = _targets(side_t[0], n1, n2)
     feet0: list[FloatArray] | None = None
     coarse_counts: dict[str, float] = {}
     if len(levels) > 1:
@@ -120,7 +121,7 @@ def _grid(
         inner, feet0 = _refine_guess(cgrid, cfeet, n1, n2)
     else:
         inner = _coons(grid, n1, n2)[1:-1, 1:-1].reshape(-1, 2)
-    solved, feet, counts = _solve(region, inner, ra, rb, 1e-3 * tol, kinds, feet0)
+    solved, feet, counts = _solve(region, inner, ra, rb, 1e-3 * tol, kinds, feet0, axes)
     grid[1:-1, 1:-1] = solved.reshape(n2 - 1, n1 - 1, 2)
     for key in ("newton_iterations", "global_resolved"):
         counts[f"coarse_{key}"] = coarse_counts.get(key, 0) + coarse_counts.get(f"coarse_{key}", 0)
@@ -129,17 +130,24 @@ def _grid(
 
 def _targets(
     sides: list[tuple[FloatArray, FloatArray]], n1: int, n2: int
-) -> tuple[FloatArray, FloatArray]:
+) -> tuple[FloatArray, FloatArray, tuple[FloatArray | None, FloatArray | None]]:
     """The ratios ``(ra, rb)`` (each ((n1 - 1) * (n2 - 1),)) of the pairs (S0, S2) and
     (S1, S3) at the interior nodes: the transfinite blend of their values at the boundary
     nodes (``sides``: per side, parameters and the crossing pair's ratio), linear in
-    ``i / n1`` between S3 and S1 and in ``j / n2`` between S0 and S2."""
+    ``i / n1`` between S3 and S1 and in ``j / n2`` between S0 and S2. Where both ends agree
+    to round-off (``_SAME``) the blend is their mean, one value per node row of ``ra`` or per
+    column of ``rb``: those values are returned too (else None), so that the weights can be
+    computed once per row or column."""
     s0, s1, s2, s3 = (r for _, r in sides)
     u = (np.arange(1, n1) / n1)[None, :]
     v = (np.arange(1, n2) / n2)[:, None]
-    ra = (1.0 - u) * s3[::-1][1:-1, None] + u * s1[1:-1, None]
-    rb = (1.0 - v) * s0[None, 1:-1] + v * s2[::-1][None, 1:-1]
-    return ra.ravel(), rb.ravel()
+    a0, a1 = s3[::-1][1:-1], s1[1:-1]  # ratio of (S0, S2) on S3 and on S1, per row
+    b0, b1 = s0[1:-1], s2[::-1][1:-1]  # ratio of (S1, S3) on S0 and on S2, per column
+    rows = 0.5 * (a0 + a1) if np.abs(a0 - a1).max(initial=0.0) <= _SAME else None
+    cols = 0.5 * (b0 + b1) if np.abs(b0 - b1).max(initial=0.0) <= _SAME else None
+    ra = (1.0 - u) * a0[:, None] + u * a1[:, None] if rows is None else rows[:, None] + 0.0 * u
+    rb = (1.0 - v) * b0[None] + v * b1[None] if cols is None else cols[None] + 0.0 * v
+    return ra.ravel(), rb.ravel(), (rows, cols)
 
 
 def _full_feet(
@@ -233,13 +241,14 @@ def _solve(
     tol: float,
     kinds: tuple[str, str],
     feet0: list[FloatArray] | None = None,
-    axes: tuple[FloatArray, FloatArray] | None = None,
+    axes: tuple[FloatArray | None, FloatArray | None] = (None, None),
 ) -> tuple[FloatArray, list[FloatArray], dict[str, float]]:
     """Solve ``g_a = g_b = 0`` for all rows of ``p`` (n, 2): Newton with tracked feet
     (starting from ``feet0`` if given, else from global ones), then a global check of the
     feet and a re-solve of the rows whose feet were wrong. Returns nodes, feet, counts.
-    ``axes`` ``(u, v)``, if given, says the rows are a grid: ``ra`` is ``u`` repeated
-    ``len(v)`` times each, ``rb`` is ``v`` tiled ``len(u)`` times."""
+    ``axes`` ``(u, v)`` say the rows are a grid whose ratios are constant along its rows
+    (``ra`` is ``u`` with each value repeated) or columns (``rb`` is ``v`` tiled); None
+    where they are not."""
     n = p.shape[0]
     counts = {"newton_iterations": 0, "global_resolved": 0, "max_residual": 0.0}
     if n > 0 and PlanarField.supports(region, kinds):
@@ -303,21 +312,24 @@ def _solve_planar(
     rb: FloatArray,
     tol: float,
     diag: float,
-    axes: tuple[FloatArray, FloatArray] | None = None,
+    axes: tuple[FloatArray | None, FloatArray | None] = (None, None),
 ) -> tuple[FloatArray, int, FloatArray]:
     """:func:`_newton` on the closed-form field, blocks of ``_BLOCK`` nodes at a time (each
     node's iteration is its own: blocking changes no result, only keeps the temporaries
     small). With the grid's ``axes`` (see :func:`_solve`) the weights are computed once per
-    ratio, not per node. Returns nodes, iterations (the most of any block) and residuals."""
+    row or column, not per node. Returns nodes, iterations (the most of any block) and residuals."""
     n = p.shape[0]
     px, py = p[:, 0].copy(), p[:, 1].copy()
     res = np.empty(n)
-    if axes is None:
-        wa, wb = field.weights(0, ra), field.weights(1, rb)
+    u, v = axes
+    if u is None:
+        wa = field.weights(0, ra)
     else:
-        u, v = axes
-        wa = tuple(np.repeat(w, v.size) for w in field.weights(0, u))
-        wb = tuple(np.tile(w, u.size) for w in field.weights(1, v))
+        wa = tuple(np.repeat(w, n // max(u.size, 1)) for w in field.weights(0, u))
+    if v is None:
+        wb = field.weights(1, rb)
+    else:
+        wb = tuple(np.tile(w, n // max(v.size, 1)) for w in field.weights(1, v))
     iters = 0
     for s in range(0, n, _BLOCK):
         e = min(n, s + _BLOCK)
