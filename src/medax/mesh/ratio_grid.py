@@ -16,7 +16,7 @@ Interior nodes are solved all at once by a damped 2-D Newton iteration, started 
 transfinite interpolation of the boundary nodes or, for large grids, from a coarser grid
 interpolated. Feet on sides without a closed-form closest point (B-splines, curves on
 surfaces) are tracked locally from one iteration to the next
-(:func:`~medax.geometry.curve.closest_from`) once steps are small, and certified global at
+(:func:`~medax.geometry.curve.track_closest`) once steps are small, and certified global at
 the end (:func:`~medax.geometry.curve.certify_closest`, a full query where that is not
 conclusive); nodes whose foot was on the wrong part of a side are solved again from the
 global feet.
