@@ -109,20 +109,32 @@ def stats(pts: np.ndarray, quads: np.ndarray) -> dict[str, float]:
             "inv": s["n_inverted"]}  # fmt: skip
 
 
+def peak_rss_mib() -> float:
+    """Peak resident set size of this process (MiB): ``VmHWM`` of ``/proc/self/status``
+    (this program's own, reset by exec), else ``ru_maxrss`` (which on Linux a child
+    inherits from the process that forked it: the parent's meshes would count)."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
 def memory_child(name: str, n: int) -> None:
     """Run in a subprocess: one medax n x n mesh; print peak RSS and Python heap (MiB)."""
     import tracemalloc
 
     region = read_regions(regions_file())[name]
-    base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    base = peak_rss_mib()
     tracemalloc.start()
     t0 = time.perf_counter()
     mesh = mesh_region(region, (n, n))
     mesh.quality()
     dt = time.perf_counter() - t0
     _, peak = tracemalloc.get_traced_memory()
-    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    print(json.dumps({"rss_mib": rss / 1024, "rss_before_mib": base / 1024,
+    print(json.dumps({"rss_mib": peak_rss_mib(), "rss_before_mib": base,
                       "heap_peak_mib": peak / 2**20, "time_s": dt}))  # fmt: skip
 
 
@@ -173,8 +185,8 @@ def main() -> int:
             for label, pts, quads, t in rows:
                 s = stats(pts, quads)
                 res[label] = s
-                print(f"{name:15s} {n:4d} {label:12s} {t:8.3f} {s['sj_min']:7.3f} {s['sj_p5']:7.3f}"
-                      f" {s['ang_min']:7.2f} {s['ang_p5']:7.2f} {s['inv']:4d}  "
+                print(f"{name:15s} {n:4d} {label:12s} {t:8.3f} {s['sj_min']:7.3f} {s['sj_p5']:7.4f}"
+                      f" {s['ang_min']:8.4f} {s['ang_p5']:7.2f} {s['inv']:4d}  "
                       f"{t / t_gmsh:7.2f}")  # fmt: skip
             a, g = res["medax ratio"], res["gmsh TFI"]
             ok = a["sj_p5"] >= g["sj_p5"] - 1e-12 and a["ang_min"] >= g["ang_min"] - 1e-9

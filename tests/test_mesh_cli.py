@@ -100,3 +100,21 @@ def test_mesh_angle_method_on_the_annulus(tmp_path):
     assert main([*args, "-o", str(tmp_path / "r.vtu")]) == 0
     a, r = meshio.read(out).points, meshio.read(tmp_path / "r.vtu").points
     np.testing.assert_allclose(a, r, atol=1e-9)
+
+
+def test_mesh_boundary_rule(tmp_path):
+    """--boundary ratio puts the boundary nodes at the ends of the constant-ratio curves:
+    the mesh of mesh_region(boundary="ratio"), not the default (equal arc length)."""
+    from medax.geometry import read_regions
+    from medax.mesh.mesher import mesh_region
+
+    region = read_regions(sample_regions_path())["wavy"]
+    for rule in ("ratio", "arclength"):
+        out = tmp_path / f"{rule}.vtu"
+        args = ["mesh", REGIONS, "--region", "wavy", "--divisions", "6,5", "-o", str(out)]
+        assert main([*args, "--boundary", rule]) == 0
+        pts = meshio.read(out).points[:, :2]
+        want = mesh_region(region, (6, 5), boundary=rule).points
+        other = mesh_region(region, (6, 5), boundary="arclength" if rule == "ratio" else "ratio")
+        np.testing.assert_allclose(pts, want, atol=1e-12)
+        assert np.abs(pts - other.points).max() > 1e-3

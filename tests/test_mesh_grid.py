@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 
 from medax.errors import InputError, MeshError
 from medax.geometry import Arc, Line, Region, read_regions, sample_regions_path
@@ -11,6 +14,7 @@ from medax.mesh.crossings import family_crossings
 from medax.mesh.grid import boundary_indices, structured_quads
 from medax.mesh.mesher import divisions_for_size, mesh_region
 from medax.mesh.split import split_region
+from truth import blended_targets, polyline_arc_lengths, side_function
 
 REGIONS = read_regions(sample_regions_path())
 
@@ -89,12 +93,16 @@ def test_invariants_ratio(name, div):
         )
 
 
-def test_ratio_nodes_are_on_their_curves():
-    """Independent check: node (i, j) has d0/(d0+d2) = j/n2 and d1/(d1+d3) = 1 - i/n1,
-    distances by dense sampling of the sides (not the closest-point solver)."""
+@pytest.mark.parametrize("boundary", ["arclength", "ratio"])
+def test_ratio_nodes_are_on_their_curves(boundary):
+    """Independent check: node (i, j) has the ratios d0/(d0+d2) and d1/(d1+d3) blended
+    linearly from their values at the boundary nodes (in i/n1 between S3 and S1, in j/n2
+    between S0 and S2), distances by dense sampling of the sides (not the closest-point
+    solver). With boundary nodes at the ends of the constant-ratio curves those values are
+    the constants j/n2 and 1 - i/n1."""
     r = REGIONS["wavy"]
     n1, n2 = 5, 4
-    m = mesh_region(r, (n1, n2))
+    m = mesh_region(r, (n1, n2), boundary=boundary)
     dense = [s.sample(200001) for s in r.sides]
     p = m.params
     d = np.array(
@@ -106,12 +114,34 @@ def test_ratio_nodes_are_on_their_curves():
         for n in range(len(p)):
             lo, hi = max(i0[n] - 20, 0), min(i0[n] + 21, len(s))
             d[k, n] = np.min(np.linalg.norm(s[lo:hi] - p[n], axis=1))
+    for k, idx in enumerate(boundary_indices(n1, n2)):
+        d[k, idx] = 0.0  # on its own side (checked by the invariants test)
     j, i = np.divmod(np.arange(len(p)), n1 + 1)
-    inner = (i > 0) & (i < n1) & (j > 0) & (j < n2)  # on a side, sampling error dominates
-    phi_a = d[0] / (d[0] + d[2])
-    phi_b = d[1] / (d[1] + d[3])
-    assert np.abs(phi_a - j / n2)[inner].max() < 1e-7
-    assert np.abs(phi_b - (1 - i / n1))[inner].max() < 1e-7
+    inner = (i > 0) & (i < n1) & (j > 0) & (j < n2)
+    ra, rb = blended_targets(d[0] / (d[0] + d[2]), d[1] / (d[1] + d[3]), n1, n2)
+    assert np.abs(d[0] / (d[0] + d[2]) - ra.ravel())[inner].max() < 1e-7
+    assert np.abs(d[1] / (d[1] + d[3]) - rb.ravel())[inner].max() < 1e-7
+    if boundary == "ratio":
+        assert np.abs(ra.ravel() - j / n2).max() < 1e-7
+        assert np.abs(rb.ravel() - (1 - i / n1)).max() < 1e-7
+    else:  # the blend is not the constant ratio of a row: the test can tell them apart
+        assert np.abs(ra.ravel() - j / n2)[inner].max() > 1e-3
+
+
+@pytest.mark.parametrize("name", ["wavy", "arcs", "trapezoid"])
+def test_boundary_nodes_at_equal_arc_length(name):
+    """Boundary nodes divide each side into equal arc lengths (as gmsh's transfinite
+    curves do), measured on an independent dense polyline of the side."""
+    spec = json.loads(sample_regions_path().read_text())[name]
+    n1, n2 = 9, 7
+    m = mesh_region(REGIONS[name], (n1, n2))
+    for k, idx in enumerate(boundary_indices(n1, n2)):
+        f = side_function(spec["sides"][k], spec["corners"][k], spec["corners"][(k + 1) % 4])
+        s = np.linspace(0.0, 1.0, 400001)
+        _, near = cKDTree(f(s)).query(m.params[idx])
+        lengths = polyline_arc_lengths(f, s[near])
+        edges = np.diff(lengths)
+        assert np.abs(edges / edges.mean() - 1.0).max() < 1e-4, (name, k)
 
 
 def test_paper_invariants_and_size_rule():
@@ -171,6 +201,8 @@ def test_bad_input():
         mesh_region(r, size=100.0)
     with pytest.raises(InputError, match="unknown mesh method"):
         mesh_region(r, (2, 2), method="voodoo")
+    with pytest.raises(InputError, match="unknown boundary rule"):
+        mesh_region(r, (2, 2), boundary="even")
     assert divisions_for_size(r, 1.0) == (10, 7)
 
 

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from medax.geometry import Arc, Line, Region, read_regions, sample_regions_path
-from medax.geometry.curve import certify_closest, closest_from
+from medax.geometry.curve import certify_closest, closest_from, track_closest
 from medax.mesh import ratio_field as rf
 from medax.mesh import ratio_grid as rg
 from medax.mesh.grid import boundary_indices
 from medax.mesh.mesher import mesh_region
-from truth import Cylinder
+from truth import Cylinder, blended_targets
 
 REGIONS = read_regions(sample_regions_path())
 
@@ -124,6 +124,22 @@ def test_closest_from_converges_to_the_nearby_foot():
     np.testing.assert_allclose(local.distance, 0.05, atol=1e-12)
 
 
+def test_track_closest_gives_exact_feet_from_nearby_starts():
+    """Points at a known normal offset of a wavy side: from starts 1e-2 and 1e-7 away the
+    tracked feet are the known ones, their points on the curve and the distances exact
+    (the Taylor foot of the last step)."""
+    c = REGIONS["wavy"].sides[0]
+    rng = np.random.default_rng(6)
+    t = rng.uniform(0.05, 0.95, 300)
+    normal = c.derivative(t)[:, ::-1] * np.array([1.0, -1.0])
+    x = c.evaluate(t) + 0.05 * normal / np.linalg.norm(normal, axis=1)[:, None]
+    for err in (1e-2, 1e-7):
+        got = track_closest(c, x, t + rng.uniform(-err, err, t.size))
+        np.testing.assert_allclose(got.t, t, atol=1e-12)
+        np.testing.assert_allclose(got.distance, 0.05, atol=1e-14)
+        np.testing.assert_allclose(got.foot, c.evaluate(t), atol=1e-14)
+
+
 def test_certify_closest_never_certifies_a_wrong_foot():
     """Feet on the wrong part of a wavy side are never certified; true ones mostly are."""
     r = REGIONS["wavy"]
@@ -160,10 +176,14 @@ def test_mesh_on_a_cylinder_patch_measures_in_space(div):
         cKDTree(emb.evaluate(c[k] + s[:, None] * (c[(k + 1) % 4] - c[k]))).query(m.points)[0]
         for k in range(4)
     ]
+    for k, idx in enumerate(boundary_indices(n1, n2)):
+        d[k][idx] = 0.0  # (on its own side: the sampled distance is only 1e-5 there)
     j, i = np.divmod(np.arange(m.n_nodes), n1 + 1)
     inner = (i > 0) & (i < n1) & (j > 0) & (j < n2)
-    assert np.abs(d[0] / (d[0] + d[2]) - j / n2)[inner].max() < 1e-7
-    assert np.abs(d[1] / (d[1] + d[3]) - (1 - i / n1))[inner].max() < 1e-7
+    phi_a, phi_b = d[0] / (d[0] + d[2]), d[1] / (d[1] + d[3])
+    ra, rb = blended_targets(phi_a, phi_b, n1, n2)
+    assert np.abs(phi_a - ra.ravel())[inner].max() < 1e-7
+    assert np.abs(phi_b - rb.ravel())[inner].max() < 1e-7
     assert np.all(m.quality().scaled_jacobian > 0.0)
 
 
@@ -302,3 +322,22 @@ def test_certify_closest_is_the_documented_rule(monkeypatch):
         assert 0 < want.sum() < len(x)
         assert np.count_nonzero(got != want) <= 2  # (round-off at the margin only)
         assert not np.any(got & ~want & (other - half < loc.distance - 1e-9))
+
+
+def test_targets_blend_and_separable_rows():
+    """Interior targets are the linear blends of the boundary ratios; rows (columns) whose
+    two end values agree to round-off come back as one value each, equal to the blend."""
+    n1, n2 = 5, 4
+    rng = np.random.default_rng(9)
+    rows, cols = np.sort(rng.uniform(0, 1, n2 + 1)), np.sort(rng.uniform(0, 1, n1 + 1))[::-1]
+    t1, t2 = np.zeros(n1 + 1), np.zeros(n2 + 1)
+    sides = [(t1, cols), (t2, rows), (t1, cols[::-1] + 1e-17), (t2, rows[::-1])]
+    ra, rb, (ur, vc) = rg._targets(sides, n1, n2)
+    np.testing.assert_allclose(ur, rows[1:-1], atol=1e-15)
+    np.testing.assert_allclose(vc, cols[1:-1], atol=1e-15)
+    np.testing.assert_allclose(ra.reshape(n2 - 1, n1 - 1), rows[1:-1, None] + 0 * cols[None, 1:-1])
+    bent = [(t1, cols), (t2, rows), (t1, cols[::-1] + 0.01), (t2, rows[::-1])]
+    _, rb2, (ur2, vc2) = rg._targets(bent, n1, n2)
+    assert ur2 is not None and vc2 is None
+    v = (np.arange(1, n2) / n2)[:, None]
+    np.testing.assert_allclose(rb2.reshape(n2 - 1, n1 - 1), cols[None, 1:-1] + 0.01 * v)

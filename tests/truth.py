@@ -145,3 +145,25 @@ def boundary_distances(old: object, new: object, n_old: int, n_new: int) -> tupl
     old_pts = np.vstack([face_samples(f, n_old) for f in old_faces])
     new_pts = np.vstack([face_samples(f, n_new) for f in new_faces])
     return max_distance(old_pts, new_faces), max_distance(new_pts, old_faces)
+
+
+def blended_targets(phi_a: np.ndarray, phi_b: np.ndarray, n1: int, n2: int):
+    """The ratios node ``(i, j)`` of an ``n1 x n2`` ratio grid must have, from the ratios
+    ``phi_a`` (pair (S0, S2)) and ``phi_b`` (pair (S1, S3)) measured at all its nodes (each
+    ((n1 + 1) * (n2 + 1),), row ``j`` after row): the boundary values blended linearly, in
+    ``i / n1`` from column 0 to column n1 for ``phi_a`` and in ``j / n2`` from row 0 to row
+    n2 for ``phi_b``. Returns two (n2 + 1, n1 + 1) arrays."""
+    a, b = phi_a.reshape(n2 + 1, n1 + 1), phi_b.reshape(n2 + 1, n1 + 1)
+    u = (np.arange(n1 + 1) / n1)[None, :]
+    v = (np.arange(n2 + 1) / n2)[:, None]
+    ra = (1 - u) * a[:, :1] + u * a[:, -1:]
+    rb = (1 - v) * b[:1, :] + v * b[-1:, :]
+    return ra, rb
+
+
+def polyline_arc_lengths(f, t: np.ndarray, n: int = 400001) -> np.ndarray:
+    """Arc lengths (len(t),) from ``f(0)`` to ``f(t)`` along the dense polyline of ``n``
+    samples of ``f`` (a callable on [0, 1]), interpolated linearly between samples."""
+    s = np.linspace(0.0, 1.0, n)
+    cum = np.concatenate(([0.0], np.cumsum(np.linalg.norm(np.diff(f(s), axis=0), axis=1))))
+    return np.interp(t, s, cum)

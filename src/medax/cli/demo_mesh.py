@@ -24,7 +24,8 @@ def demo(outdir: Path) -> list[Path]:
     regions = read_regions(sample_regions_path())
     written: list[Path] = []
     for stem, name, div, method, title in DEMO_MESHES:
-        mesh = mesh_region(regions[name], divisions=div, method=method, tol=1e-7)
+        # Fig. 17's lines are the curves of constant ratio: boundary nodes at their ends
+        mesh = mesh_region(regions[name], divisions=div, method=method, tol=1e-7, boundary="ratio")
         q = mesh.quality()
         written.append(write_mesh(outdir / f"{stem}.vtu", mesh.points, mesh.quads, q.as_dict()))
         written.append(plot_mesh(mesh, outdir / f"{stem}.png", title=title))

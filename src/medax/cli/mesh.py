@@ -18,8 +18,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "mesh",
         help="structured quad mesh of a 4-sided region",
-        description="Mesh a 4-sided region with quads whose node lines are curves of constant "
-        "distance ratio between opposite sides, the middle one the medial axis (default; "
+        description="Mesh a 4-sided region with quads whose node lines follow the distance "
+        "ratio between opposite sides, blended from its values at boundary nodes at equal arc "
+        "length (with --boundary ratio: curves of constant ratio, the middle one the medial "
+        "axis) (default; "
         "rays of equal angle between two lines facing concentric arcs, so an annulus sector "
         "gets the exact polar grid), angle-weighted ratio curves on all line/arc pairs "
         "(angle), or the paper's recursive medial axes (paper). "
@@ -34,6 +36,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--size", type=float, help="target edge length (region units)")
     g.add_argument("--divisions", help="quads along S0 and along S1: N1,N2 (or N for both)")
     p.add_argument("--method", choices=("ratio", "angle", "paper"), default="ratio", help="(ratio)")
+    p.add_argument(
+        "--boundary",
+        choices=("arclength", "ratio"),
+        default="arclength",
+        help="boundary nodes at equal arc length (arclength, as gmsh transfinite) or at the "
+        "ends of the constant-ratio curves (ratio); ratio and angle methods",
+    )
     p.add_argument("-o", "--output", required=True, help="mesh file: .msh .vtu .inp .bdf")
     p.add_argument("--format", help="override the format: msh, vtu, abaqus, nastran")
     p.add_argument("--report", help="quality report (JSON)")
@@ -101,7 +110,9 @@ def run(args: argparse.Namespace) -> int:
         if out:
             check_writable(out)
     region = read_region(args.regions, _region_name(args.regions, args.region))
-    mesh = mesh_region(region, divisions=divisions, size=args.size, method=args.method)
+    mesh = mesh_region(
+        region, divisions=divisions, size=args.size, method=args.method, boundary=args.boundary
+    )
     time_s = float(mesh.info["time_s"])
     rep = report(mesh, time_s)
     write_mesh(args.output, mesh.points, mesh.quads, mesh.quality().as_dict(), fmt)

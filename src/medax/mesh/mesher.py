@@ -4,9 +4,12 @@ Two methods build the same kind of grid: ``n1`` strips across the pair ``(S1, S3
 ``n2`` across ``(S0, S2)``, node ``(i, j)`` the crossing of curve ``i`` of one family with
 curve ``j`` of the other (numbering in :mod:`medax.mesh.grid`).
 
-- ``"ratio"`` (default): the curves ``d_a / (d_a + d_b) = k / n`` of each pair (the
-  tracer's ``ratio`` curves; ``k / n = 1/2`` is the medial axis), crossed directly
-  (:mod:`medax.mesh.ratio_grid`). Any division counts. A pair of lines whose opposite sides
+- ``"ratio"`` (default): the distance ratio ``d_a / (d_a + d_b)`` of each pair (the
+  tracer's ``ratio`` curves; ``1/2`` is the medial axis), node ``(i, j)`` solved directly
+  where both ratios take the blend of their values at the boundary nodes, which divide the
+  sides into equal arc lengths (:mod:`medax.mesh.ratio_grid`; ``boundary="ratio"``: the
+  boundary nodes at the ends of the curves of constant ratio ``k / n``, the nodes their
+  crossings). Any division counts. A pair of lines whose opposite sides
   are arcs centred where the lines meet (an annulus sector) takes rays of equal angle
   instead: the exact polar grid.
 - ``"angle"``: angle-weighted ratio curves on every pair of lines and arcs (rays of equal
@@ -30,6 +33,7 @@ import numpy as np
 from medax import tolerances
 from medax.errors import InputError, MeshError
 from medax.geometry.region import Region, normalised_region
+from medax.mesh.boundary_nodes import RULES as BOUNDARY_RULES
 from medax.mesh.crossings import family_crossings
 from medax.mesh.grid import QuadMesh, boundary_indices
 from medax.mesh.ratio_grid import ratio_grid
@@ -63,12 +67,18 @@ def mesh_region(
     size: float | None = None,
     method: str = "ratio",
     tol: float = 1e-9,
+    boundary: str = "arclength",
 ) -> QuadMesh:
     """A structured quad mesh of ``region`` with ``divisions = (n1, n2)`` (along S0, along S1)
     or edges of about ``size`` (region units). ``tol`` (relative to the diagonal) bounds the
-    node error of the crossings and, for ``"paper"``, the traced splines' error."""
+    node error of the crossings and, for ``"paper"``, the traced splines' error. ``boundary``
+    (``"ratio"`` and ``"angle"`` methods): boundary nodes at equal arc length
+    (``"arclength"``) or at the ends of the curves of constant ratio (``"ratio"``), see
+    :mod:`medax.mesh.boundary_nodes`."""
     if method not in METHODS:
         raise InputError(f"unknown mesh method '{method}' (known: {', '.join(METHODS)})")
+    if boundary not in BOUNDARY_RULES:
+        raise InputError(f"unknown boundary rule '{boundary}' (known: {', '.join(BOUNDARY_RULES)})")
     if (divisions is None) == (size is None):
         raise InputError("give exactly one of divisions and size")
     if divisions is not None:
@@ -87,9 +97,7 @@ def mesh_region(
         # solved centred and at unit diagonal, so that far from the origin the node tolerance
         # (1e-13 x diagonal) is still above round-off
         work, offset, scale = normalised_region(region)
-        params, info = ratio_grid(
-            work, n1, n2, point_tol=min(tol, tolerances.POINT_TOL), weighting=weighting
-        )
+        params, info = ratio_grid(work, n1, n2, min(tol, tolerances.POINT_TOL), weighting, boundary)
         params = params * scale + offset
     else:
         params, n1, n2 = _paper_grid(region, n1, n2, size, tol)

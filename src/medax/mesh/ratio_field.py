@@ -26,7 +26,7 @@ import numpy as np
 from medax import tolerances
 from medax.geometry._types import FloatArray
 from medax.geometry.arc import Arc
-from medax.geometry.curve import Closest, Curve, closest_from, has_closed_form_closest
+from medax.geometry.curve import Closest, Curve, has_closed_form_closest, track_closest
 from medax.geometry.line import Line
 from medax.geometry.region import Region
 
@@ -197,9 +197,25 @@ class SideDistances:
         elif rows is None or not self.tracked[k]:
             c = curve.closest(x)
         else:
-            c = closest_from(curve, x, self.t[k][rows])
+            c = _tracked(curve, x, self.t[k][rows])
         u = (x - c.foot) / np.maximum(c.distance, _TINY)[:, None]
         return c.distance, u, c.t
+
+
+def _tracked(curve: Curve, x: FloatArray, t0: FloatArray) -> Closest:
+    """Feet from the accepted ones ``t0`` (n,) by :func:`track_closest`; a global query
+    for rows without one (NaN)."""
+    cold = np.isnan(t0)
+    if not cold.any():
+        return track_closest(curve, x, t0)
+    if cold.all():
+        return curve.closest(x)
+    warm = track_closest(curve, x[~cold], t0[~cold])
+    glob = curve.closest(x[cold])
+    t, foot, dist = np.empty(x.shape[0]), np.empty_like(x), np.empty(x.shape[0])
+    t[~cold], foot[~cold], dist[~cold] = warm.t, warm.foot, warm.distance
+    t[cold], foot[cold], dist[cold] = glob.t, glob.foot, glob.distance
+    return Closest(t=t, foot=foot, distance=dist)
 
 
 def evaluate_field(

@@ -1,14 +1,22 @@
-"""Nodes as crossings of two families of ratio curves, solved directly.
+"""Nodes where the two ratios of :mod:`medax.mesh.ratio_field` take given values, solved
+directly.
 
-The curves are level sets of the field of :mod:`medax.mesh.ratio_field`: for ``(S0, S2)``
-the ratio of node row ``j`` is ``j / n2``; for ``(S1, S3)`` the ratio of column ``i`` is
-``1 - i / n1``. Node ``(i, j)`` is the root of both. Boundary nodes are the curves' end
-points: the root of one equation along the side (1-D, bracketed, vectorised), so they lie on
-the sides exactly. Interior nodes are solved all at once by a damped 2-D Newton iteration,
-started from the transfinite interpolation of the boundary nodes or, for large grids, from
-a coarser grid interpolated. Feet on sides without a closed-form closest point (B-splines,
-curves on surfaces) are tracked locally from one iteration to the next
-(:func:`~medax.geometry.curve.closest_from`) once steps are small, and certified global at
+Boundary nodes divide each side into equal arc lengths in space (as gmsh's transfinite
+curves do; they are the side's curve evaluated, so they lie on it exactly). The ratio of the
+crossing pair is measured at each of them, and interior node ``(i, j)`` is the root of both
+equations with the transfinite blend of those boundary values: the ratio of ``(S0, S2)``
+linear in ``i / n1`` between its values at node ``j`` of S3 and of S1, that of ``(S1, S3)``
+linear in ``j / n2`` between node ``i`` of S0 and of S2. Where the boundary nodes are the
+ends of the curves of constant ratio ``k / n`` (a rectangle, an annulus sector: equal
+spacing is then the same thing), the targets are those constants and the nodes the
+crossings of those curves: the uniform and the polar grid (the other rule,
+``boundary="ratio"``, always places them so: :mod:`medax.mesh.boundary_nodes`).
+
+Interior nodes are solved all at once by a damped 2-D Newton iteration, started from the
+transfinite interpolation of the boundary nodes or, for large grids, from a coarser grid
+interpolated. Feet on sides without a closed-form closest point (B-splines, curves on
+surfaces) are tracked locally from one iteration to the next
+(:func:`~medax.geometry.curve.track_closest`) once steps are small, and certified global at
 the end (:func:`~medax.geometry.curve.certify_closest`, a full query where that is not
 conclusive); nodes whose foot was on the wrong part of a side are solved again from the
 global feet.
@@ -25,103 +33,26 @@ from scipy.interpolate import BSpline, make_interp_spline
 from medax import tolerances
 from medax.errors import MeshError
 from medax.geometry._types import FloatArray
-from medax.geometry.curve import Curve, certify_closest
+from medax.geometry.curve import certify_closest
 from medax.geometry.region import Region
+from medax.mesh.boundary_nodes import RULES, side_params
 from medax.mesh.grid import boundary_indices
 from medax.mesh.ratio_field import (
     WEIGHTINGS,
     PlanarField,
     SideDistances,
-    angular_ratio,
     evaluate_field,
-    foot_angle,
     pair_weighting,
 )
 
 log = logging.getLogger(__name__)
-_SCAN = 513  # samples per side when bracketing boundary nodes
 _NEWTON_ITERS = 40
 _GLOBAL_ROUNDS = 3  # re-solves after the global foot check
 _COARSE_MIN = 12  # grids with both counts >= 4x this start from a coarser grid
 _FOOT_JUMP = 0.05  # coarse-cell spread of foot parameters taken as a jump
 _TRACK_STEP = 1e-3  # Newton moves (x diagonal) below which feet are tracked, not searched
+_SAME = 1e-15  # boundary ratios at both ends of a node row or column taken as one value
 _BLOCK = 32768  # nodes solved together on the closed-form path (temporaries stay in cache)
-
-
-def side_nodes(
-    region: Region,
-    side: int,
-    a: int,
-    b: int,
-    ratios: FloatArray,
-    tol: float,
-    weighting: str = "auto",
-) -> FloatArray:
-    """Parameters ``t`` (len(ratios),) on ``side`` where the ratio curve of ``(a, b)`` ends.
-
-    Ratios 0 and 1 are the side's end points on ``a`` and on ``b``. Each ratio is bracketed
-    on a scan of the side (the first sign change from the ``a`` end) and solved by the
-    Illinois variant of regula falsi, all ratios at once, to ``|t1 - t0| <= 4e-16``.
-    """
-    curve: Curve = region.sides[side]
-    weighting = pair_weighting(region, a, b, weighting)
-    sides = SideDistances(region, 0, (weighting, weighting))
-    r = np.asarray(ratios, dtype=np.float64)
-    s = np.linspace(0.0, 1.0, _SCAN)
-    x = region.embedding.evaluate(curve.evaluate(s))
-    da, ua, _ = sides.dist(a, x, None)
-    db, ub, _ = sides.dist(b, x, None)
-    phi = angular_ratio(da, db, foot_angle(ua, ub, weighting))
-    # orient the scan so that phi runs from the a end (0) to the b end (1)
-    if phi[0] > phi[-1]:
-        s, phi = s[::-1], phi[::-1]
-    out = np.empty(r.size)
-    inner = (r > 0.0) & (r < 1.0)
-    out[r <= 0.0] = s[0]
-    out[r >= 1.0] = s[-1]
-    ri = r[inner]
-    if ri.size == 0:
-        return out
-    above = phi[None, :] >= ri[:, None]  # (k, scan)
-    first = np.argmax(above, axis=1)
-    if np.any(~above.any(axis=1)) or np.any(first == 0):
-        raise MeshError(
-            f"region '{region.name}': a ratio curve of sides ({a}, {b}) does not meet side {side}"
-        )
-    if np.any(np.diff(phi) < -1e-12):
-        log.warning("region '%s': the ratio is not monotone along side %d", region.name, side)
-    lo, hi = s[first - 1], s[first]
-
-    pair = 0 if a == 0 else 1
-    kinds = (weighting, "distance") if pair == 0 else ("distance", weighting)
-    planar = PlanarField(region, kinds) if PlanarField.supports(region, kinds) else None
-    w = planar.weights(pair, ri) if planar is not None else ()
-
-    def f(t: FloatArray) -> FloatArray:
-        """``g`` on the side: the sign of ``phi - r``."""
-        p = curve.evaluate(t)
-        if planar is not None:  # (only the pair (a, b) is evaluated)
-            return planar.value(pair, p[:, 0].copy(), p[:, 1].copy(), w)
-        return evaluate_field(sides, a, b, ri, p, weighting)[0]
-
-    flo, fhi = f(lo), f(hi)
-    moved = np.zeros(ri.size, dtype=np.int8)  # -1: lo moved last, +1: hi moved last
-    for _ in range(100):
-        den = fhi - flo
-        t = np.where(den != 0.0, lo - flo * (hi - lo) / np.where(den != 0.0, den, 1.0), lo)
-        t = np.clip(t, np.minimum(lo, hi), np.maximum(lo, hi))
-        ft = f(t)
-        left = ft < 0.0
-        # Illinois: halve the value kept at an end that stays put twice in a row
-        fhi = np.where(left & (moved == -1), 0.5 * fhi, fhi)
-        flo = np.where(~left & (moved == 1), 0.5 * flo, flo)
-        lo, flo = np.where(left, t, lo), np.where(left, ft, flo)
-        hi, fhi = np.where(left, hi, t), np.where(left, fhi, ft)
-        moved = np.where(left, -1, 1).astype(np.int8)
-        if np.all((np.abs(hi - lo) <= 4e-16) | (np.abs(ft) <= 1e-3 * tol)):
-            break
-    out[inner] = np.where(np.abs(flo) <= np.abs(fhi), lo, hi)
-    return out
 
 
 def ratio_grid(
@@ -130,14 +61,19 @@ def ratio_grid(
     n2: int,
     point_tol: float = tolerances.POINT_TOL,
     weighting: str = "auto",
+    boundary: str = "arclength",
 ) -> tuple[FloatArray, dict[str, float]]:
-    """Parameter-plane nodes (``(n1 + 1) * (n2 + 1)``, 2) of the ratio grid; and counts."""
+    """Parameter-plane nodes (``(n1 + 1) * (n2 + 1)``, 2) of the ratio grid; and counts.
+    ``boundary`` places the boundary nodes (:data:`~medax.mesh.boundary_nodes.RULES`)."""
     if weighting not in WEIGHTINGS:
         raise ValueError(f"unknown weighting '{weighting}'")
+    if boundary not in RULES:
+        raise ValueError(f"unknown boundary rule '{boundary}'")
     kinds = (pair_weighting(region, 0, 2, weighting), pair_weighting(region, 1, 3, weighting))
     tol = point_tol * region.diagonal
     levels = _levels(n1, n2)
-    grid, _, counts = _grid(region, levels, _side_params(region, levels, tol, kinds), tol, kinds)
+    sides = side_params(region, levels, tol, kinds, boundary)
+    grid, _, counts = _grid(region, levels, sides, tol, kinds, with_feet=False)
     counts["max_residual"] /= region.diagonal
     return grid.reshape(-1, 2), counts
 
@@ -152,58 +88,32 @@ def _levels(n1: int, n2: int) -> list[tuple[int, int]]:
     return out
 
 
-def _ratios(n1: int, n2: int) -> tuple[FloatArray, FloatArray]:
-    """The ratios of the node columns (pair (S1, S3): 1 on S3 at i = 0, 0 on S1) and of the
-    node rows (pair (S0, S2): 0 on S0 at j = 0, 1 on S2)."""
-    return 1.0 - np.arange(n1 + 1) / n1, np.arange(n2 + 1) / n2
-
-
-# side k carries the end points of the curves of the pair (a, b) (index into the kinds)
-_SIDE_PAIRS = ((0, 1, 3, 1), (1, 0, 2, 0), (2, 1, 3, 1), (3, 0, 2, 0))
-
-
-def _side_params(
-    region: Region, levels: list[tuple[int, int]], tol: float, kinds: tuple[str, str]
-) -> list[list[FloatArray]]:
-    """Per level, per side, the parameters (in the side's direction) of the boundary nodes;
-    the nodes of all levels on one side are found by one call of :func:`side_nodes`."""
-    out: list[list[FloatArray]] = [[] for _ in levels]
-    for side, a, b, kind in _SIDE_PAIRS:
-        rs = []
-        for n1, n2 in levels:
-            ri, rj = _ratios(n1, n2)
-            rs.append((ri, rj, ri[::-1], rj[::-1])[side])
-        t = side_nodes(region, side, a, b, np.concatenate(rs), tol, kinds[kind])
-        for lev, part in enumerate(np.split(t, np.cumsum([r.size for r in rs])[:-1])):
-            out[lev].append(part)
-    return out
-
-
 def _grid(
     region: Region,
     levels: list[tuple[int, int]],
-    side_t: list[list[FloatArray]],
+    side_t: list[list[tuple[FloatArray, FloatArray]]],
     tol: float,
     kinds: tuple[str, str],
+    with_feet: bool = True,
 ) -> tuple[FloatArray, list[FloatArray], dict[str, float]]:
-    """Nodes (n2 + 1, n1 + 1, 2) of ``levels[0]`` (boundary nodes at ``side_t[0]``), feet on
-    the tracked sides (each (n2 + 1, n1 + 1)) and counts.
+    """Nodes (n2 + 1, n1 + 1, 2) of ``levels[0]`` (boundary nodes and their ratios:
+    ``side_t[0]``, see :func:`~medax.mesh.boundary_nodes.side_params`), feet on
+    the tracked sides (each (n2 + 1, n1 + 1); none unless ``with_feet``: only a coarse
+    start needs them) and counts.
 
     Large grids start from the coarser ``levels[1]`` (solved the same way) interpolated by
     bicubic splines in the ratios, with feet interpolated too: Newton then takes small
     steps with tracked feet, and one global query per side checks them.
     """
     n1, n2 = levels[0]
-    ri, rj = _ratios(n1, n2)
     idx = boundary_indices(n1, n2)
     params = np.full(((n1 + 1) * (n2 + 1), 2), np.nan)
     for side in range(4):
-        params[idx[side]] = region.sides[side].evaluate(side_t[0][side])
+        params[idx[side]] = region.sides[side].evaluate(side_t[0][side][0])
     params[idx[0][[0, -1]]] = region.corners[[0, 1]]
     params[idx[2][[0, -1]]] = region.corners[[2, 3]]
     grid = params.reshape(n2 + 1, n1 + 1, 2)
-    ra = np.broadcast_to(rj[1:-1, None], (n2 - 1, n1 - 1)).ravel()
-    rb = np.broadcast_to(ri[None, 1:-1], (n2 - 1, n1 - 1)).ravel()
+    ra, rb, axes = _targets(side_t[0], n1, n2)
     feet0: list[FloatArray] | None = None
     coarse_counts: dict[str, float] = {}
     if len(levels) > 1:
@@ -211,12 +121,33 @@ def _grid(
         inner, feet0 = _refine_guess(cgrid, cfeet, n1, n2)
     else:
         inner = _coons(grid, n1, n2)[1:-1, 1:-1].reshape(-1, 2)
-    axes = (rj[1:-1], ri[1:-1])
     solved, feet, counts = _solve(region, inner, ra, rb, 1e-3 * tol, kinds, feet0, axes)
     grid[1:-1, 1:-1] = solved.reshape(n2 - 1, n1 - 1, 2)
     for key in ("newton_iterations", "global_resolved"):
         counts[f"coarse_{key}"] = coarse_counts.get(key, 0) + coarse_counts.get(f"coarse_{key}", 0)
-    return grid, _full_feet(region, grid, feet, kinds), counts
+    return grid, _full_feet(region, grid, feet, kinds) if with_feet else [], counts
+
+
+def _targets(
+    sides: list[tuple[FloatArray, FloatArray]], n1: int, n2: int
+) -> tuple[FloatArray, FloatArray, tuple[FloatArray | None, FloatArray | None]]:
+    """The ratios ``(ra, rb)`` (each ((n1 - 1) * (n2 - 1),)) of the pairs (S0, S2) and
+    (S1, S3) at the interior nodes: the transfinite blend of their values at the boundary
+    nodes (``sides``: per side, parameters and the crossing pair's ratio), linear in
+    ``i / n1`` between S3 and S1 and in ``j / n2`` between S0 and S2. Where both ends agree
+    to round-off (``_SAME``) the blend is their mean, one value per node row of ``ra`` or per
+    column of ``rb``: those values are returned too (else None), so that the weights can be
+    computed once per row or column."""
+    s0, s1, s2, s3 = (r for _, r in sides)
+    u = (np.arange(1, n1) / n1)[None, :]
+    v = (np.arange(1, n2) / n2)[:, None]
+    a0, a1 = s3[::-1][1:-1], s1[1:-1]  # ratio of (S0, S2) on S3 and on S1, per row
+    b0, b1 = s0[1:-1], s2[::-1][1:-1]  # ratio of (S1, S3) on S0 and on S2, per column
+    rows = 0.5 * (a0 + a1) if np.abs(a0 - a1).max(initial=0.0) <= _SAME else None
+    cols = 0.5 * (b0 + b1) if np.abs(b0 - b1).max(initial=0.0) <= _SAME else None
+    ra = (1.0 - u) * a0[:, None] + u * a1[:, None] if rows is None else rows[:, None] + 0.0 * u
+    rb = (1.0 - v) * b0[None] + v * b1[None] if cols is None else cols[None] + 0.0 * v
+    return ra.ravel(), rb.ravel(), (rows, cols)
 
 
 def _full_feet(
@@ -310,13 +241,14 @@ def _solve(
     tol: float,
     kinds: tuple[str, str],
     feet0: list[FloatArray] | None = None,
-    axes: tuple[FloatArray, FloatArray] | None = None,
+    axes: tuple[FloatArray | None, FloatArray | None] = (None, None),
 ) -> tuple[FloatArray, list[FloatArray], dict[str, float]]:
     """Solve ``g_a = g_b = 0`` for all rows of ``p`` (n, 2): Newton with tracked feet
     (starting from ``feet0`` if given, else from global ones), then a global check of the
     feet and a re-solve of the rows whose feet were wrong. Returns nodes, feet, counts.
-    ``axes`` ``(u, v)``, if given, says the rows are a grid: ``ra`` is ``u`` repeated
-    ``len(v)`` times each, ``rb`` is ``v`` tiled ``len(u)`` times."""
+    ``axes`` ``(u, v)`` say the rows are a grid whose ratios are constant along its rows
+    (``ra`` is ``u`` with each value repeated) or columns (``rb`` is ``v`` tiled); None
+    where they are not."""
     n = p.shape[0]
     counts = {"newton_iterations": 0, "global_resolved": 0, "max_residual": 0.0}
     if n > 0 and PlanarField.supports(region, kinds):
@@ -380,21 +312,24 @@ def _solve_planar(
     rb: FloatArray,
     tol: float,
     diag: float,
-    axes: tuple[FloatArray, FloatArray] | None = None,
+    axes: tuple[FloatArray | None, FloatArray | None] = (None, None),
 ) -> tuple[FloatArray, int, FloatArray]:
     """:func:`_newton` on the closed-form field, blocks of ``_BLOCK`` nodes at a time (each
     node's iteration is its own: blocking changes no result, only keeps the temporaries
     small). With the grid's ``axes`` (see :func:`_solve`) the weights are computed once per
-    ratio, not per node. Returns nodes, iterations (the most of any block) and residuals."""
+    row or column, not per node. Returns nodes, iterations (the most of any block) and residuals."""
     n = p.shape[0]
     px, py = p[:, 0].copy(), p[:, 1].copy()
     res = np.empty(n)
-    if axes is None:
-        wa, wb = field.weights(0, ra), field.weights(1, rb)
+    u, v = axes
+    if u is None:
+        wa = field.weights(0, ra)
     else:
-        u, v = axes
-        wa = tuple(np.repeat(w, v.size) for w in field.weights(0, u))
-        wb = tuple(np.tile(w, u.size) for w in field.weights(1, v))
+        wa = tuple(np.repeat(w, n // max(u.size, 1)) for w in field.weights(0, u))
+    if v is None:
+        wb = field.weights(1, rb)
+    else:
+        wb = tuple(np.tile(w, n // max(v.size, 1)) for w in field.weights(1, v))
     iters = 0
     for s in range(0, n, _BLOCK):
         e = min(n, s + _BLOCK)
@@ -611,13 +546,9 @@ def _newton(
     backtracking on the residual ``hypot(g_a, g_b)``. Returns nodes, iterations, residuals."""
     p = p.copy()
     system = _System(sides, ra_all[rows], rb_all[rows], rows, kinds)
-    # rows whose feet are known (interpolated or reset to global ones) start tracked
-    known = np.ones(rows.size, dtype=bool)
-    for k, tracked in enumerate(sides.tracked):
-        if tracked:
-            known &= np.isfinite(sides.t[k][rows])
+    # every row starts tracked (a side without a foot yet, NaN, is queried globally)
     all_rows = np.arange(rows.size)
-    v = system.evaluate(p, all_rows, known)
+    v = system.evaluate(p, all_rows, np.ones(rows.size, dtype=bool))
     system.accept(all_rows, v)
     res = np.hypot(v.ga, v.gb)
     diag = sides.region.diagonal
