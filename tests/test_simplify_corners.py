@@ -108,7 +108,7 @@ def _spheres(part):
 
 
 def test_torus_heights_match_occt_intersections():
-    """The batched line-torus quartic against OCCT's own curve/surface intersection."""
+    """Lines along the axis (closed form) against OCCT's own curve/surface intersection."""
     from matplotlib.path import Path
     from OCP.Geom import Geom_Line, Geom_ToroidalSurface
     from OCP.GeomAPI import GeomAPI_IntCS
@@ -135,6 +135,44 @@ def test_torus_heights_match_occt_intersections():
     slope = np.degrees(np.arcsin(np.abs(rad - big) / small))
     assert np.all(ok[slope < 69.0]) and not np.any(ok[slope > 71.0])
     assert ok.sum() > 10 and (~ok).sum() > 3
+
+
+@pytest.mark.parametrize(
+    "n", [(0.0, 1.0, 0.0), (0.0, 0.0, 1.0), (0.3, -0.2, 0.93)], ids=["normal", "along", "oblique"]
+)
+def test_torus_heights_every_direction(n):
+    """Lines normal to the axis (two circles per height, closed form), along it and oblique
+    (the batched quartic): the root nearest the start against OCCT's intersections, and
+    where OCCT finds none the line is refused (the closed forms refuse nothing else)."""
+    from matplotlib.path import Path
+    from OCP.Geom import Geom_Line, Geom_ToroidalSurface
+    from OCP.GeomAPI import GeomAPI_IntCS
+    from OCP.gp import gp_Ax3, gp_Dir, gp_Pnt
+
+    from medax.cad.simplify import fitted
+
+    n = np.array(n) / np.linalg.norm(n)
+    centre, axis, big, small = np.array([1.0, 2.0, 3.0]), np.array([0.0, 0.0, 1.0]), 6.0, 2.0
+    m = fitted._Member("torus", centre, axis, small, Path(np.zeros((3, 2))), (), (), big)
+    q = centre + np.random.default_rng(8).uniform(-9.0, 9.0, (150, 3))
+    aligned = abs(n[2]) in (0.0, 1.0)
+    if aligned:  # the closed forms, before the slope check
+        t, ok = fitted._torus_heights_aligned(m, q - centre, n, float(n @ axis))
+    else:
+        t, ok = fitted._heights(m, q, n)
+    torus = Geom_ToroidalSurface(gp_Ax3(gp_Pnt(*centre), gp_Dir(*axis)), big, small)
+    for qi, ti, oki in zip(q, t, ok, strict=True):
+        inter = GeomAPI_IntCS(Geom_Line(gp_Pnt(*qi), gp_Dir(*n)), torus)
+        hits = [
+            float((fitted.xyz(inter.Point(k)) - qi) @ n) for k in range(1, inter.NbPoints() + 1)
+        ]
+        if not hits:
+            assert not oki
+            continue
+        assert oki or not aligned
+        if oki:  # (the oblique path also refuses steep hits)
+            assert abs(ti - min(hits, key=abs)) <= 1e-9
+    assert ok.sum() > 20 and (~ok).sum() > 20
 
 
 def test_box12_two_volume_measures_agree(box12):

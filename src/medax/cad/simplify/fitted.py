@@ -249,6 +249,9 @@ def _torus_heights(m: _Member, q: Array, n: Array) -> tuple[Array, np.ndarray]:
     big, r, a = m.major, m.radius, m.axis
     w = q - m.centre
     b, za, na = w @ n, w @ a, float(n @ a)
+    if abs(abs(na) - 1.0) < 1e-12 or abs(na) < 1e-12:
+        t, ok = _torus_heights_aligned(m, w, n, na)
+        return _torus_slope(m, w, n, t, ok)
     ww = np.einsum("ij,ij->i", w, w)
     c0 = ww + big * big - r * r
     k4 = 4 * big * big
@@ -274,10 +277,48 @@ def _torus_heights(m: _Member, q: Array, n: Array) -> tuple[Array, np.ndarray]:
         p = (((t + coef[:, 0]) * t + coef[:, 1]) * t + coef[:, 2]) * t + coef[:, 3]
         dp = ((4 * t + 3 * coef[:, 0]) * t + 2 * coef[:, 1]) * t + coef[:, 2]
         t = t - np.where(np.abs(dp) > 1e-300, p / np.where(dp == 0, 1.0, dp), 0.0)
+    return _torus_slope(m, w, n, t, ok)
+
+
+def _torus_heights_aligned(m: _Member, w: Array, n: Array, na: float) -> tuple[Array, Array]:
+    """Line-torus intersections in closed form when the lines are parallel to the axis
+    (``|n.a| = 1``: a constant radial distance, so ``z = +-sqrt(r^2 - (rho - R)^2)``) or
+    normal to it (``n.a = 0``: at height ``z`` the torus is the two circles of radius
+    ``R +- sqrt(r^2 - z^2)``, each met by a quadratic). The root nearest the plane; ``ok``
+    where there is one. ``w``: the points relative to the torus centre (k, 3)."""
+    big, r, a = m.major, m.radius, m.axis
+    za = w @ a
+    roots = []
+    if abs(na) > 0.5:
+        rho = np.linalg.norm(w - np.outer(za, a), axis=1)
+        half = np.sqrt(np.maximum(r * r - (rho - big) ** 2, 0.0))
+        real = r * r - (rho - big) ** 2 >= 0
+        for z in (half, -half):
+            roots.append(np.where(real, (z - za) / na, np.inf))
+    else:
+        flat = w - np.outer(za, a)  # in the plane normal to the axis, as n is
+        b = flat @ n
+        c0 = np.einsum("ij,ij->i", flat, flat)
+        across = np.sqrt(np.maximum(r * r - za * za, 0.0))
+        for rc in (big + across, big - across):
+            disc = b * b - (c0 - rc * rc)
+            real = (disc >= 0) & (r * r - za * za >= 0) & (rc >= 0)
+            root = np.sqrt(np.maximum(disc, 0.0))
+            roots += [np.where(real, -b - root, np.inf), np.where(real, -b + root, np.inf)]
+    cand = np.stack(roots, axis=1)
+    pick = np.argmin(np.abs(cand), axis=1)
+    t = cand[np.arange(len(w)), pick]
+    ok = np.isfinite(t)
+    return np.where(ok, t, 0.0), ok
+
+
+def _torus_slope(m: _Member, w: Array, n: Array, t: Array, ok: Array) -> tuple[Array, Array]:
+    """``(t, ok)`` with ``ok`` cleared where the torus' normal at the hit is steeper than
+    ``MAX_SLOPE_ANGLE`` from ``n``."""
     x = w + np.outer(t, n)
-    radial = x - np.outer(x @ a, a)
-    core = big * radial / np.maximum(np.linalg.norm(radial, axis=1), 1e-300)[:, None]
-    normal = (x - core) / r
+    radial = x - np.outer(x @ m.axis, m.axis)
+    core = m.major * radial / np.maximum(np.linalg.norm(radial, axis=1), 1e-300)[:, None]
+    normal = (x - core) / m.radius
     cos = np.abs(normal @ n)
     return t, ok & (cos >= np.cos(MAX_SLOPE_ANGLE))
 
