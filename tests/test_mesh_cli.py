@@ -56,6 +56,7 @@ def test_format_override(tmp_path):
         (["--divisions", "a,b"], "integers"),
         (["--divisions", "2,3,4"], "N1,N2"),
         (["--divisions", "4", "--format", "stl"], "unknown mesh format"),
+        (["--divisions", "4", "--method", "paper", "--boundary", "ratio"], "not to paper"),
     ],
 )
 def test_bad_input(tmp_path, capsys, extra, message):

@@ -3,8 +3,10 @@
 A box with four filleted vertical edges (10 -> 6 faces, extrusion surfaces), a plate with a
 filleted boss and a hole (10 -> 9 faces, revolution surfaces) and a boss filleted at its root
 and top (10 -> 8 faces; the top face holds the pole of its revolution surface) and a box with
-all 12 edges filleted (26 -> 6 faces: eight sphere corners split, fitted faces): the input
-STEP, the simplified STEP, the JSON report and the before/after picture of each.
+all 12 edges filleted (26 -> 6 faces: eight sphere corners split, fitted faces) and a box
+with rounded vertical edges whose top loop was filleted after them (18 -> 6 faces: the tori
+ride on the vertical fillets and are split by bridges): the input STEP, the simplified
+STEP, the JSON report and the before/after picture of each.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from medax.cli.main import main
 
 def demo(outdir: Path) -> list[Path]:
     """Write ``simplify-<part>{-input.step,.step,.json,.png}`` into ``outdir``."""
+    from medax.cad import parts as catalogue
     from medax.cad.simplify import parts
     from medax.cad.simplify.step_out import write_step
 
@@ -25,6 +28,7 @@ def demo(outdir: Path) -> list[Path]:
         ("boss", parts.plate_with_boss()),
         ("boss-top", parts.boss_top_fillet(2.0, root=True)),
         ("box-12-edges", parts.box_all_fillets()),
+        ("rounded-box-chain", catalogue.rounded_box_chain()),
     ):
         src = write_step(part.shape, outdir / f"simplify-{name}-input.step")
         out, rep, png = (outdir / f"simplify-{name}{ext}" for ext in (".step", ".json", ".png"))

@@ -39,9 +39,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--boundary",
         choices=("arclength", "ratio"),
-        default="arclength",
-        help="boundary nodes at equal arc length (arclength, as gmsh transfinite) or at the "
-        "ends of the constant-ratio curves (ratio); ratio and angle methods",
+        default=None,
+        help="boundary nodes at equal arc length (arclength, the default, as gmsh "
+        "transfinite) or at the ends of the constant-ratio curves (ratio); ratio and angle "
+        "methods only (the paper's recursion places its own)",
     )
     p.add_argument("-o", "--output", required=True, help="mesh file: .msh .vtu .inp .bdf")
     p.add_argument("--format", help="override the format: msh, vtu, abaqus, nastran")
@@ -104,6 +105,8 @@ def run(args: argparse.Namespace) -> int:
     divisions = parse_divisions(args.divisions) if args.divisions is not None else None
     if args.size is not None and not (math.isfinite(args.size) and args.size > 0.0):
         raise InputError(f"--size must be positive, got {args.size}")
+    if args.boundary is not None and args.method == "paper":
+        raise InputError("--boundary applies to the ratio and angle methods, not to paper")
     if args.plot and Path(args.plot).suffix.lower() not in PLOT_SUFFIXES:
         raise InputError(f"--plot {args.plot}: use a {', '.join(PLOT_SUFFIXES)} file name")
     for out in (args.output, args.report, args.plot):
@@ -111,7 +114,11 @@ def run(args: argparse.Namespace) -> int:
             check_writable(out)
     region = read_region(args.regions, _region_name(args.regions, args.region))
     mesh = mesh_region(
-        region, divisions=divisions, size=args.size, method=args.method, boundary=args.boundary
+        region,
+        divisions=divisions,
+        size=args.size,
+        method=args.method,
+        boundary=args.boundary or "arclength",
     )
     time_s = float(mesh.info["time_s"])
     rep = report(mesh, time_s)
