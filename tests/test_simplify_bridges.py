@@ -14,11 +14,10 @@ import pytest
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
 from OCP.TopoDS import TopoDS
 
-from medax.cad.simplify import simplify, specs_from_classification
 from medax.cad.simplify.occ import edge_points, shape_map
 from medax.cad.simplify.specs import edge_face_map
-from medax.cad.simplify.validate import check, face_samples
-from truth import boundary_distances
+from medax.cad.simplify.validate import face_samples
+from truth import assert_same_solid, classified_and_simplified
 
 #: the box: x in [0, 30], y in [0, 20], z in [0, 10]; the side planes by coordinate
 SIDES = {("x", 0.0), ("x", 30.0), ("y", 0.0), ("y", 20.0)}
@@ -26,23 +25,16 @@ SIDES = {("x", 0.0), ("x", 30.0), ("y", 0.0), ("y", 20.0)}
 
 @pytest.fixture(scope="module")
 def chain():
-    from medax.cad.classify import classify_solid
     from medax.cad.parts import rounded_box_chain
-    from medax.cad.reader import heal
 
-    cls = classify_solid(heal(rounded_box_chain().shape))
-    return cls, simplify(cls.shape, specs_from_classification(cls))
+    return classified_and_simplified(rounded_box_chain().shape)
 
 
 def test_every_fillet_removed(chain):
     cls, r = chain
     assert len(cls.blends) == 12
     assert (r.faces_before, r.faces_after) == (18, 6) and not r.blends_kept
-    c = check(r.shape)
-    assert c.valid and c.shells == 1 and c.closed
-    assert abs(r.volume_rel_change) <= 1e-6
-    old_to_new, new_to_old = boundary_distances(cls.shape, r.shape, 9, 24)
-    assert max(old_to_new, new_to_old) <= 1e-5 * r.diagonal
+    assert_same_solid(cls.shape, r, 9, 24)
 
 
 def test_each_torus_is_shared_by_both_side_faces(chain):

@@ -167,3 +167,26 @@ def polyline_arc_lengths(f, t: np.ndarray, n: int = 400001) -> np.ndarray:
     s = np.linspace(0.0, 1.0, n)
     cum = np.concatenate(([0.0], np.cumsum(np.linalg.norm(np.diff(f(s), axis=0), axis=1))))
     return np.interp(t, s, cum)
+
+
+def classified_and_simplified(shape: object) -> tuple[object, object]:
+    """(classification, simplification) of a part built with OCCT: healed, classified by
+    medax, simplified with the default tolerance."""
+    from medax.cad.classify import classify_solid
+    from medax.cad.reader import heal
+    from medax.cad.simplify import simplify, specs_from_classification
+
+    cls = classify_solid(heal(shape))
+    return cls, simplify(cls.shape, specs_from_classification(cls))
+
+
+def assert_same_solid(before: object, r: object, n_old: int = 9, n_new: int = 16) -> None:
+    """The simplified solid is one valid closed shell, its volume within 1e-6 of the input's,
+    and its boundary within 1e-5 x diagonal of the input's both ways (whole solids)."""
+    from medax.cad.simplify.validate import check
+
+    c = check(r.shape)  # type: ignore[attr-defined]
+    assert c.valid and c.shells == 1 and c.closed
+    assert abs(r.volume_rel_change) <= 1e-6  # type: ignore[attr-defined]
+    old_to_new, new_to_old = boundary_distances(before, r.shape, n_old, n_new)  # type: ignore[attr-defined]
+    assert max(old_to_new, new_to_old) <= 1e-5 * r.diagonal  # type: ignore[attr-defined]
