@@ -47,9 +47,10 @@ def bridge_edge(
     fillet's two supporting faces; ``tol``: length tolerance for the bridge's start on
     ``smooth_edge``. Returns a one-line reason when there is no such bridge.
     """
-    normals = [plane_normal(p) for p in planes]
-    points = [face_inside_point(p) for p in planes]
-    if any(n is None for n in normals) or any(p is None for p in points):
+    found = [(plane_normal(p), face_inside_point(p)) for p in planes]
+    normals = [n for n, _ in found if n is not None]
+    points = [q for _, q in found if q is not None]
+    if len(normals) != 2 or len(points) != 2:
         return "the fillet it rides on is not between two planes"
     ext = BRepExtrema_DistShapeShape(base_medial.edge, smooth_edge)
     if not ext.IsDone() or ext.NbSolution() < 1 or ext.Value() > tol:
@@ -59,15 +60,17 @@ def bridge_edge(
     u, v = GeomAPI_ProjectPointOnSurf(start, surf).LowerDistanceParameters()
     if rider_medial.iso == "u":  # the rider's medial is u = mid: the bridge runs along u at v
         a, curve = float(u), surf.VIso(float(v))
+        period = surf.UPeriod() if surf.IsUPeriodic() else 0.0
     else:
         a, curve = float(v), surf.UIso(float(u))
+        period = surf.VPeriod() if surf.IsVPeriodic() else 0.0
     b = rider_medial.mid
-    if abs(b - a) > math.pi:  # periodic direction: the same period as the medial's
-        a += math.copysign(2 * math.pi, b - a)
+    if period and abs(b - a) > 0.5 * period:  # the same period as the medial's
+        a += math.copysign(period, b - a)
     if abs(b - a) < 1e-12:
         return "the bridge has zero length"
     lo, hi = min(a, b), max(a, b)
-    err = _equidistance(curve, lo, hi, normals, points)  # type: ignore[arg-type]
+    err = _equidistance(curve, lo, hi, normals, points)
     if err > rel_tol * rider_medial.radius:
         return f"the bridge is not equidistant from the two planes ({err:.2e})"
     mk = BRepBuilderAPI_MakeEdge(curve, lo, hi)

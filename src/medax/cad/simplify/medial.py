@@ -49,6 +49,13 @@ def _uv(surface: Any, p: np.ndarray) -> tuple[float, float]:
     return float(u), float(v)
 
 
+def _period(ad: Any, k: int) -> float:
+    """Period of the surface in u (``k = 0``) or v (``k = 1``), 0 when not periodic."""
+    if k == 0:
+        return float(ad.UPeriod()) if ad.IsUPeriodic() else 0.0
+    return float(ad.VPeriod()) if ad.IsVPeriodic() else 0.0
+
+
 def medial_curve(face: Any, edge1: Any, edge2: Any, rel_tol: float = 1e-9) -> Medial | str:
     """Medial curve of the fillet ``face`` between smooth edges ``edge1`` and ``edge2``.
 
@@ -78,17 +85,21 @@ def medial_curve(face: Any, edge1: Any, edge2: Any, rel_tol: float = 1e-9) -> Me
         return "smooth edges are not iso-lines of the fillet surface: not supported"
     # mid between the smooth edges' own parameters (the face may reach past them)
     c1, c2 = float(ends[0][0, k]), float(ends[1][0, k])
-    periodic_cross = ad.IsUPeriodic() if k == 0 else ad.IsVPeriodic()
-    if periodic_cross and abs(c2 - c1) > math.pi:
-        c2 -= math.copysign(2 * math.pi, c2 - c1)
+    # periods: 2 pi on cylinders and tori, the knot range on periodic B-splines
+    cross_period = _period(ad, k)
+    if cross_period and abs(c2 - c1) > 0.5 * cross_period:
+        c2 -= math.copysign(cross_period, c2 - c1)
     mid = 0.5 * (c1 + c2)
-    period = 2 * math.pi
+    period = _period(ad, 1 - k) or 2 * math.pi
     full = closed_dir and abs((hi - lo) - period) < 1e-9
     if not full:
         ext = EXTEND * (hi - lo)
         lo, hi = lo - ext, hi + ext
         if closed_dir and hi - lo >= period:
             return "fillet wraps almost all around its axis: not supported"
+        if not closed_dir:  # a bounded surface (a B-spline blend) is not continued past its end
+            b0, b1, c0, c1 = surf.Bounds()
+            lo, hi = (max(lo, b0), min(hi, b1)) if iso == "v" else (max(lo, c0), min(hi, c1))
     curve = surf.UIso(mid) if iso == "u" else surf.VIso(mid)
     mk = BRepBuilderAPI_MakeEdge(curve, lo, hi)
     if not mk.IsDone():
