@@ -86,10 +86,11 @@ def surface_embedding(face: Any) -> Embedding:
             bs = GeomConvert.SurfaceToBSplineSurface_s(BRep_Tool.Surface_s(face))
         except Exception as err:
             raise CadError(f"cannot convert a {kind.name} surface to a B-spline ({err})") from err
-    return _nurbs(bs)
+    return bspline_embedding(bs)
 
 
-def _nurbs(bs: Any) -> NurbsSurface:
+def bspline_embedding(bs: Any) -> NurbsSurface:
+    """The numpy copy of a ``Geom_BSplineSurface`` (a periodic one made non-periodic)."""
     if bs.IsUPeriodic() or bs.IsVPeriodic():
         bs = bs.Copy()
         if bs.IsUPeriodic():

@@ -179,13 +179,15 @@ class TorusSurface(_Surface):
 
 # ---- NURBS --------------------------------------------------------------------------------
 def basis_and_derivative(
-    knots: FloatArray, degree: int, t: FloatArray
+    knots: FloatArray, degree: int, t: FloatArray, extrapolate: bool = False
 ) -> tuple[np.ndarray, FloatArray, FloatArray]:
     """Non-zero B-spline basis functions and their first derivatives at ``t`` (n,).
 
     ``knots`` is the full (clamped or not) knot vector with repeated entries. Returns the
     span index (n,) ``i`` (functions ``N_{i-p..i}`` are non-zero), values (n, p+1) and
-    derivatives (n, p+1). Vectorised Cox-de Boor (The NURBS Book, A2.2 and A2.3).
+    derivatives (n, p+1). Vectorised Cox-de Boor (The NURBS Book, A2.2 and A2.3). Outside
+    the domain ``t`` is clamped to it, or with ``extrapolate`` the end spans' polynomials
+    are continued.
     """
     kn = np.asarray(knots, dtype=np.float64)
     t = np.asarray(t, dtype=np.float64)
@@ -193,7 +195,8 @@ def basis_and_derivative(
     m = kn.size - 1
     n_ctrl = m - p
     lo, hi = kn[p], kn[n_ctrl]
-    t = np.clip(t, lo, hi)
+    if not extrapolate:
+        t = np.clip(t, lo, hi)
     span = np.searchsorted(kn, t, side="right") - 1
     span = np.clip(span, p, n_ctrl - 1)
     nn = t.size
@@ -240,7 +243,8 @@ class NurbsSurface(_Surface):
 
     ``poles`` (nu, nv, 3); ``weights`` (nu, nv) positive or None (polynomial); ``uknots``
     and ``vknots`` full knot vectors with repeats, lengths ``nu + udeg + 1`` and
-    ``nv + vdeg + 1``.
+    ``nv + vdeg + 1``. With ``extrapolate`` the surface is continued past its domain (the
+    end spans' polynomials), else parameters are clamped to it.
     """
 
     poles: FloatArray
@@ -249,6 +253,7 @@ class NurbsSurface(_Surface):
     uknots: FloatArray
     vknots: FloatArray
     weights: FloatArray | None = None
+    extrapolate: bool = False
     _hom: FloatArray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -266,8 +271,8 @@ class NurbsSurface(_Surface):
 
     def _parts(self, p: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         u, v = _p(p)
-        su, nu_, du_ = basis_and_derivative(self.uknots, self.udeg, u)
-        sv, nv_, dv_ = basis_and_derivative(self.vknots, self.vdeg, v)
+        su, nu_, du_ = basis_and_derivative(self.uknots, self.udeg, u, self.extrapolate)
+        sv, nv_, dv_ = basis_and_derivative(self.vknots, self.vdeg, v, self.extrapolate)
         iu = su[:, None] - self.udeg + np.arange(self.udeg + 1)[None, :]  # (n, pu+1)
         iv = sv[:, None] - self.vdeg + np.arange(self.vdeg + 1)[None, :]  # (n, pv+1)
         block = self._hom[iu[:, :, None], iv[:, None, :]]  # (n, pu+1, pv+1, 4)
@@ -276,14 +281,23 @@ class NurbsSurface(_Surface):
         hv = np.einsum("na,nb,nabk->nk", nu_, dv_, block)
         return h, hu, hv
 
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """(u0, u1, v0, v1) of the knot domain."""
+        u, v, pu, pv = self.uknots, self.vknots, self.udeg, self.vdeg
+        return float(u[pu]), float(u[len(u) - pu - 1]), float(v[pv]), float(v[len(v) - pv - 1])
+
     def evaluate(self, p: FloatArray) -> FloatArray:
         h, _, _ = self._parts(p)
         return h[:, :3] / h[:, 3:]
 
-    def jacobian(self, p: FloatArray) -> FloatArray:
+    def jet(self, p: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Points, d/du and d/dv at ``p`` (n, 2): three (n, 3) arrays from one basis pass."""
         h, hu, hv = self._parts(p)
         w = h[:, 3:]
         x = h[:, :3] / w
-        du = (hu[:, :3] - hu[:, 3:] * x) / w
-        dv = (hv[:, :3] - hv[:, 3:] * x) / w
+        return x, (hu[:, :3] - hu[:, 3:] * x) / w, (hv[:, :3] - hv[:, 3:] * x) / w
+
+    def jacobian(self, p: FloatArray) -> FloatArray:
+        _, du, dv = self.jet(p)
         return _stack(du, dv)

@@ -18,7 +18,7 @@ points sit at the Greville abscissae (so ``x`` and ``y`` are reproduced exactly)
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -38,6 +38,7 @@ from OCP.TopAbs import TopAbs_REVERSED, TopAbs_WIRE
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS
 
+from medax.cad.face_region import surface_embedding
 from medax.cad.simplify.occ import (
     Array,
     edge_points,
@@ -47,7 +48,8 @@ from medax.cad.simplify.occ import (
     uv_bounds,
     xyz,
 )
-from medax.geometry.nurbs_surface import NurbsSurface, graph_heights
+from medax.geometry.surface_heights import graph_heights
+from medax.geometry.surfaces import NurbsSurface
 from medax.geometry.tensor_fit import MAX_COEFFICIENTS, TensorFit, fit_height, greville
 
 #: Samples per edge for the projected member boundaries.
@@ -135,10 +137,10 @@ def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
         m = ("torus", xyz(ax.Location()), xyz(ax.Direction()), float(tor.MinorRadius()))
         major = float(tor.MajorRadius())
     elif kind == GeomAbs_BSplineSurface:
-        got = _nurbs(ad)
-        if isinstance(got, str):
-            return got
-        nurbs = got
+        emb = surface_embedding(face)
+        if not isinstance(emb, NurbsSurface):
+            return "a B-spline piece without a NURBS embedding"
+        nurbs = replace(emb, extrapolate=True)  # continued like the analytic pieces
         m = ("nurbs", np.zeros(3), np.zeros(3), _min_radius(ad))
     else:
         return "fitted merge takes plane, cylinder, sphere, torus and B-spline pieces only"
@@ -168,23 +170,6 @@ def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
         uv_bounds(face) if free else (0.0, 0.0, 0.0, 0.0),
         (frame[1], frame[2]),
     )
-
-
-def _nurbs(ad: Any) -> NurbsSurface | str:
-    """The numpy copy of a non-periodic B-spline face surface (``BRepAdaptor_Surface``)."""
-    bs = ad.BSpline()
-    if bs.IsUPeriodic() or bs.IsVPeriodic():
-        return "periodic B-spline pieces are not supported by the fitted merge"
-    nu, nv = bs.NbUPoles(), bs.NbVPoles()
-    poles = np.array([[xyz(bs.Pole(i, j)) for j in range(1, nv + 1)] for i in range(1, nu + 1)])
-    weights = np.array([[bs.Weight(i, j) for j in range(1, nv + 1)] for i in range(1, nu + 1)])
-
-    def flat(n: int, knot: Any, mult: Any) -> Array:
-        return np.repeat([knot(i) for i in range(1, n + 1)], [mult(i) for i in range(1, n + 1)])
-
-    tu = flat(bs.NbUKnots(), bs.UKnot, bs.UMultiplicity)
-    tv = flat(bs.NbVKnots(), bs.VKnot, bs.VMultiplicity)
-    return NurbsSurface(poles, weights, tu, tv, bs.UDegree(), bs.VDegree())
 
 
 def _min_radius(ad: Any, n: int = 7) -> float:

@@ -3,10 +3,11 @@
 ``GeomAPI_ProjectPointOnSurf`` searches the whole surface for every point: on a fitted
 merged face (a cubic B-spline with 100 - 200 poles each way) that costs 2 - 20 ms per point,
 which made the deviation check and the pcurve fits the slowest steps of a simplification.
-Here the surface is sampled once on a grid (one sample per knot span at least, in a k-d
-tree); each point starts from its nearest sample and is refined locally by OCCT
-(``ShapeAnalysis_Surface.NextValueOfUV``), about 10 microseconds per point. A local refinement
-can only stop at a foot no nearer than the true one, so distances are never underestimated.
+Here the surface is sampled once on a grid (one sample per knot span at least, evaluated
+by its numpy copy, in a k-d tree); each point starts from its nearest sample and is refined
+locally by OCCT (``ShapeAnalysis_Surface.NextValueOfUV``), about 10 microseconds per point.
+A local refinement can only stop at a foot no nearer than the true one, so distances are
+never underestimated.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from OCP.gp import gp_Pnt, gp_Pnt2d
 from OCP.ShapeAnalysis import ShapeAnalysis_Surface
 from scipy.spatial import cKDTree
 
+from medax.cad.face_region import bspline_embedding
 from medax.cad.simplify.occ import Array
 
 #: Grid samples per direction: at least MIN_SAMPLES, one per knot span, at most MAX_SAMPLES.
@@ -34,13 +36,10 @@ class GridProjection:
         nu = int(np.clip(surf.NbUKnots() * 2, MIN_SAMPLES, MAX_SAMPLES))
         nv = int(np.clip(surf.NbVKnots() * 2, MIN_SAMPLES, MAX_SAMPLES))
         self.us, self.vs = np.linspace(u0, u1, nu), np.linspace(v0, v1, nv)
-        grid = np.empty((nu, nv, 3))
-        for i, u in enumerate(self.us):
-            for j, v in enumerate(self.vs):
-                p = surf.Value(float(u), float(v))
-                grid[i, j] = (p.X(), p.Y(), p.Z())
+        gu, gv = np.meshgrid(self.us, self.vs, indexing="ij")
+        grid = bspline_embedding(surf).evaluate(np.column_stack([gu.ravel(), gv.ravel()]))
         self.nv = nv
-        self.tree = cKDTree(grid.reshape(-1, 3))
+        self.tree = cKDTree(grid)
         self.sas = ShapeAnalysis_Surface(surf)
         self.uv, self.dist = (0.0, 0.0), 0.0
 
