@@ -177,22 +177,44 @@ def test_deviation_measures_a_known_offset():
     assert d1 < 1e-12 and d2 > 4.0
 
 
-def test_extrusion_projection_matches_occt_surface_projection(box4, monkeypatch):
-    """The fast projection through an extrusion's profile gives OCCT's surface-projection
-    distances (checked point by point on offset samples of every new extruded face)."""
-    from OCP.BRep import BRep_Tool
+def test_batch_projection_matches_occt_surface_projection(box4, monkeypatch):
+    """The numpy projections (planes, cylinders, extrusions through their profile) give
+    OCCT's surface-projection distances, point by point, on offset samples of every face
+    of the original box and of the simplified one (the merged faces are extrusions)."""
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+    from OCP.GeomAbs import GeomAbs_Cylinder, GeomAbs_Plane, GeomAbs_SurfaceOfExtrusion
 
     from medax.cad.simplify import validate as V
+    from medax.cad.simplify.projection import batch_projection
 
-    _, res = box4
-    faces = [f for f in faces_of(res.shape) if V._ExtrusionProjection.of(BRep_Tool.Surface_s(f))]
-    assert faces  # the merged faces are extrusions
+    part, res = box4
+    faces = list(faces_of(part.shape)) + list(faces_of(res.shape))
+    kinds = {BRepAdaptor_Surface(f).GetType() for f in faces}
+    assert {GeomAbs_Plane, GeomAbs_Cylinder, GeomAbs_SurfaceOfExtrusion} <= kinds
     rng = np.random.default_rng(11)
     for f in faces:
+        assert batch_projection(f) is not None
         pts = face_samples(f, 5)
         pts = pts + rng.normal(0.0, 0.5, pts.shape)
         fast = [max_distance(p[None], [f]) for p in pts]
         with monkeypatch.context() as m:
-            m.setattr(V._ExtrusionProjection, "of", classmethod(lambda cls, s: None))
+            m.setattr(V, "batch_projection", lambda face: None)
             slow = [max_distance(p[None], [f]) for p in pts]
         np.testing.assert_allclose(fast, slow, atol=1e-9)
+
+
+def test_nurbs_copy_keeps_the_volume(box4):
+    """The B-spline copy (extrusions swapped onto their exact B-splines, pcurves kept) has
+    the closed-form volume of the rounded box, by both integrators."""
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+    from OCP.GeomAbs import GeomAbs_BSplineSurface
+
+    from medax.cad.simplify.validate import nurbs_copy, volumes
+
+    _, res = box4
+    copy = nurbs_copy(res.shape)
+    assert all(BRepAdaptor_Surface(f).GetType() == GeomAbs_BSplineSurface for f in faces_of(copy))
+    exact = 40.0 * 30.0 * 20.0 - 4 * (1 - math.pi / 4) * 5.0**2 * 20.0
+    gk, ad = volumes(res.shape, nurbs=True, eps=1e-10)
+    assert abs(gk - exact) <= 1e-8 * exact and abs(ad - exact) <= 1e-8 * exact
+

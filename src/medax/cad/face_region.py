@@ -112,6 +112,11 @@ def bspline_embedding(bs: Any) -> NurbsSurface:
 
 
 # ---- curves -------------------------------------------------------------------------------
+def curve_copy(bs: Any) -> BSpline:
+    """The numpy copy of a 3-D ``Geom_BSplineCurve`` (its knot range mapped onto [0, 1])."""
+    return _to_bspline(bs, 3)
+
+
 def _to_bspline(bs: Any, dim: int) -> BSpline:
     if bs.IsPeriodic():
         bs = bs.Copy()

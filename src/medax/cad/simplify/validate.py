@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
 from OCP.BRepCheck import BRepCheck_Analyzer
@@ -26,7 +27,7 @@ from OCP.IntTools import IntTools_FClass2d
 from OCP.TopAbs import TopAbs_IN, TopAbs_OUT, TopAbs_SHELL
 
 from medax.cad.simplify.occ import Array, compound, count, faces_of, uv_bounds, xyz
-from medax.cad.simplify.projection import GridProjection
+from medax.cad.simplify.projection import GridProjection, batch_projection
 
 #: Relative accuracy asked of the volume integration.
 VOLUME_EPS = 1e-10
@@ -66,13 +67,75 @@ def volumes(
     some parts (a shape change that is not there); on the NURBS copy both agreed with the
     original volume to ~1e-9 on every part tried.
     """
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
-
-    target = BRepBuilderAPI_NurbsConvert(shape, True).Shape() if nurbs else shape
+    target = nurbs_copy(shape) if nurbs else shape
     p1, p2 = GProp_GProps(), GProp_GProps()
     BRepGProp.VolumePropertiesGK_s(target, p1, eps if eps_gk is None else eps_gk)
     BRepGProp.VolumeProperties_s(target, p2, eps)
     return float(p1.Mass()), float(p2.Mass())
+
+
+def nurbs_copy(shape: Any) -> Any:
+    """The faces of ``shape`` on (rational) B-spline surfaces, as a compound: what
+    ``BRepBuilderAPI_NurbsConvert`` gives, face by face.
+
+    A face on a linear extrusion (not closed in ``u``) keeps its pcurves: the exact B-spline
+    of an extrusion of a B-spline profile has the extrusion's own parameters (checked at
+    three points per face), so only the surface is swapped (:func:`_extrusion_copy`).
+    ``BRepBuilderAPI_NurbsConvert`` re-approximates every pcurve: on the 586-face grid plate's
+    260 extruded faces it took 1.8 s, the swap 0.03 s, with the same volumes (1e-16 apart).
+    """
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
+    from OCP.GeomAbs import GeomAbs_SurfaceOfExtrusion
+    from OCP.TopoDS import TopoDS_Compound
+
+    builder = BRep_Builder()
+    out = TopoDS_Compound()
+    builder.MakeCompound(out)
+    for f in faces_of(shape):
+        copy = None
+        if BRepAdaptor_Surface(f).GetType() == GeomAbs_SurfaceOfExtrusion:
+            copy = _extrusion_copy(f)
+        if copy is None:
+            copy = BRepBuilderAPI_NurbsConvert(f, True).Shape()
+        builder.Add(out, copy)
+    return out
+
+
+def _extrusion_copy(face: Any) -> Any | None:
+    """A copy of the extrusion face ``face`` on the surface's exact B-spline, its pcurves
+    kept; None where that is not the same parametrisation or an edge is a seam."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
+    from OCP.GeomConvert import GeomConvert
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.TopoDS import TopoDS
+
+    from medax.cad.simplify.occ import edges_of
+
+    surf = BRep_Tool.Surface_s(face)
+    try:
+        bs = GeomConvert.SurfaceToBSplineSurface_s(surf)
+    except Exception:  # OCCT Standard_Failure: no conversion
+        return None
+    u0, u1, v0, v1 = uv_bounds(face)
+    for a, b in ((0.0, 0.0), (1.0, 1.0), (0.3, 0.6)):
+        u, v = u0 + a * (u1 - u0), v0 + b * (v1 - v0)
+        p = surf.Value(u, v)
+        if p.Distance(bs.Value(u, v)) > 1e-12 * max(1.0, float(np.abs(xyz(p)).max())):
+            return None
+    copy = TopoDS.Face(BRepBuilderAPI_Copy(face).Shape())
+    if any(BRep_Tool.IsClosed_s(TopoDS.Edge(e), copy) for e in edges_of(copy)):
+        return None
+    builder, loc = BRep_Builder(), TopLoc_Location()
+    for e in edges_of(copy):
+        edge = TopoDS.Edge(e)
+        pc = BRep_Tool.CurveOnSurface_s(edge, copy, 0.0, 0.0)
+        if pc is None:
+            return None
+        first, last = BRep_Tool.Range_s(edge, copy)
+        builder.UpdateEdge(edge, pc, bs, loc, BRep_Tool.Tolerance_s(edge))
+        builder.Range(edge, bs, loc, first, last)
+    builder.UpdateFace(copy, bs, loc, BRep_Tool.Tolerance_s(copy))
+    return copy
 
 
 def volume_change(
@@ -89,9 +152,7 @@ def volume_change(
         # exact heights (``expected``, relative); the adaptive integrator must agree with it
         # (on a NURBS copy when there are swept faces too: as built, the adaptive integrator
         # was 1.5e-4 off on the rounded box chain's revolved faces)
-        from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
-
-        target = BRepBuilderAPI_NurbsConvert(shape, True).Shape() if swept else shape
+        target = nurbs_copy(shape) if swept else shape
         props = GProp_GProps()
         BRepGProp.VolumeProperties_s(target, props, 1e-2 * tol)
         d_ad = (float(props.Mass()) - before) / before
@@ -162,73 +223,17 @@ def face_samples(face: Any, n: int = 12) -> Array:
     us = u0 + (u1 - u0) * (np.arange(n) + 0.5) / n
     vs = v0 + (v1 - v0) * (np.arange(n) + 0.5) / n
     out = []
-    for u in us:
-        for v in vs:
-            if cls.Perform(gp_Pnt2d(float(u), float(v))) == TopAbs_IN:
-                out.append(xyz(surf.Value(float(u), float(v))))
-    return np.array(out).reshape(-1, 3)
-
-
-class _ExtrusionProjection:
-    """Orthogonal projection onto a surface of linear extrusion ``S(u, v) = C(u) + v d``
-    through its profile: the point moved along ``d`` into the profile's plane is projected on
-    ``C`` (``GeomAPI_ProjectPointOnCurve``, several times faster than the surface
-    projection); then ``v = (p - C(u)) . d``. The same answers as
-    ``GeomAPI_ProjectPointOnSurf`` for profiles normal to ``d`` (ours are), with its API."""
-
-    def __init__(self, curve: Any, direction: Array) -> None:
-        from OCP.GeomAPI import GeomAPI_ProjectPointOnCurve
-
-        self.curve, self.d = curve, direction
-        self.c0 = xyz(curve.Value(curve.FirstParameter()))
-        self.proj = GeomAPI_ProjectPointOnCurve()
-        self.proj.Init(curve, curve.FirstParameter(), curve.LastParameter())
-        self.n, self.uv, self.dist = 0, (0.0, 0.0), 0.0
-
-    @classmethod
-    def of(cls, surf: Any) -> _ExtrusionProjection | None:
-        """The projection for an extrusion surface (possibly trimmed), else None."""
-        from OCP.Geom import Geom_RectangularTrimmedSurface, Geom_SurfaceOfLinearExtrusion
-
-        if isinstance(surf, Geom_RectangularTrimmedSurface):
-            surf = surf.BasisSurface()
-        if not isinstance(surf, Geom_SurfaceOfLinearExtrusion):
-            return None
-        d = surf.Direction()
-        direction = np.array([d.X(), d.Y(), d.Z()])
-        curve = surf.BasisCurve()
-        ends = [xyz(curve.Value(t)) for t in (curve.FirstParameter(), curve.LastParameter())]
-        mid = xyz(curve.Value(0.5 * (curve.FirstParameter() + curve.LastParameter())))
-        if max(abs(float((q - ends[0]) @ direction)) for q in (ends[1], mid)) > 1e-12:
-            return None  # the profile is not in a plane normal to d
-        return cls(curve, direction)
-
-    def Perform(self, point: Any) -> None:  # noqa: N802 - GeomAPI's spelling
-        p = xyz(point)
-        q = p - float((p - self.c0) @ self.d) * self.d
-        self.proj.Perform(gp_Pnt(*map(float, q)))
-        self.n = int(self.proj.NbPoints())
-        if self.n:
-            u = float(self.proj.LowerDistanceParameter())
-            c = xyz(self.curve.Value(u))
-            v = float((p - c) @ self.d)
-            self.uv = (u, v)
-            self.dist = float(np.linalg.norm(p - c - v * self.d))
-
-    def NbPoints(self) -> int:  # noqa: N802
-        return self.n
-
-    def LowerDistanceParameters(self) -> tuple[float, float]:  # noqa: N802
-        return self.uv
-
-    def LowerDistance(self) -> float:  # noqa: N802
-        return self.dist
+    for u in us.tolist():
+        for v in vs.tolist():
+            if cls.Perform(gp_Pnt2d(u, v)) == TopAbs_IN:
+                p = surf.Value(u, v)
+                out.append((p.X(), p.Y(), p.Z()))
+    return np.array(out, dtype=np.float64).reshape(-1, 3)
 
 
 def _edge_tolerance(face: Any) -> float:
     """The largest tolerance of ``face``'s edges (at least 1e-9): feet on a boundary edge
     then count as on the face from both sides, whatever its two pcurves' small errors."""
-    from OCP.BRep import BRep_Tool
 
     from medax.cad.simplify.occ import edges_of
 
@@ -238,56 +243,69 @@ def _edge_tolerance(face: Any) -> float:
 def max_distance(points: Array, faces: Sequence[Any], enough: float = 0.0) -> float:
     """Largest distance from ``points`` (n, 3) to the union of ``faces``.
 
-    Each point is projected on each face's surface (``GeomAPI_ProjectPointOnSurf``; through
-    the profile on extrusions, from a grid start on B-spline surfaces: :mod:`.projection`);
-    a foot inside the face (face classifier, to the face's edge tolerance) gives the
-    distance. A point with no foot inside any face, or whose nearest foot is farther than
-    ``enough`` and 1e-6 of the points' extent (a foot exactly on a shared edge may be OUT of
-    both faces there, so only a far face answers), is measured exactly with
-    ``BRepExtrema_DistShapeShape`` against all ``faces``. A point whose distance to some
-    face is ``<= enough`` is not tried on the others (the result is then an upper bound,
-    exact whenever it is above ``enough``).
+    Each point is projected on each face's surface: all points at once in numpy on planes,
+    cylinders and extrusions (:func:`.projection.batch_projection`), else one by one
+    (``GeomAPI_ProjectPointOnSurf``; from a grid start on B-spline surfaces:
+    :class:`.projection.GridProjection`); a foot inside the face (face classifier, to the
+    face's edge tolerance) gives the distance. A point with no foot inside any face, or
+    whose nearest foot is farther than ``enough`` and 1e-6 of the points' extent (a foot
+    exactly on a shared edge may be OUT of both faces there, so only a far face answers), is
+    measured exactly with ``BRepExtrema_DistShapeShape`` against all ``faces``. A point
+    whose distance to some face is ``<= enough`` is not tried on the later faces (the
+    result is then an upper bound, exact whenever it is above ``enough``).
     """
-    from OCP.BRep import BRep_Tool
-    from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
-
-    prepared: list[tuple[Any, Any, Any]] = []
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    best = np.full(len(points), np.inf)
     for f in faces:
-        surf = BRep_Tool.Surface_s(f)
-        u0, u1, v0, v1 = uv_bounds(f)
-        du, dv = 0.1 * (u1 - u0), 0.1 * (v1 - v0)
-        wide = (u0 - du, u1 + du, v0 - dv, v1 + dv)
-        proj: Any = _ExtrusionProjection.of(surf) or GridProjection.of(surf, wide)
-        if proj is None:
-            proj = GeomAPI_ProjectPointOnSurf()
-            proj.Init(surf, *wide)
-        prepared.append((proj, surf, IntTools_FClass2d(f, _edge_tolerance(f))))
-    target = None
-    worst = 0.0
+        cls = IntTools_FClass2d(f, _edge_tolerance(f))
+        rows = np.flatnonzero(best > enough)
+        if rows.size == 0:
+            break
+        uv, dist = _project(f, points[rows])
+        closer = np.flatnonzero(dist < best[rows])
+        cand = rows[closer].tolist()
+        for r, (u, v), d in zip(cand, uv[closer].tolist(), dist[closer].tolist(), strict=True):
+            if cls.Perform(gp_Pnt2d(u, v)) != TopAbs_OUT:  # one point at a time
+                best[r] = d
     extent = float(np.ptp(points, axis=0).max()) if len(points) else 0.0
     confirm = max(enough, 1e-6 * extent)
-    for p in points:
-        gp = gp_Pnt(*map(float, p))
-        best = float("inf")
-        for proj, _, cls in prepared:
-            proj.Perform(gp)
-            if proj.NbPoints() == 0:
-                continue
-            u, v = proj.LowerDistanceParameters()
-            if cls.Perform(gp_Pnt2d(u, v)) != TopAbs_OUT:
-                best = min(best, float(proj.LowerDistance()))
-                if best <= enough:
-                    break
-        if best > confirm:
-            if target is None:
-                target = compound(faces)
-            v = BRepBuilderAPI_MakeVertex(gp).Vertex()
+    far = np.flatnonzero(best > confirm)
+    if far.size:
+        target = compound(faces)
+        for r in far:
+            v = BRepBuilderAPI_MakeVertex(gp_Pnt(*map(float, points[r]))).Vertex()
             d = BRepExtrema_DistShapeShape(v, target)
             if not d.IsDone():
                 return float("inf")
-            best = min(best, float(d.Value()))
-        worst = max(worst, best)
-    return worst
+            best[r] = min(best[r], float(d.Value()))
+    return float(best.max()) if len(best) else 0.0
+
+
+def _project(face: Any, points: Array) -> tuple[Array, Array]:
+    """Foot parameters (n, 2) and distances (n,) of ``points`` (n, 3) on ``face``'s
+    surface (``inf`` where a projection finds no foot)."""
+    batch = batch_projection(face)
+    if batch is not None:
+        return batch(points)
+    from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
+
+    surf = BRep_Tool.Surface_s(face)
+    u0, u1, v0, v1 = uv_bounds(face)
+    du, dv = 0.1 * (u1 - u0), 0.1 * (v1 - v0)
+    wide = (u0 - du, u1 + du, v0 - dv, v1 + dv)
+    grid = GridProjection.of(surf, wide)
+    if grid is not None:
+        return grid.project_many(points)
+    proj = GeomAPI_ProjectPointOnSurf()
+    proj.Init(surf, *wide)
+    uv = np.zeros((len(points), 2))
+    dist = np.full(len(points), np.inf)
+    for i, p in enumerate(points):
+        proj.Perform(gp_Pnt(*map(float, p)))
+        if proj.NbPoints():
+            uv[i] = proj.LowerDistanceParameters()
+            dist[i] = float(proj.LowerDistance())
+    return uv, dist
 
 
 def deviation(
