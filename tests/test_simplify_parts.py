@@ -217,4 +217,3 @@ def test_nurbs_copy_keeps_the_volume(box4):
     exact = 40.0 * 30.0 * 20.0 - 4 * (1 - math.pi / 4) * 5.0**2 * 20.0
     gk, ad = volumes(res.shape, nurbs=True, eps=1e-10)
     assert abs(gk - exact) <= 1e-8 * exact and abs(ad - exact) <= 1e-8 * exact
-

@@ -98,6 +98,25 @@ def test_basis_is_a_partition_of_unity_and_derivatives_sum_to_zero():
     assert np.all(vals >= -1e-15)
 
 
+@pytest.mark.parametrize("extrapolate", [False, True])
+def test_span_polynomials_match_the_recursion(extrapolate):
+    """The per-span polynomials give the Cox-de Boor values and derivatives (a double
+    knot, unequal spans, points past both ends), and finite differences of the values."""
+    from medax.geometry.surfaces import SpanBasis
+
+    kn = np.array([0, 0, 0, 0, 0.2, 0.2, 0.6, 0.65, 1, 1, 1, 1.0]) * 7.0 + 2.0
+    t = np.concatenate([np.linspace(1.5, 9.5, 401), kn])
+    basis = SpanBasis.of(kn, 3, extrapolate)
+    span, vals, ders = basis(t)
+    span0, vals0, ders0 = basis_and_derivative(kn, 3, t, extrapolate)
+    assert np.array_equal(span, span0)
+    assert np.max(np.abs(vals - vals0)) < 1e-13 and np.max(np.abs(ders - ders0)) < 1e-12
+    h = 1e-6
+    inside = (t > 2.0 + h) & (t < 9.0 - h) & np.all(np.abs(t[:, None] - kn) > h, axis=1)
+    fd = (basis(t[inside] + h)[1] - basis(t[inside] - h)[1]) / (2 * h)
+    assert np.max(np.abs(fd - ders[inside])) < 1e-6
+
+
 @pytest.mark.parametrize("name", ["plane", "cylinder", "cone", "sphere", "torus", "nurbs"])
 def test_same_parametrisation_as_occt(name):
     """Each embedding reproduces OCCT's ``Geom_*`` surface point for point."""
