@@ -263,13 +263,13 @@ class SpanBasis:
         coef = np.zeros((kn.size - 1, p + 1, p + 1))
         tau = (np.arange(p + 1) + 0.5) / (p + 1)  # inside the span: the recursion's span is s
         vander = np.vander(tau, p + 1, increasing=True)  # (samples, powers)
-        for s in range(p, n_ctrl):  # once per span, not per point
-            a, b = kn[s], kn[s + 1]
-            if b <= a:
-                continue
-            t = a + tau * (b - a)
-            _, vals, _ = basis_and_derivative(kn, p, t)
-            coef[s] = np.linalg.solve(vander, vals).T
+        spans = np.arange(p, n_ctrl)
+        spans = spans[kn[spans + 1] > kn[spans]]
+        if spans.size:  # every span's samples in one recursion, one batched solve
+            a, b = kn[spans][:, None], kn[spans + 1][:, None]
+            _, vals, _ = basis_and_derivative(kn, p, (a + tau[None, :] * (b - a)).ravel())
+            sol = np.linalg.solve(vander[None], vals.reshape(spans.size, p + 1, p + 1))
+            coef[spans] = np.swapaxes(sol, 1, 2)  # (span, function, power)
         return cls(kn, p, extrapolate, coef, float(kn[p]), float(kn[n_ctrl]))
 
     def __call__(self, t: FloatArray) -> tuple[np.ndarray, FloatArray, FloatArray]:

@@ -48,6 +48,7 @@ from medax.cad.simplify.occ import (
     uv_bounds,
     xyz,
 )
+from medax.geometry.polygon_grid import inside_grid
 from medax.geometry.surface_heights import graph_heights
 from medax.geometry.surfaces import NurbsSurface
 from medax.geometry.tensor_fit import MAX_COEFFICIENTS, TensorFit, fit_height, greville
@@ -380,6 +381,49 @@ def _dedup(vals: list[float], tol: float) -> list[float]:
     return out
 
 
+def _point_labels(pts: Array, ms: Sequence[_Member], boxes: list[tuple[Array, Array]]) -> Array:
+    """Index (n,) of the member whose projected boundary contains each point (n, 2), or
+    -1; the first member wins on shared edges."""
+    label = np.full(len(pts), -1)
+    for i, m in enumerate(ms):
+        # only the points in the member's bounding box go to the polygon test
+        blo, bhi = boxes[i]
+        cand = np.flatnonzero((label < 0) & np.all(pts >= blo, axis=1) & np.all(pts <= bhi, axis=1))
+        if cand.size == 0:
+            continue
+        inside = m.outer.contains_points(pts[cand], radius=0.0)
+        for hole in m.inner:
+            inside &= ~hole.contains_points(pts[cand])
+        label[cand[inside]] = i
+    return label
+
+
+def _grid_labels(
+    x: Array, y: Array, ms: Sequence[_Member], boxes: list[tuple[Array, Array]]
+) -> Array | None:
+    """:func:`_point_labels` for points on a tensor grid (``x``, ``y`` (nx, ny) from
+    ``meshgrid(..., indexing="ij")``) by scanlines (:func:`inside_grid`: the fit grids
+    have 10^5 - 10^6 points); None when they are not a grid."""
+    if x.ndim != 2 or not (np.all(x == x[:, :1]) and np.all(y == y[:1, :])):
+        return None
+    xs, ys = x[:, 0], y[0, :]
+    label = np.full(x.shape, -1)
+    for i, m in enumerate(ms):
+        blo, bhi = boxes[i]
+        ix = np.flatnonzero((xs >= blo[0]) & (xs <= bhi[0]))
+        iy = np.flatnonzero((ys >= blo[1]) & (ys <= bhi[1]))
+        if ix.size == 0 or iy.size == 0:
+            continue
+        sx, sy = xs[ix], ys[iy]
+        inside = inside_grid(sx, sy, np.asarray(m.outer.vertices, dtype=np.float64))
+        for hole in m.inner:
+            inside &= ~inside_grid(sx, sy, np.asarray(hole.vertices, dtype=np.float64))
+        block = label[np.ix_(ix, iy)]
+        block[inside & (block < 0)] = i
+        label[np.ix_(ix, iy)] = block
+    return label.ravel()
+
+
 def graph_surface(
     plane_face: Any,
     members: Sequence[Any],
@@ -412,19 +456,9 @@ def graph_surface(
 
     def h(x: Array, y: Array) -> tuple[Array, np.ndarray, np.ndarray]:
         pts = np.column_stack([x.ravel(), y.ravel()])
-        label = np.full(len(pts), -1)
-        for i, m in enumerate(ms):
-            # only the points in the member's bounding box go to the polygon test
-            blo, bhi = boxes[i]
-            cand = np.flatnonzero(
-                (label < 0) & np.all(pts >= blo, axis=1) & np.all(pts <= bhi, axis=1)
-            )
-            if cand.size == 0:
-                continue
-            inside = m.outer.contains_points(pts[cand], radius=0.0)
-            for hole in m.inner:
-                inside &= ~hole.contains_points(pts[cand])
-            label[cand[inside]] = i
+        label = _grid_labels(x, y, ms, boxes)
+        if label is None:
+            label = _point_labels(pts, ms, boxes)
         face_mask = label >= 0
         z = np.zeros(len(pts))
         ok = np.zeros(len(pts), bool)
