@@ -332,9 +332,12 @@ class NurbsSurface(_Surface):
         u, v = _p(p)
         su, nu_, du_ = self._ubasis(u)
         sv, nv_, dv_ = self._vbasis(v)
-        iu = su[:, None] - self.udeg + np.arange(self.udeg + 1)[None, :]  # (n, pu+1)
-        iv = sv[:, None] - self.vdeg + np.arange(self.vdeg + 1)[None, :]  # (n, pv+1)
-        block = self._hom[iu[:, :, None], iv[:, None, :]]  # (n, pu+1, pv+1, 4)
+        # the (pu+1, pv+1) homogeneous poles of each point's span, by one flat take
+        # (twice as fast as indexing with two index arrays): (n, pu+1, pv+1, 4)
+        nv = self._hom.shape[1]
+        base = (su - self.udeg) * nv + (sv - self.vdeg)
+        off = np.arange(self.udeg + 1)[:, None] * nv + np.arange(self.vdeg + 1)[None, :]
+        block = np.take(self._hom.reshape(-1, 4), base[:, None, None] + off, axis=0)
         # contracted over v (values and derivatives together), then over u, by batched
         # matmuls: a three-operand einsum loops naively (14 of the variable-radius box's
         # 60 s), two-operand ones take twice as long as these
