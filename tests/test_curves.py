@@ -46,6 +46,37 @@ def test_closest_is_global_and_exact(name):
     assert np.allclose(c.evaluate(got.t), got.foot)
 
 
+def test_closest_is_exact_near_the_evolute():
+    """Points near the centres of curvature (where ``g'`` is small and Newton slow: the
+    medial axis of a wavy side runs there): feet stationary to round-off, foot points (a
+    Taylor step, not an evaluation) on the curve, never farther than 400k samples."""
+    c = wavy_spline()
+    t = np.linspace(0.01, 0.99, 400)
+    d1, d2 = c.derivative(t), c.derivative(t, 2)
+    speed = np.linalg.norm(d1, axis=1)
+    kappa = (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]) / speed**3
+    normal = np.column_stack((-d1[:, 1], d1[:, 0])) / speed[:, None]
+    f = np.repeat([0.5, 0.9, 0.99, 1.01, 1.1], t.size)
+    rho = f / np.tile(kappa, 5)  # signed radii of curvature, scaled
+    pts = np.tile(c.evaluate(t), (5, 1)) + rho[:, None] * np.tile(normal, (5, 1))
+    pts = pts[np.all(np.abs(pts) < 20.0, axis=1)]
+    got = c.closest(pts)
+    ref, _ = cKDTree(c.sample(400_001)).query(pts)
+    assert np.all(got.distance <= ref + 1e-12)
+    assert np.allclose(c.evaluate(got.t), got.foot, rtol=0.0, atol=1e-13)
+    # interior feet: stationary; 8 more plain Newton steps leave the distance as it is
+    inner = (got.t > 0.0) & (got.t < 1.0)
+    t, x = got.t[inner].copy(), pts[inner]
+    for _ in range(8):
+        r = c.evaluate(t) - x
+        d1, d2 = c.derivative(t), c.derivative(t, 2)
+        dg = np.einsum("ij,ij->i", d1, d1) + np.einsum("ij,ij->i", r, d2)
+        t -= np.einsum("ij,ij->i", r, d1) / dg
+    assert np.max(np.abs(t - got.t[inner])) < 1e-8
+    polished = np.linalg.norm(c.evaluate(t) - x, axis=1)
+    assert np.allclose(got.distance[inner], polished, rtol=1e-14, atol=1e-14)
+
+
 def test_nurbs_quarter_circle_is_exact():
     c = CURVES["nurbs"]
     t = np.linspace(0, 1, 101)
