@@ -15,6 +15,9 @@ from scipy.spatial import cKDTree
 
 from medax.geometry._types import FloatArray
 
+#: 10-point Gauss-Legendre nodes and weights on [-1, 1] (for :meth:`Curve.length`)
+_GAUSS = np.polynomial.legendre.leggauss(10)
+
 
 @dataclass(frozen=True)
 class Closest:
@@ -87,7 +90,7 @@ class Curve(ABC):
     def length(self, n: int = 0) -> float:
         """Arc length, by Gauss-Legendre quadrature on ``complexity()`` pieces."""
         pieces = max(self.complexity(), 1) * 8
-        x, w = np.polynomial.legendre.leggauss(10)
+        x, w = _GAUSS
         edges = np.linspace(0.0, 1.0, pieces + 1)
         a, b = edges[:-1, None], edges[1:, None]
         t = (0.5 * (b - a) * x[None, :] + 0.5 * (a + b)).ravel()
@@ -405,7 +408,6 @@ def _bracketed_newton(
     x: FloatArray,
     lo: FloatArray,
     hi: FloatArray,
-    iters: int = 60,
     start: FloatArray | None = None,
 ) -> tuple[FloatArray, FloatArray]:
     """Minimise ``|C(t) - x|`` over ``t in [lo, hi]`` for all rows at once: parameters (n,)
@@ -413,8 +415,8 @@ def _bracketed_newton(
 
     ``g(t) = (C - x) . C'`` is the half derivative of the squared distance. Where ``g`` has
     the same sign at both bracket ends the minimum is at an end; otherwise
-    :func:`_newton_in_brackets` from ``start`` (default: the linear interpolation of ``g``
-    between the bracket ends).
+    :func:`_quick_newton` from ``start`` (default: the linear interpolation of ``g`` between
+    the bracket ends).
     """
     n = x.shape[0]
     c0, c1, _ = curve.jet(np.concatenate((lo, hi)))
@@ -435,28 +437,29 @@ def _bracketed_newton(
         s0 = a + (b - a) * ga / (ga - gb)  # regula falsi start: g < 0 at a, > 0 at b
     else:
         s0 = np.minimum(np.maximum(start[interior], a), b)
-    t[interior], foot[interior] = _newton_in_brackets(curve, x[interior], a, b, s0, iters)
+    t[interior], foot[interior] = _quick_newton(curve, x[interior], a, b, s0)
     return t, foot
 
 
 def _quick_newton(
     curve: Curve, x: FloatArray, a: FloatArray, b: FloatArray, s: FloatArray, steps: int = 3
 ) -> tuple[FloatArray, FloatArray]:
-    """:func:`_newton_in_brackets` for good starts ``s`` (n,): ``steps`` plain Newton steps
-    on all rows (clamped to ``[a, b]``, no per-row bookkeeping: a few numpy calls each), then
-    the safeguarded iteration for the rows whose last step was not a Newton step of at most
-    ``_STEP_TOL`` (from where they are)."""
-    for it in range(steps):
+    """:func:`_newton_in_brackets` for good starts ``s`` (n,): up to ``steps`` plain Newton
+    steps on all rows (clamped to ``[a, b]``, no per-row bookkeeping: a few numpy calls
+    each), stopping once every row's step was a Newton step of at most ``_STEP_TOL``; then
+    the safeguarded iteration for the rows that did not settle (from where they are)."""
+    for _ in range(steps):
         c0, c1, c2 = curve.jet(s)
         c = c0 - x
         g = np.einsum("ij,ij->i", c, c1)
         dg = np.einsum("ij,ij->i", c1, c1) + np.einsum("ij,ij->i", c, c2)
         with np.errstate(divide="ignore", invalid="ignore"):
             new = np.minimum(np.maximum(s - g / dg, a), b)
-        if it < steps - 1:
-            s = new
-    ds = new - s
-    ok = (dg > 0.0) & (np.abs(ds) <= _STEP_TOL)
+        ds = new - s
+        ok = (dg > 0.0) & (np.abs(ds) <= _STEP_TOL)
+        if ok.all():
+            break
+        s = new
     foot = c0 + ds[:, None] * (c1 + (0.5 * ds)[:, None] * c2)  # Taylor: no evaluation
     if ok.all():
         return new, foot
