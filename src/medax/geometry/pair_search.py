@@ -20,7 +20,8 @@ from medax.geometry.curve import Closest, Curve, _quick_newton, _start
 #: parameter offset of the second curve in the stacked tables
 SHIFT = 2.0
 #: batches whose distance table (points x samples) is larger than this use two queries
-MAX_TABLE = 200_000
+#: (blocked to stay in cache: faster for a few hundred points and more)
+MAX_TABLE = 40_000
 
 
 class _Pieces:
@@ -29,16 +30,13 @@ class _Pieces:
 
     def __init__(self, starts: FloatArray, coefs: FloatArray) -> None:
         self.starts, self.coefs = starts, coefs
+        self.powers = np.arange(coefs.shape[1] - 1, -1, -1, dtype=np.float64)
 
     def jet(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Value, first and second derivative (each (n, dim)) at stacked parameters (n,)."""
         i = np.searchsorted(self.starts, t, side="right") - 1
-        s = (t - self.starts[i])[:, None, None]
-        c = self.coefs[i]  # (n, degree + 1, 3, dim)
-        w = c[:, 0].copy()
-        for m in range(1, c.shape[1]):
-            w *= s
-            w += c[:, m]
+        s = np.power.outer(t - self.starts[i], self.powers)  # (n, degree + 1)
+        w = np.einsum("nk,nkqd->nqd", s, self.coefs[i])
         return w[:, 0], w[:, 1], w[:, 2]
 
 
@@ -63,9 +61,11 @@ class PairSearch:
             starts.append(x[:-1] + shift)
             coefs.append(np.concatenate((pad, cf), axis=1))
         self.pieces = _Pieces(np.concatenate(starts), np.concatenate(coefs))
-        # the sample window of each candidate stays on its own curve
-        self.lo = np.where(np.arange(self.m) < self.m1, 0, self.m1)
-        self.hi = np.where(np.arange(self.m) < self.m1, self.m1 - 1, self.m - 1)
+        # the three-sample window of each sample (m, 3), kept on its own curve
+        j = np.arange(self.m)
+        lo = np.where(j < self.m1, 0, self.m1)[:, None]
+        hi = np.where(j < self.m1, self.m1 - 1, self.m - 1)[:, None]
+        self.window = np.minimum(np.maximum(j[:, None] + np.arange(-1, 2), lo), hi)
 
     @staticmethod
     def build(c1: Curve, c2: Curve) -> PairSearch | None:
@@ -92,9 +92,7 @@ class PairSearch:
         n, k = x0.shape[0], self.k
         cand = self._candidates(x0).ravel()  # (n * 2k,): k on curve 1, then k on curve 2
         x = np.repeat(x0, 2 * k, axis=0)
-        j3 = np.minimum(
-            np.maximum(cand[:, None] + _THREE, self.lo[cand, None]), self.hi[cand, None]
-        )
+        j3 = self.window[cand]  # (n * 2k, 3)
         c = self.pts[j3] - x[:, None, :]
         g = np.einsum("nij,nij->ni", c, self.slopes[j3])
         d2 = np.einsum("nij,nij->ni", c, c)
@@ -144,6 +142,3 @@ class PairSearch:
         out[:, 0] = np.argpartition(score[:, :m1], k - 1, axis=1)[:, :k]
         out[:, 1] = np.argpartition(score[:, m1:], k - 1, axis=1)[:, :k] + m1
         return out
-
-
-_THREE = np.arange(-1, 2)
