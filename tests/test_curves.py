@@ -11,6 +11,7 @@ from scipy.spatial import cKDTree
 
 from medax.geometry import Arc, BSpline, Line, Polyline
 from medax.geometry.curve import sub_curve
+from medax.geometry.pair_search import PairSearch
 
 RNG = np.random.default_rng(7)
 
@@ -44,6 +45,37 @@ def test_closest_is_global_and_exact(name):
     assert np.all(got.distance >= ref - 0.5 * spacing)
     assert np.allclose(np.linalg.norm(got.foot - pts, axis=1), got.distance)
     assert np.allclose(c.evaluate(got.t), got.foot)
+
+
+def test_closest_is_exact_near_the_evolute():
+    """Points near the centres of curvature (where ``g'`` is small and Newton slow: the
+    medial axis of a wavy side runs there): feet stationary to round-off, foot points (a
+    Taylor step, not an evaluation) on the curve, never farther than 400k samples."""
+    c = wavy_spline()
+    t = np.linspace(0.01, 0.99, 400)
+    d1, d2 = c.derivative(t), c.derivative(t, 2)
+    speed = np.linalg.norm(d1, axis=1)
+    kappa = (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]) / speed**3
+    normal = np.column_stack((-d1[:, 1], d1[:, 0])) / speed[:, None]
+    f = np.repeat([0.5, 0.9, 0.99, 1.01, 1.1], t.size)
+    rho = f / np.tile(kappa, 5)  # signed radii of curvature, scaled
+    pts = np.tile(c.evaluate(t), (5, 1)) + rho[:, None] * np.tile(normal, (5, 1))
+    pts = pts[np.all(np.abs(pts) < 20.0, axis=1)]
+    got = c.closest(pts)
+    ref, _ = cKDTree(c.sample(400_001)).query(pts)
+    assert np.all(got.distance <= ref + 1e-12)
+    assert np.allclose(c.evaluate(got.t), got.foot, rtol=0.0, atol=1e-13)
+    # interior feet: stationary; 8 more plain Newton steps leave the distance as it is
+    inner = (got.t > 0.0) & (got.t < 1.0)
+    t, x = got.t[inner].copy(), pts[inner]
+    for _ in range(8):
+        r = c.evaluate(t) - x
+        d1, d2 = c.derivative(t), c.derivative(t, 2)
+        dg = np.einsum("ij,ij->i", d1, d1) + np.einsum("ij,ij->i", r, d2)
+        t -= np.einsum("ij,ij->i", r, d1) / dg
+    assert np.max(np.abs(t - got.t[inner])) < 1e-8
+    polished = np.linalg.norm(c.evaluate(t) - x, axis=1)
+    assert np.allclose(got.distance[inner], polished, rtol=1e-14, atol=1e-14)
 
 
 def test_nurbs_quarter_circle_is_exact():
@@ -106,3 +138,40 @@ def test_reversed_and_sub_curve():
     s = sub_curve(c, 0.25, 0.75)
     assert np.allclose(s.evaluate(t), c.evaluate(0.25 + 0.5 * t))
     assert np.allclose(sub_curve(s, 0.5, 1.0).evaluate(t), c.evaluate(0.5 + 0.25 * t))
+
+
+def test_pair_search_matches_dense_samples_on_both_curves():
+    """Two B-splines searched together (stacked tables): each answer global and exact,
+    against 400k samples of each curve, and equal to the separate queries."""
+    c1 = wavy_spline()
+    c2 = BSpline(np.array([[10, 0.5], [11.4, 2.5], [9, 4.5], [11.2, 7], [9.5, 9.5]], float), 3)
+    pair = PairSearch.build(c1, c2)
+    assert pair is not None
+    pts = RNG.uniform([-2.0, -3.0], [13.0, 12.0], size=(700, 2))
+    got = pair.closest(pts)
+    for c, g in zip((c1, c2), got, strict=True):
+        dense = c.sample(400_001)
+        ref, _ = cKDTree(dense).query(pts)
+        spacing = np.linalg.norm(np.diff(dense, axis=0), axis=1).max()
+        assert np.all(g.distance <= ref + 1e-12)
+        assert np.all(g.distance >= ref - 0.5 * spacing)
+        assert np.allclose(c.evaluate(g.t), g.foot, rtol=0.0, atol=1e-12)
+        assert np.allclose(g.distance, c.closest(pts).distance, rtol=0.0, atol=1e-13)
+    # rational or non-B-spline curves are not stacked
+    assert PairSearch.build(c1, CURVES["nurbs"]) is None
+    assert PairSearch.build(c1, CURVES["line"]) is None
+
+
+def test_transformed_bspline_keeps_exact_pieces():
+    """The image of a B-spline whose pieces are cached gets them in closed form: its jet
+    equals that of scipy's B-spline of the transformed control points."""
+    c = wavy_spline()
+    c.evaluate(np.zeros(1))  # caches the pieces
+    off, scale = np.array([5.0, -2.0]), 16.0
+    img = c.transformed(off, scale)
+    assert "_pieces" in img.__dict__
+    knots = np.r_[np.zeros(4), [1 / 3, 2 / 3], np.ones(4)]
+    ref = SciBSpline(knots, (c.control_points - off) / scale, 3)
+    t = np.linspace(0.0, 1.0, 301)
+    for got, nu in zip(img.jet(t), (0, 1, 2), strict=True):
+        assert np.allclose(got, ref(t, nu), rtol=0.0, atol=1e-13)

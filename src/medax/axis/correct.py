@@ -36,6 +36,13 @@ def correct_newton(
         trial = p[act] - lam[act, None] * step
         st = field(trial)
         better = np.abs(st.g) < np.abs(g[act])
+        if act.size == p.shape[0] and better.all():  # all accepted: take the new sample
+            p = trial
+            cols = {f: getattr(st, f) for f in cols}
+            g, grad = cols["g"], cols["grad"]
+            lam[:] = 1.0
+            done = 2.0 * np.abs(g) <= goal
+            continue
         idx = act[better]
         p[idx] = trial[better]
         for f, col in cols.items():  # the accepted points' field (g and grad among them)

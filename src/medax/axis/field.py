@@ -12,7 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from medax.geometry._types import FloatArray
-from medax.geometry.curve import Curve
+from medax.geometry.curve import Closest, Curve
+from medax.geometry.pair_search import PairSearch
 from medax.geometry.region import PairRoles, Region
 
 
@@ -51,13 +52,24 @@ class DistanceField:
         self.a1: Curve = region.space_curve(roles.a1)
         self.a2: Curve = region.space_curve(roles.a2)
         self.evaluations = 0
+        self._pair: PairSearch | None | bool = False  # built on first use
+
+    def closest(self, x: FloatArray) -> tuple[Closest, Closest]:
+        """Global closest points on A1 and A2 for space points ``x`` (n, dim); two B-spline
+        constraints are searched together (:class:`PairSearch`: one query's numpy calls)."""
+        if self._pair is False:
+            self._pair = PairSearch.build(self.a1, self.a2)
+        pair = self._pair
+        if isinstance(pair, PairSearch) and pair.fits(x.shape[0]):
+            return pair.closest(x)
+        return self.a1.closest(x), self.a2.closest(x)
 
     def __call__(self, p: FloatArray) -> FieldSample:
         """The field at parameter points ``p`` of shape ``(n, 2)``."""
         p = np.atleast_2d(np.asarray(p, dtype=np.float64))
         emb = self.region.embedding
         x = emb.evaluate(p)
-        c1, c2 = self.a1.closest(x), self.a2.closest(x)
+        c1, c2 = self.closest(x)
         self.evaluations += p.shape[0]
         d1, d2 = c1.distance, c2.distance
         tiny = np.finfo(float).tiny

@@ -12,7 +12,7 @@ import numpy as np
 
 from medax.axis.field import DistanceField, FieldSample
 from medax.geometry._types import FloatArray
-from medax.geometry.curve import closest_near
+from medax.geometry.curve import Closest, closest_near
 
 #: a foot point moving this many times faster than the axis point marks a kink
 KINK_SPEED = 25.0
@@ -69,8 +69,14 @@ def locate_kinks(
         act = np.arange(len(ii))
         for _ in range(iters):
             x = emb.evaluate(q[act])
-            ca = closest_near(jumping, x, ta[act], BRANCH_WIDTH)
-            cb = closest_near(jumping, x, tb[act], BRANCH_WIDTH)
+            nb = len(act)  # both branches in one query
+            cab = closest_near(
+                jumping, np.concatenate((x, x)), np.concatenate((ta[act], tb[act])), BRANCH_WIDTH
+            )
+            ca, cb = (
+                Closest(cab.t[sl], cab.foot[sl], cab.distance[sl])
+                for sl in (slice(0, nb), slice(nb, None))
+            )
             co = other.closest(x)
             ta[act], tb[act] = ca.t, cb.t
             ua, ub, uo = (

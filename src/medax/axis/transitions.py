@@ -85,8 +85,9 @@ def locate_transitions(
         step = np.zeros_like(qa)
         step[ok] = np.linalg.solve(m[ok], rhs[ok][:, :, None])[:, :, 0]
         q[active] = qa - step
-        # quadratic convergence: a step at round-off level leaves the point exact
-        active = active[ok & (np.linalg.norm(step, axis=1) > 1e-14 * field.region.diagonal)]
+        # quadratic convergence: after a step of 1e-8 (x diagonal) the point is off by
+        # ~1e-16 K (K the ratio of the field's curvature to its gradient, of order one)
+        active = active[ok & (np.linalg.norm(step, axis=1) > 1e-8 * field.region.diagonal)]
         if active.size == 0:
             break
     fs = field(q)

@@ -253,6 +253,12 @@ class BSpline(Curve):
         return BSpline(self.control_points[::-1], self.degree, kn, w)
 
     def transformed(self, offset: FloatArray, scale: float) -> BSpline:
-        return BSpline(
-            (self.control_points - offset) / scale, self.degree, self.knots, self.weights
-        )
+        out = BSpline((self.control_points - offset) / scale, self.degree, self.knots, self.weights)
+        if self.weights is None and "_pieces" in self.__dict__:
+            # the image's polynomial pieces in closed form (no de Boor evaluations): all
+            # coefficients scaled, the value's constant term moved
+            x, coefs = self._pieces
+            moved = coefs / scale
+            moved[:, -1, 0] -= np.asarray(offset, dtype=np.float64) / scale
+            out.__dict__["_pieces"] = (x, moved)
+        return out

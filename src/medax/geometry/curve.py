@@ -15,6 +15,9 @@ from scipy.spatial import cKDTree
 
 from medax.geometry._types import FloatArray
 
+#: 10-point Gauss-Legendre nodes and weights on [-1, 1] (for :meth:`Curve.length`)
+_GAUSS = np.polynomial.legendre.leggauss(10)
+
 
 @dataclass(frozen=True)
 class Closest:
@@ -87,7 +90,7 @@ class Curve(ABC):
     def length(self, n: int = 0) -> float:
         """Arc length, by Gauss-Legendre quadrature on ``complexity()`` pieces."""
         pieces = max(self.complexity(), 1) * 8
-        x, w = np.polynomial.legendre.leggauss(10)
+        x, w = _GAUSS
         edges = np.linspace(0.0, 1.0, pieces + 1)
         a, b = edges[:-1, None], edges[1:, None]
         t = (0.5 * (b - a) * x[None, :] + 0.5 * (a + b)).ravel()
@@ -104,6 +107,11 @@ class Curve(ABC):
         t = np.linspace(0.0, 1.0, n)
         pts = self.evaluate(t)
         return t, pts, cKDTree(pts)
+
+    @cached_property
+    def _slopes(self) -> FloatArray:
+        """``C'`` at the search samples, (m, dim)."""
+        return self.derivative(self._search[0])
 
     @cached_property
     def _table(self) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -127,12 +135,13 @@ class Curve(ABC):
 
 def closest_near(curve: Curve, points: FloatArray, t0: FloatArray, width: float) -> Closest:
     """Local closest points: the nearest point of ``curve`` to ``points[i]`` with parameter in
-    ``[t0[i] - width, t0[i] + width]`` (a branch of the curve), for all points at once."""
+    ``[t0[i] - width, t0[i] + width]`` (a branch of the curve), for all points at once; the
+    Newton iteration starts from ``t0`` (a warm start when the points moved little)."""
     x = np.asarray(points, dtype=np.float64)
-    lo = np.clip(np.asarray(t0) - width, 0.0, 1.0)
-    hi = np.clip(np.asarray(t0) + width, 0.0, 1.0)
-    t = _bracketed_newton(curve, x, lo, hi)
-    foot = curve.evaluate(t)
+    t0 = np.asarray(t0, dtype=np.float64)
+    lo = np.clip(t0 - width, 0.0, 1.0)
+    hi = np.clip(t0 + width, 0.0, 1.0)
+    t, foot = _bracketed_newton(curve, x, lo, hi, start=t0)
     return Closest(t=t, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
 
 
@@ -293,24 +302,68 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
     """Generic global closest-point query (see :meth:`Curve.closest`).
 
     Candidates are the ``k`` best local minima of the distance over the dense samples
-    (distinct parts of the curve, not neighbouring samples of one part); each is refined in
-    the bracket of its two neighbouring samples.
+    (distinct parts of the curve, not neighbouring samples of one part). Each is refined in
+    the bracket of its two neighbouring samples: ``g = (C - x) . C'`` at the three samples
+    (from the tabulated samples and slopes: no curve evaluation) picks the half with the
+    sign change, whose linear interpolation starts :func:`_newton_in_brackets`; a bracket
+    without a sign change keeps its nearest sample (an end of the curve).
     """
-    ts, _, _ = curve._search
-    n = points.shape[0]
-    cand = _candidate_samples(curve, points, k)
-    dt = ts[1] - ts[0]
-    lo = np.maximum(ts[cand] - dt, 0.0).ravel()
-    hi = np.minimum(ts[cand] + dt, 1.0).ravel()
+    ts, pts, _ = curve._search
+    slopes = curve._slopes
+    n, m = points.shape[0], ts.size
+    cand = _candidate_samples(curve, points, k).ravel()
     x = np.repeat(points, k, axis=0)
-    t = _bracketed_newton(curve, x, lo, hi)
-    foot = curve.evaluate(t)
+    j3 = np.minimum(np.maximum(cand[:, None] + _THREE, 0), m - 1)  # (nk, 3) samples
+    c = pts[j3] - x[:, None, :]
+    g = np.einsum("nij,nij->ni", c, slopes[j3])
+    d2 = np.einsum("nij,nij->ni", c, c)
+    left = g[:, 1] >= 0.0  # the sign change is in [j-1, j] (else in [j, j+1])
+    ia = np.where(left, j3[:, 0], j3[:, 1])
+    ga = np.where(left, g[:, 0], g[:, 1])
+    gb = np.where(left, g[:, 1], g[:, 2])
+    interior = (ga < 0.0) & (gb > 0.0)
+    best = np.argmin(d2, axis=1)
+    rows = np.arange(x.shape[0])
+    jb = j3[rows, best]
+    t, foot = ts[jb], pts[jb]
+    if np.any(interior):
+        ta, tb = ts[ia[interior]], ts[ia[interior] + 1]
+        start = _start(ts[j3[interior]], g[interior], ta, tb, ga[interior], gb[interior])
+        t[interior], foot[interior] = _quick_newton(curve, x[interior], ta, tb, start)
     dist = np.linalg.norm(foot - x, axis=1).reshape(n, k)
-    best = np.argmin(dist, axis=1)
-    rows = np.arange(n)
-    t = t.reshape(n, k)[rows, best]
-    foot = foot.reshape(n, k, -1)[rows, best]
-    return Closest(t=t, foot=foot, distance=dist[rows, best])
+    pick = np.argmin(dist, axis=1)
+    r = np.arange(n)
+    return Closest(
+        t=t.reshape(n, k)[r, pick],
+        foot=foot.reshape(n, k, -1)[r, pick],
+        distance=dist[r, pick],
+    )
+
+
+def _start(
+    t3: FloatArray, g3: FloatArray, ta: FloatArray, tb: FloatArray, ga: FloatArray, gb: FloatArray
+) -> FloatArray:
+    """Start (n,) for the root of ``g`` in ``[ta, tb]`` (``g(ta) = ga < 0 < gb = g(tb)``):
+    inverse quadratic interpolation through the three samples ``t3``, ``g3`` (n, 3) (error
+    ~ h^3 instead of the h^2 of regula falsi: Newton then needs one step less), regula falsi
+    where that leaves the bracket or is undefined (repeated samples at the curve's ends)."""
+    g0, g1, g2 = g3[:, 0], g3[:, 1], g3[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = (
+            t3[:, 0] * g1 * g2 / ((g0 - g1) * (g0 - g2))
+            + t3[:, 1] * g0 * g2 / ((g1 - g0) * (g1 - g2))
+            + t3[:, 2] * g0 * g1 / ((g2 - g0) * (g2 - g1))
+        )
+    falsi = ta + (tb - ta) * ga / (ga - gb)
+    return np.where((s > ta) & (s < tb), s, falsi)
+
+
+_THREE = np.arange(-1, 2)
+#: a Newton step on the foot parameter at most this long ends a row: Newton converging
+#: quadratically, the foot is then off by about ``K s^2`` (``K = g'' / 2 g'``) and the
+#: distance, stationary there, by about ``g' K^2 s^4`` (~1e-24 for ``K``, ``g'`` of order
+#: one; the rule of :func:`track_closest`)
+_STEP_TOL = 1e-6
 
 
 _TREE_ABOVE = 2_000_000  # point x sample table size above which a k-d tree answers (x 50)
@@ -351,14 +404,19 @@ def _candidate_samples(curve: Curve, points: FloatArray, k: int) -> np.ndarray:
 
 
 def _bracketed_newton(
-    curve: Curve, x: FloatArray, lo: FloatArray, hi: FloatArray, iters: int = 60
-) -> FloatArray:
-    """Minimise ``|C(t) - x|`` over ``t in [lo, hi]`` for all rows at once.
+    curve: Curve,
+    x: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    start: FloatArray | None = None,
+) -> tuple[FloatArray, FloatArray]:
+    """Minimise ``|C(t) - x|`` over ``t in [lo, hi]`` for all rows at once: parameters (n,)
+    and foot points (n, dim).
 
     ``g(t) = (C - x) . C'`` is the half derivative of the squared distance. Where ``g`` has
-    the same sign at both bracket ends the minimum is at an end; otherwise Newton steps are
-    kept inside a shrinking sign-change bracket (bisection when a step leaves it), starting
-    from the linear interpolation of ``g`` between the bracket ends.
+    the same sign at both bracket ends the minimum is at an end; otherwise
+    :func:`_quick_newton` from ``start`` (default: the linear interpolation of ``g`` between
+    the bracket ends).
     """
     n = x.shape[0]
     c0, c1, _ = curve.jet(np.concatenate((lo, hi)))
@@ -368,37 +426,87 @@ def _bracketed_newton(
     g_lo, g_hi, d_lo, d_hi = g_ends[:n], g_ends[n:], d_ends[:n], d_ends[n:]
     interior = (g_lo < 0.0) & (g_hi > 0.0)
     # no interior minimum: the smaller end distance wins
-    t = np.where(d_lo <= d_hi, lo, hi)
+    at_lo = d_lo <= d_hi
+    t = np.where(at_lo, lo, hi)
+    foot = np.where(at_lo[:, None], c0[:n], c0[n:])
     if not np.any(interior):
-        return t
-    a, b, xi = lo[interior].copy(), hi[interior].copy(), x[interior]
+        return t, foot
+    a, b = lo[interior], hi[interior]
     ga, gb = g_lo[interior], g_hi[interior]
-    s = a + (b - a) * ga / (ga - gb)  # regula falsi start: g < 0 at a, > 0 at b
-    ia = np.arange(s.size)
-    for _ in range(iters):
-        sa = s[ia]
-        c0, c1, c2 = curve.jet(sa)
-        c = c0 - xi[ia]
+    if start is None:
+        s0 = a + (b - a) * ga / (ga - gb)  # regula falsi start: g < 0 at a, > 0 at b
+    else:
+        s0 = np.minimum(np.maximum(start[interior], a), b)
+    t[interior], foot[interior] = _quick_newton(curve, x[interior], a, b, s0)
+    return t, foot
+
+
+def _quick_newton(
+    curve: Curve, x: FloatArray, a: FloatArray, b: FloatArray, s: FloatArray, steps: int = 3
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`_newton_in_brackets` for good starts ``s`` (n,): up to ``steps`` plain Newton
+    steps on all rows (clamped to ``[a, b]``, no per-row bookkeeping: a few numpy calls
+    each), stopping once every row's step was a Newton step of at most ``_STEP_TOL``; then
+    the safeguarded iteration for the rows that did not settle (from where they are)."""
+    for _ in range(steps):
+        c0, c1, c2 = curve.jet(s)
+        c = c0 - x
         g = np.einsum("ij,ij->i", c, c1)
         dg = np.einsum("ij,ij->i", c1, c1) + np.einsum("ij,ij->i", c, c2)
-        aa, bb = a[ia], b[ia]
-        aa = np.where(g < 0.0, sa, aa)
-        bb = np.where(g > 0.0, sa, bb)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            new = np.minimum(np.maximum(s - g / dg, a), b)
+        ds = new - s
+        ok = (dg > 0.0) & (np.abs(ds) <= _STEP_TOL)
+        if ok.all():
+            break
+        s = new
+    foot = c0 + ds[:, None] * (c1 + (0.5 * ds)[:, None] * c2)  # Taylor: no evaluation
+    if ok.all():
+        return new, foot
+    bad = ~ok
+    ss = np.where(np.isfinite(new), new, s)[bad]
+    new[bad], foot[bad] = _newton_in_brackets(curve, x[bad], a[bad], b[bad], ss)
+    return new, foot
+
+
+def _newton_in_brackets(
+    curve: Curve, x: FloatArray, a: FloatArray, b: FloatArray, s: FloatArray, iters: int = 60
+) -> tuple[FloatArray, FloatArray]:
+    """The root of ``g(t) = (C(t) - x) . C'(t)`` in ``[a, b]`` (n,) where ``g(a) < 0 < g(b)``,
+    from ``s`` (n,): parameters (n,) and foot points (n, dim).
+
+    Newton steps kept inside the shrinking sign-change bracket (bisection when a step leaves
+    it or ``g' <= 0``); a row stops at its first step of at most ``_STEP_TOL`` (see there),
+    its foot the second-order Taylor expansion of that step's jet (off by ``|C^(3)| s^3 / 6``):
+    no separate evaluation of the feet.
+    """
+    a, b, s = a.copy(), b.copy(), s.copy()
+    foot = np.empty_like(x)
+    rows = np.arange(s.size)
+    for it in range(iters):
+        sr, xr = s[rows], x[rows]
+        c0, c1, c2 = curve.jet(sr)
+        c = c0 - xr
+        g = np.einsum("ij,ij->i", c, c1)
+        dg = np.einsum("ij,ij->i", c1, c1) + np.einsum("ij,ij->i", c, c2)
+        aa = np.where(g < 0.0, sr, a[rows])
+        bb = np.where(g > 0.0, sr, b[rows])
         # g / dg where dg > 0, else inf (a bisection below); no division warnings
         step = np.divide(g, dg, out=np.full_like(g, np.inf), where=dg > 0.0)
-        new = sa - step
-        # the distance is stationary at the foot: |dt| < 1e-10 leaves it exact to round-off
-        small = np.abs(step) <= 1e-10
-        bad = ~np.isfinite(new) | (new < aa) | (new > bb)
+        new = sr - step
+        small = np.abs(step) <= _STEP_TOL
+        bad = ~(new >= aa) | ~(new <= bb)  # also catches nan
         kept = np.minimum(np.maximum(new, aa), bb)
         new = np.where(small, kept, np.where(bad, 0.5 * (aa + bb), new))
-        done = small | (bb - aa <= 4e-16) | (g == 0.0)
-        a[ia], b[ia], s[ia] = aa, bb, new
-        ia = ia[~done]
-        if ia.size == 0:
+        done = small | (bb - aa <= 4e-16) | (g == 0.0) | (it == iters - 1)
+        a[rows], b[rows], s[rows] = aa, bb, new
+        ds = np.where(small, kept - sr, 0.0)[done]
+        foot[rows[done]] = c0[done] + ds[:, None] * (c1[done] + (0.5 * ds)[:, None] * c2[done])
+        s[rows[done]] = np.where(small[done], kept[done], sr[done])
+        rows = rows[~done]
+        if rows.size == 0:
             break
-    t[interior] = s
-    return t
+    return s, foot
 
 
 class SubCurve(Curve):

@@ -252,4 +252,7 @@ def normalised_region(region: Region) -> tuple[Region, FloatArray, float]:
     scale = region.diagonal
     sides = tuple(s.transformed(offset, scale) for s in region.sides)
     work = Region(sides, region.embedding, region.name, region.reoriented)  # type: ignore[arg-type]
+    # the image's samples are the samples' images: its boundary and diagonal in closed form
+    work.__dict__["boundary"] = (pts - offset) / scale
+    work.__dict__["diagonal"] = 1.0
     return work, offset, scale
