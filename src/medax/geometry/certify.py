@@ -32,8 +32,6 @@ from medax.geometry.curve import Curve, certify_closest
 _PIECES_PER_SPAN = 4
 _CELLS = 48  # groups: square cells of 1 / _CELLS of the points' larger extent
 _MIN_GROUPED = 2048  # fewer points: the per-point test
-_FINE = 3  # the second pass: cells this many times finer
-_SINGLE_BLOCK = 4096  # rows tested one by one at a time (the tables stay small)
 
 
 @dataclass(frozen=True)
@@ -156,24 +154,12 @@ class PointGroups:
         rho = np.maximum.reduceat(offset[order], starts)
         return cls(x, order, starts, group, centre, rho, offset)
 
-    @classmethod
-    def single(cls, points: FloatArray) -> PointGroups:
-        """Each point its own group (``rho = 0``: the tightest bounds)."""
-        x = np.asarray(points, dtype=np.float64)
-        n = np.arange(x.shape[0])
-        zero = np.zeros(x.shape[0])
-        return cls(x, n, n, n, x, zero, zero)
-
     def reduce_max(self, v: FloatArray) -> FloatArray:
         """Per group (G,) the largest of ``v`` (n,) over its members."""
-        if self.starts.size == v.size:
-            return v
         return np.maximum.reduceat(v[self.order], self.starts)
 
     def reduce_min(self, v: FloatArray) -> FloatArray:
         """Per group (G,) the smallest of ``v`` (n,) over its members."""
-        if self.starts.size == v.size:
-            return v
         return np.minimum.reduceat(v[self.order], self.starts)
 
 
@@ -253,9 +239,10 @@ def certify_many(
     groups: PointGroups | None = None,
 ) -> np.ndarray:
     """:func:`~medax.geometry.curve.certify_closest` for many points (n, dim): groups of
-    cells first (``groups``, built from ``points`` if not given), then each row left on its
-    own, then that per-point sample test for the rows still left. Same meaning: True where
-    the foot is certainly global, False where a full query is needed."""
+    cells first (``groups``, built from ``points`` if not given), then that per-point
+    sample test for the rows left (measured cheaper than smaller groups or single points
+    for them). Same meaning: True where the foot is certainly global, False where a full
+    query is needed."""
     x = np.asarray(points, dtype=np.float64)
     t = np.asarray(t, dtype=np.float64)
     if not supports(curve) or x.shape[0] < _MIN_GROUPED:
@@ -263,14 +250,6 @@ def certify_many(
     assert isinstance(curve, BSpline)
     ok = certify_groups(curve, groups or PointGroups.build(x), t, distance, slack)
     rest = np.flatnonzero(~ok)
-    if rest.size >= _MIN_GROUPED:  # smaller groups
-        fine = PointGroups.build(x[rest], _FINE * _CELLS)
-        ok[rest] = certify_groups(curve, fine, t[rest], distance[rest], slack)
-        rest = rest[~ok[rest]]
-    for a in range(0, rest.size, _SINGLE_BLOCK):
-        r = rest[a : a + _SINGLE_BLOCK]
-        ok[r] = certify_groups(curve, PointGroups.single(x[r]), t[r], distance[r], slack)
-    rest = rest[~ok[rest]]
     if rest.size:
         ok[rest] = certify_closest(curve, x[rest], t[rest], distance[rest], slack)
     return ok
