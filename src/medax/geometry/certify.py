@@ -42,7 +42,7 @@ class PieceBounds:
     (P, m + 1) of ``|C'|^2 + C . C''`` and ``acc`` (P, m + 1, dim) of ``C''`` (derivatives
     in the piece's own parameter); ``acc_max`` (P,) a bound of ``|C''|``; ``slope``
     (P, m + 1) of ``C . C'``, ``vel`` (P, m + 1, dim) of ``C'`` and ``vel_max`` (P,) a bound
-    of ``|C'|``; ``margin`` a
+    of ``|C'|``; ``pos_max`` (P,) a bound of ``|C|``; ``margin`` a
     bound of the coefficients' rounding error (squared length units)."""
 
     origin: FloatArray
@@ -55,6 +55,7 @@ class PieceBounds:
     slope: FloatArray
     vel: FloatArray
     vel_max: FloatArray
+    pos_max: FloatArray
     margin: float
 
 
@@ -105,13 +106,16 @@ def piece_bounds(curve: BSpline) -> PieceBounds:
     slope_v = np.einsum("pld,pld->pl", c0, c1)
     sq, conv, slope = sq_v @ inv.T, conv_v @ inv.T, slope_v @ inv.T
     pos, vel, acc = (np.einsum("il,pld->pid", inv, v) for v in (c0, c1, c2))
-    vel_max, acc_max = (np.sqrt(np.einsum("pid,pid->pi", v, v)).max(axis=1) for v in (vel, acc))
+    vel_max, acc_max, pos_max = (
+        np.sqrt(np.einsum("pid,pid->pi", v, v)).max(axis=1) for v in (vel, acc, pos)
+    )
     scale = max(float(np.abs(v).max()) for v in (sq_v, conv_v, slope_v))
     margin = 64.0 * np.finfo(float).eps * norm * max(scale, 1e-300)
     grow = 1.0 + 1e-12
     out = PieceBounds(
-        origin, edges, sq, pos, conv, acc, acc_max * grow, slope, vel, vel_max * grow, margin
-    )
+        origin, edges, sq, pos, conv, acc, acc_max * grow, slope, vel, vel_max * grow,
+        pos_max * grow, margin,
+    )  # fmt: skip
     curve.__dict__["_piece_bounds"] = out
     return out
 
@@ -188,15 +192,18 @@ def certify_groups(
     npc, ng = b.edges.size - 1, c.shape[0]
     # far pieces: |C - c| >= the group's max of d + |x - c| (less the slack)
     need = groups.reduce_max(distance + groups.offset) - slack  # (G,)
+    cc = np.einsum("gd,gd->g", c, c)
+    cn = np.sqrt(cc)  # (rounding of the products with c: a margin growing with |c|)
+    eps = 16.0 * np.finfo(float).eps
     low2 = _coef_min(b.sq, -2.0 * c, b.pos)
-    low2 += np.einsum("gd,gd->g", c, c) - b.margin
+    low2 += cc - b.margin - eps * (cc + 2.0 * cn * b.pos_max[:, None])
     far = low2 >= np.square(np.maximum(need, 0.0))
     far |= need <= 0.0
     # near pieces: the squared distance convex, or monotone, for every member
     h = _coef_min(b.conv, -c, b.acc)
-    h -= groups.rho * b.acc_max[:, None] + b.margin
+    h -= (groups.rho + eps * cn) * b.acc_max[:, None] + b.margin
     convex = h > 0.0
-    spread = groups.rho * b.vel_max[:, None] + b.margin
+    spread = (groups.rho + eps * cn) * b.vel_max[:, None] + b.margin
     rising = _coef_min(b.slope, -c, b.vel) > spread  # of (C - c) . C'
     falling = _coef_min(-b.slope, c, b.vel) > spread
     # the window: the pieces of the group's feet and one more on each side convex (one
