@@ -17,7 +17,7 @@ transfinite interpolation of the boundary nodes or, for large grids, from a coar
 interpolated. Feet on sides without a closed-form closest point (B-splines, curves on
 surfaces) are tracked locally from one iteration to the next
 (:func:`~medax.geometry.curve.track_closest`) once steps are small, and certified global at
-the end (:func:`~medax.geometry.curve.certify_closest`, a full query where that is not
+the end (:func:`~medax.geometry.certify.certify_many`, a full query where that is not
 conclusive); nodes whose foot was on the wrong part of a side are solved again from the
 global feet.
 """
@@ -33,7 +33,7 @@ from scipy.interpolate import BSpline, make_interp_spline
 from medax import tolerances
 from medax.errors import MeshError
 from medax.geometry._types import FloatArray
-from medax.geometry.curve import certify_closest
+from medax.geometry.certify import PointGroups, certify_many
 from medax.geometry.region import Region
 from medax.mesh.boundary_nodes import RULES, side_params
 from medax.mesh.grid import boundary_indices
@@ -442,11 +442,14 @@ def _wrong_feet(sides: SideDistances, p: FloatArray, tol: float, rows: np.ndarra
     the global ones."""
     x = sides.region.embedding.evaluate(p[rows])
     wrong = np.zeros(rows.size, dtype=bool)
+    groups: PointGroups | None = None
     for k in range(4):
         if not sides.tracked[k]:
             continue
         curve, tk, dk = sides.curves[k], sides.t[k][rows], sides.d[k][rows]
-        doubt = np.flatnonzero(~certify_closest(curve, x, tk, dk, tol))
+        if groups is None and rows.size >= 2048:
+            groups = PointGroups.build(x)
+        doubt = np.flatnonzero(~certify_many(curve, x, tk, dk, tol, groups))
         if doubt.size == 0:
             continue
         c = curve.closest(x[doubt])
