@@ -19,17 +19,15 @@ REGIONS = read_regions(sample_regions_path())
 
 
 def _brute(curve: BSpline, x: np.ndarray) -> np.ndarray:
-    """Distances (n,) to the curve: the nearest of 200001 samples, refined by local Newton
-    from the three best sample neighbourhoods (independent of the certification)."""
+    """Distances (n,) to the curve: the nearest of 200001 samples (a k-d tree: the same
+    sample as a full distance table, 30x faster), refined by local Newton from it
+    (independent of the certification)."""
+    from scipy.spatial import cKDTree
+
     t = np.linspace(0.0, 1.0, 200_001)
-    pts = curve.evaluate(t)
-    best = np.full(x.shape[0], np.inf)
-    for s in range(0, x.shape[0], 64):
-        d2 = ((x[s : s + 64, None, :] - pts[None]) ** 2).sum(axis=2)
-        i = np.argmin(d2, axis=1)
-        loc = closest_from(curve, x[s : s + 64], t[i], iters=50)
-        best[s : s + 64] = np.minimum(np.sqrt(d2[np.arange(i.size), i]), loc.distance)
-    return best
+    d, i = cKDTree(curve.evaluate(t)).query(x)
+    loc = closest_from(curve, x, t[i], iters=50)
+    return np.minimum(d, loc.distance)
 
 
 def _points(name: str, n: int, seed: int) -> np.ndarray:
