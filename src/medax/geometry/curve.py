@@ -314,14 +314,7 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
     cand = _candidate_samples(curve, points, k).ravel()
     x = np.repeat(points, k, axis=0)
     j3 = np.minimum(np.maximum(cand[:, None] + _THREE, 0), m - 1)  # (nk, 3) samples
-    c = pts[j3] - x[:, None, :]
-    g = np.einsum("nij,nij->ni", c, slopes[j3])
-    d2 = np.einsum("nij,nij->ni", c, c)
-    left = g[:, 1] >= 0.0  # the sign change is in [j-1, j] (else in [j, j+1])
-    ia = np.where(left, j3[:, 0], j3[:, 1])
-    ga = np.where(left, g[:, 0], g[:, 1])
-    gb = np.where(left, g[:, 1], g[:, 2])
-    interior = (ga < 0.0) & (gb > 0.0)
+    g, d2, ia, ga, gb, interior = sign_brackets(pts, slopes, j3, x)
     best = np.argmin(d2, axis=1)
     rows = np.arange(x.shape[0])
     jb = j3[rows, best]
@@ -338,6 +331,24 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
         foot=foot.reshape(n, k, -1)[r, pick],
         distance=dist[r, pick],
     )
+
+
+def sign_brackets(
+    pts: FloatArray, slopes: FloatArray, j3: np.ndarray, x: FloatArray
+) -> tuple[FloatArray, FloatArray, np.ndarray, FloatArray, FloatArray, np.ndarray]:
+    """For points ``x`` (n, dim) and three consecutive sample indices ``j3`` (n, 3) each,
+    from the tabulated samples ``pts`` and slopes ``slopes`` (m, dim): ``g = (C - x) . C'``
+    (n, 3), the squared distances (n, 3), the left sample ``ia`` (n,) of the half with the
+    sign change and ``g`` at its ends ``ga``, ``gb`` (n,), and whether that change is a
+    minimum inside (n,) (``ga < 0 < gb``)."""
+    c = pts[j3] - x[:, None, :]
+    g = np.einsum("nij,nij->ni", c, slopes[j3])
+    d2 = np.einsum("nij,nij->ni", c, c)
+    left = g[:, 1] >= 0.0  # the sign change is in [j-1, j] (else in [j, j+1])
+    ia = np.where(left, j3[:, 0], j3[:, 1])
+    ga = np.where(left, g[:, 0], g[:, 1])
+    gb = np.where(left, g[:, 1], g[:, 2])
+    return g, d2, ia, ga, gb, (ga < 0.0) & (gb > 0.0)
 
 
 def _start(

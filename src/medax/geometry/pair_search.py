@@ -15,7 +15,7 @@ import numpy as np
 
 from medax.geometry._types import FloatArray
 from medax.geometry.bspline import POWER_BASIS_MAX_DEGREE, BSpline
-from medax.geometry.curve import Closest, Curve, _quick_newton, _start
+from medax.geometry.curve import Closest, Curve, _quick_newton, _start, sign_brackets
 
 #: parameter offset of the second curve in the stacked tables
 SHIFT = 2.0
@@ -93,14 +93,7 @@ class PairSearch:
         cand = self._candidates(x0).ravel()  # (n * 2k,): k on curve 1, then k on curve 2
         x = np.repeat(x0, 2 * k, axis=0)
         j3 = self.window[cand]  # (n * 2k, 3)
-        c = self.pts[j3] - x[:, None, :]
-        g = np.einsum("nij,nij->ni", c, self.slopes[j3])
-        d2 = np.einsum("nij,nij->ni", c, c)
-        left = g[:, 1] >= 0.0  # the sign change is in [j-1, j] (else in [j, j+1])
-        ia = np.where(left, j3[:, 0], j3[:, 1])
-        ga = np.where(left, g[:, 0], g[:, 1])
-        gb = np.where(left, g[:, 1], g[:, 2])
-        interior = (ga < 0.0) & (gb > 0.0)
+        g, d2, ia, ga, gb, interior = sign_brackets(self.pts, self.slopes, j3, x)
         jb = j3[np.arange(x.shape[0]), np.argmin(d2, axis=1)]
         t, foot = self.ts[jb], self.pts[jb]
         if np.any(interior):
