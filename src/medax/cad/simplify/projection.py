@@ -21,7 +21,7 @@ from OCP.ShapeAnalysis import ShapeAnalysis_Surface
 from scipy.spatial import cKDTree
 
 from medax.cad.face_region import bspline_embedding
-from medax.cad.simplify.occ import Array
+from medax.cad.simplify.occ import Array, xyz
 
 #: Grid samples per direction: at least MIN_SAMPLES, one per knot span, at most MAX_SAMPLES.
 MIN_SAMPLES, MAX_SAMPLES = 40, 240
@@ -55,10 +55,8 @@ class GridProjection:
 
     def project(self, p: Array) -> tuple[tuple[float, float], float]:
         """Foot parameters and distance of point ``p`` (3,)."""
-        _, k = self.tree.query(p)
-        start = gp_Pnt2d(float(self.us[k // self.nv]), float(self.vs[k % self.nv]))
-        uv = self.sas.NextValueOfUV(start, gp_Pnt(*map(float, p)), 1e-12, -1.0)
-        return (float(uv.X()), float(uv.Y())), float(self.sas.Gap())
+        uv, dist = self.project_many(np.asarray(p, dtype=np.float64)[None])
+        return (float(uv[0, 0]), float(uv[0, 1])), float(dist[0])
 
     def project_many(self, points: Array) -> tuple[Array, Array]:
         """Foot parameters (n, 2) and distances (n,) of ``points`` (n, 3): the starts from
@@ -105,9 +103,7 @@ def batch_projection(face: Any) -> Callable[[Array], tuple[Array, Array]] | None
     kind = ad.GetType()
     if kind == GeomAbs_Plane:
         ax = ad.Plane().Position()
-        o, x, y, n = (
-            _xyz(v) for v in (ax.Location(), ax.XDirection(), ax.YDirection(), ax.Direction())
-        )
+        o, x, y, n = _frame(ax)
 
         def plane(p: Array) -> tuple[Array, Array]:
             r = p - o
@@ -117,9 +113,7 @@ def batch_projection(face: Any) -> Callable[[Array], tuple[Array, Array]] | None
     if kind == GeomAbs_Cylinder:
         cyl = ad.Cylinder()
         ax, radius = cyl.Position(), cyl.Radius()
-        o, x, y, a = (
-            _xyz(v) for v in (ax.Location(), ax.XDirection(), ax.YDirection(), ax.Direction())
-        )
+        o, x, y, a = _frame(ax)
         mid = 0.5 * (ad.FirstUParameter() + ad.LastUParameter())
 
         def cylinder(p: Array) -> tuple[Array, Array]:
@@ -134,13 +128,9 @@ def batch_projection(face: Any) -> Callable[[Array], tuple[Array, Array]] | None
     return _extrusion_projection(BRep_Tool.Surface_s(face))
 
 
-def _xyz(v: Any) -> Array:
-    return np.array([v.X(), v.Y(), v.Z()])
-
-
 def _frame(ax: Any) -> tuple[Array, Array, Array, Array]:
     """Origin, x, y and main direction (3,) each of a ``gp_Ax3``."""
-    return tuple(_xyz(v) for v in (ax.Location(), ax.XDirection(), ax.YDirection(), ax.Direction()))  # type: ignore[return-value]
+    return xyz(ax.Location()), xyz(ax.XDirection()), xyz(ax.YDirection()), xyz(ax.Direction())
 
 
 def _extrusion_projection(surf: Any) -> Callable[[Array], tuple[Array, Array]] | None:
@@ -154,7 +144,6 @@ def _extrusion_projection(surf: Any) -> Callable[[Array], tuple[Array, Array]] |
     )
 
     from medax.cad.face_region import curve_copy
-    from medax.geometry.curve import closest_from
 
     if isinstance(surf, Geom_RectangularTrimmedSurface):
         surf = surf.BasisSurface()
@@ -163,7 +152,7 @@ def _extrusion_projection(surf: Any) -> Callable[[Array], tuple[Array, Array]] |
     bc = surf.BasisCurve()
     if not isinstance(bc, Geom_BSplineCurve):
         return None
-    d = _xyz(surf.Direction())
+    d = xyz(surf.Direction())
     curve = curve_copy(bc)
     k0, k1 = bc.FirstParameter(), bc.LastParameter()
     ends = curve.evaluate(np.array([0.0, 0.5, 1.0]))
@@ -173,10 +162,7 @@ def _extrusion_projection(surf: Any) -> Callable[[Array], tuple[Array, Array]] |
 
     def extrusion(p: Array) -> tuple[Array, Array]:
         q = p - np.outer((p - c0) @ d, d)
-        # the global search's feet, polished by Newton with the foot evaluated on the curve
-        # (the search stops at steps of 1e-6 in t and Taylor-expands its foot: ~1e-11 of the
-        # diagonal off on the long profiles of a grid plate)
-        c = closest_from(curve, q, curve.closest(q).t, iters=3)
+        c = curve.closest(q)
         v = (p - c.foot) @ d
         return np.column_stack((k0 + c.t * (k1 - k0), v)), c.distance
 

@@ -26,7 +26,7 @@ from OCP.GProp import GProp_GProps
 from OCP.IntTools import IntTools_FClass2d
 from OCP.TopAbs import TopAbs_IN, TopAbs_OUT, TopAbs_SHELL
 
-from medax.cad.simplify.occ import Array, compound, count, faces_of, uv_bounds, xyz
+from medax.cad.simplify.occ import Array, compound, count, edges_of, faces_of, uv_bounds, xyz
 from medax.cad.simplify.projection import GridProjection, batch_projection
 
 #: Relative accuracy asked of the volume integration.
@@ -61,7 +61,7 @@ def volumes(
     shape: Any, nurbs: bool = False, eps: float = VOLUME_EPS, eps_gk: float | None = None
 ) -> tuple[float, float]:
     """Volume of ``shape`` by two integrators, (Gauss-Kronrod, adaptive), each to ``eps``
-    relative; with ``nurbs`` on a NURBS copy (``BRepBuilderAPI_NurbsConvert``).
+    relative; with ``nurbs`` on a B-spline copy (:func:`nurbs_copy`).
 
     On faces of extruded or revolved B-spline profiles each integrator was 0.1 - 1 % off on
     some parts (a shape change that is not there); on the NURBS copy both agreed with the
@@ -108,8 +108,6 @@ def _extrusion_copy(face: Any) -> Any | None:
     from OCP.GeomConvert import GeomConvert
     from OCP.TopLoc import TopLoc_Location
     from OCP.TopoDS import TopoDS
-
-    from medax.cad.simplify.occ import edges_of
 
     surf = BRep_Tool.Surface_s(face)
     try:
@@ -234,8 +232,6 @@ def face_samples(face: Any, n: int = 12) -> Array:
 def _edge_tolerance(face: Any) -> float:
     """The largest tolerance of ``face``'s edges (at least 1e-9): feet on a boundary edge
     then count as on the face from both sides, whatever its two pcurves' small errors."""
-
-    from medax.cad.simplify.occ import edges_of
 
     return max([1e-9] + [BRep_Tool.Tolerance_s(e) for e in edges_of(face)])
 
