@@ -143,6 +143,9 @@ def main() -> int:
     ap.add_argument("--sizes", default="16,32,128,512")
     ap.add_argument("--regions", default="")
     ap.add_argument("--angle", action="store_true", help="add method='angle'")
+    ap.add_argument(
+        "--no-exact", action="store_true", help="leave out medax with every node solved (tol=0)"
+    )
     ap.add_argument("--paper", action="store_true", help="add method='paper' at N <= 32")
     ap.add_argument("--memory-child", nargs=2, metavar=("REGION", "N"), help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -169,6 +172,10 @@ def main() -> int:
             m = mesh_region(region, (n, n))
             t_medax = time.perf_counter() - t0
             rows = [("medax ratio", m.points, m.quads, t_medax)]
+            if not args.no_exact:
+                t0 = time.perf_counter()
+                me = mesh_region(region, (n, n), tol=0.0)
+                rows.append(("medax exact", me.points, me.quads, time.perf_counter() - t0))
             if args.angle:
                 t0 = time.perf_counter()
                 ma = mesh_region(region, (n, n), method="angle")

@@ -57,6 +57,9 @@ def test_format_override(tmp_path):
         (["--divisions", "2,3,4"], "N1,N2"),
         (["--divisions", "4", "--format", "stl"], "unknown mesh format"),
         (["--divisions", "4", "--method", "paper", "--boundary", "ratio"], "not to paper"),
+        (["--divisions", "4", "--tol=-1e-6"], "non-negative"),
+        (["--divisions", "4", "--tol", "nan"], "non-negative"),
+        (["--divisions", "4", "--method", "paper", "--tol", "0"], "positive tol"),
     ],
 )
 def test_bad_input(tmp_path, capsys, extra, message):

@@ -95,13 +95,40 @@ def test_coarse_start_gives_the_same_nodes(monkeypatch):
     """Large grids start from an interpolated coarse grid with tracked feet; the nodes must
     be those of the direct solve from the transfinite guess with global feet."""
     r = REGIONS["wavy"]
-    fast = mesh_region(r, (60, 52))
+    fast = mesh_region(r, (60, 52), tol=0.0)  # every node solved
     assert fast.info["coarse_newton_iterations"] > 0
+    assert fast.info["interpolated"] == fast.info["coarse_interpolated"] == 0
     monkeypatch.setattr(rg, "_COARSE_MIN", 10**6)
     monkeypatch.setattr(rg, "_TRACK_STEP", 0.0)  # every evaluation global
     slow = mesh_region(r, (60, 52))
     assert slow.info["coarse_newton_iterations"] == 0
     assert np.abs(fast.params - slow.params).max() <= 1e-9 * r.diagonal
+
+
+@pytest.mark.parametrize(
+    ("divisions", "tol", "share"),
+    [((200, 200), 1e-6, 0.3), ((400, 150), 1e-6, 0.25), ((300, 300), 1e-7, 0.2)],
+)
+def test_interpolated_nodes_within_the_tolerance(divisions, tol, share):
+    """Interior nodes interpolated from the coarser level where the estimate allows (at
+    least ``share`` of them on ``wavy``, whose four B-spline sides put foot jumps across the
+    grid): every node within ``tol`` x diagonal of the grid with every node solved."""
+    r = REGIONS["wavy"]
+    fast = mesh_region(r, divisions, tol=tol)
+    exact = mesh_region(r, divisions, tol=0.0)
+    assert exact.info["interpolated"] == 0
+    assert fast.info["interpolated"] >= share * (divisions[0] - 1) * (divisions[1] - 1)
+    err = np.linalg.norm(fast.params - exact.params, axis=1).max()
+    assert err <= tol * r.diagonal
+    assert np.all(fast.quality().scaled_jacobian > 0.0)
+
+
+def test_line_and_arc_regions_are_always_solved():
+    """Regions of lines and arcs have every foot in closed form: nothing is interpolated,
+    whatever the tolerance."""
+    r = REGIONS["arcs"]
+    m = mesh_region(r, (200, 200), tol=1e-3)
+    assert m.info["interpolated"] == m.info["coarse_interpolated"] == 0
 
 
 def _brute_distance(curve, x: np.ndarray, n: int = 400001) -> np.ndarray:
@@ -280,20 +307,6 @@ def test_planar_solve_gives_the_general_nodes(name, monkeypatch):
     monkeypatch.setattr(rf.PlanarField, "supports", staticmethod(lambda region, kinds: False))
     slow = mesh_region(r, (60, 52))
     assert np.abs(fast.params - slow.params).max() <= 1e-12 * r.diagonal
-
-
-@pytest.mark.parametrize("dims", [(12, 15, 48, 57), (30, 13, 117, 50)])
-def test_coarse_start_is_the_bicubic_interpolating_spline(dims):
-    """The coarse grid is interpolated by the not-a-knot bicubic spline of FITPACK's
-    RectBivariateSpline (the tensor product, evaluated through sparse basis matrices)."""
-    from scipy.interpolate import RectBivariateSpline
-
-    c1, c2, n1, n2 = dims
-    values = np.random.default_rng(c1).normal(size=(c2 + 1, c1 + 1, 2))
-    uc, vc = np.arange(c1 + 1) / c1, np.arange(c2 + 1) / c2
-    uf, vf = np.arange(1, n1) / n1, np.arange(1, n2) / n2
-    want = [RectBivariateSpline(vc, uc, values[..., d], kx=3, ky=3)(vf, uf) for d in range(2)]
-    np.testing.assert_allclose(rg._bicubic(values, uc, vc, uf, vf), np.stack(want, -1), atol=1e-13)
 
 
 def test_certify_closest_is_the_documented_rule(monkeypatch):

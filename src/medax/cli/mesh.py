@@ -44,6 +44,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "transfinite) or at the ends of the constant-ratio curves (ratio); ratio and angle "
         "methods only (the paper's recursion places its own)",
     )
+    p.add_argument(
+        "--tol",
+        type=float,
+        default=None,
+        help="node tolerance x diagonal (ratio, angle: 1e-6; interior nodes on free-form "
+        "sides are interpolated where that is estimated within it, 0 solves every node; "
+        "paper: the traced splines' tolerance, 1e-9)",
+    )
     p.add_argument("-o", "--output", required=True, help="mesh file: .msh .vtu .inp .bdf")
     p.add_argument("--format", help="override the format: msh, vtu, abaqus, nastran")
     p.add_argument("--report", help="quality report (JSON)")
@@ -107,6 +115,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--size must be positive, got {args.size}")
     if args.boundary is not None and args.method == "paper":
         raise InputError("--boundary applies to the ratio and angle methods, not to paper")
+    if args.tol is not None and not (math.isfinite(args.tol) and args.tol >= 0.0):
+        raise InputError(f"--tol must be a non-negative number, got {args.tol}")
     if args.plot and Path(args.plot).suffix.lower() not in PLOT_SUFFIXES:
         raise InputError(f"--plot {args.plot}: use a {', '.join(PLOT_SUFFIXES)} file name")
     for out in (args.output, args.report, args.plot):
@@ -118,6 +128,7 @@ def run(args: argparse.Namespace) -> int:
         divisions=divisions,
         size=args.size,
         method=args.method,
+        tol=args.tol,
         boundary=args.boundary or "arclength",
     )
     time_s = float(mesh.info["time_s"])

@@ -61,17 +61,28 @@ def divisions_for_size(region: Region, size: float) -> tuple[int, int]:
     return max(n1, 1), max(n2, 1)
 
 
+#: Default node tolerance (x diagonal) of the ratio and angle methods: that of the tracer's
+#: splines (:data:`medax.tolerances.CURVE_TOL`).
+NODE_TOL = tolerances.CURVE_TOL
+#: Default tolerance (x diagonal) of the paper's traced splines.
+PAPER_TOL = 1e-9
+
+
 def mesh_region(
     region: Region,
     divisions: tuple[int, int] | None = None,
     size: float | None = None,
     method: str = "ratio",
-    tol: float = 1e-9,
+    tol: float | None = None,
     boundary: str = "arclength",
 ) -> QuadMesh:
     """A structured quad mesh of ``region`` with ``divisions = (n1, n2)`` (along S0, along S1)
     or edges of about ``size`` (region units). ``tol`` (relative to the diagonal) bounds the
-    node error of the crossings and, for ``"paper"``, the traced splines' error. ``boundary``
+    node error of the crossings: for ``"ratio"`` and ``"angle"`` (default
+    :data:`NODE_TOL`) interior nodes of regions with free-form sides are interpolated from
+    the coarser level where its error estimate allows, and solved elsewhere (``0``: every
+    node solved; boundary nodes and regions of lines and arcs are always exact); for
+    ``"paper"`` (default :data:`PAPER_TOL`) it is the traced splines' error. ``boundary``
     (``"ratio"`` and ``"angle"`` methods): boundary nodes at equal arc length
     (``"arclength"``) or at the ends of the curves of constant ratio (``"ratio"``), see
     :mod:`medax.mesh.boundary_nodes`."""
@@ -90,6 +101,12 @@ def mesh_region(
         n1, n2 = divisions_for_size(region, size)
     if max(n1, n2) > MAX_DIVISIONS:
         raise InputError(f"divisions {n1},{n2} exceed the limit {MAX_DIVISIONS} per direction")
+    if tol is None:
+        tol = PAPER_TOL if method == "paper" else NODE_TOL
+    if not (math.isfinite(tol) and tol >= 0.0):
+        raise InputError(f"tol must be a non-negative number, got {tol}")
+    if method == "paper" and tol == 0.0:
+        raise InputError("method 'paper' needs a positive tol (its traced splines' error)")
     t0 = time.perf_counter()
     info: dict = {}
     if method in ("angle", "ratio"):
@@ -97,7 +114,8 @@ def mesh_region(
         # solved centred and at unit diagonal, so that far from the origin the node tolerance
         # (1e-13 x diagonal) is still above round-off
         work, offset, scale = normalised_region(region)
-        params, info = ratio_grid(work, n1, n2, min(tol, tolerances.POINT_TOL), weighting, boundary)
+        point_tol = min(tol or tolerances.POINT_TOL, tolerances.POINT_TOL)
+        params, info = ratio_grid(work, n1, n2, point_tol, weighting, boundary, node_tol=tol)
         params = params * scale + offset
     else:
         params, n1, n2 = _paper_grid(region, n1, n2, size, tol)

@@ -28,7 +28,6 @@ import logging
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import BSpline, make_interp_spline
 
 from medax import tolerances
 from medax.errors import MeshError
@@ -37,6 +36,7 @@ from medax.geometry.certify import PointGroups, certify_many
 from medax.geometry.region import Region
 from medax.mesh.boundary_nodes import RULES, side_params
 from medax.mesh.grid import boundary_indices
+from medax.mesh.grid_interp import interpolate
 from medax.mesh.ratio_field import (
     WEIGHTINGS,
     PlanarField,
@@ -48,8 +48,12 @@ from medax.mesh.ratio_field import (
 log = logging.getLogger(__name__)
 _NEWTON_ITERS = 40
 _GLOBAL_ROUNDS = 3  # re-solves after the global foot check
-_COARSE_MIN = 12  # grids with both counts >= 4x this start from a coarser grid
+_COARSE_MIN = 12  # grids with both counts >= 2x this start from a coarser grid
 _FOOT_JUMP = 0.05  # coarse-cell spread of foot parameters taken as a jump
+_INTERP_SHARE = 0.2  # hard above this share of the tolerance: the estimate was seen up to 3.5x low
+_MOVED_SHARE = 2.0  # ... or where the coarse level's solve moved a node near by more than this
+_INTERP_MIN = 48  # divisions of a coarse level below which its interpolation is not trusted
+_FOOT_TURN = 8.0  # ... or this times the median spread on the side: the foot turns fast
 _TRACK_STEP = 1e-3  # Newton moves (x diagonal) below which feet are tracked, not searched
 _SAME = 1e-15  # boundary ratios at both ends of a node row or column taken as one value
 _BLOCK = 32768  # nodes solved together on the closed-form path (temporaries stay in cache)
@@ -62,9 +66,14 @@ def ratio_grid(
     point_tol: float = tolerances.POINT_TOL,
     weighting: str = "auto",
     boundary: str = "arclength",
+    node_tol: float = 0.0,
 ) -> tuple[FloatArray, dict[str, float]]:
     """Parameter-plane nodes (``(n1 + 1) * (n2 + 1)``, 2) of the ratio grid; and counts.
-    ``boundary`` places the boundary nodes (:data:`~medax.mesh.boundary_nodes.RULES`)."""
+    ``boundary`` places the boundary nodes (:data:`~medax.mesh.boundary_nodes.RULES`).
+    Solved nodes meet both equations to ``1e-3 * point_tol`` (x diagonal); with
+    ``node_tol > 0`` (x diagonal) interior nodes on free-form sides whose interpolation from
+    the coarser level is measured to be within it are interpolated, not solved (see
+    :func:`_hard_nodes`)."""
     if weighting not in WEIGHTINGS:
         raise ValueError(f"unknown weighting '{weighting}'")
     if boundary not in RULES:
@@ -73,19 +82,35 @@ def ratio_grid(
     tol = point_tol * region.diagonal
     levels = _levels(n1, n2)
     sides = side_params(region, levels, tol, kinds, boundary)
-    grid, _, counts = _grid(region, levels, sides, tol, kinds, with_feet=False)
+    level = _grid(region, levels, sides, tol, kinds, node_tol * region.diagonal, False)
+    counts = level.counts
     counts["max_residual"] /= region.diagonal
-    return grid.reshape(-1, 2), counts
+    return level.grid.reshape(-1, 2), counts
 
 
 def _levels(n1: int, n2: int) -> list[tuple[int, int]]:
     """Division counts of the grid and of its coarse starts, finest first: grids with both
-    counts at least ``4 * _COARSE_MIN`` start from one of about a quarter of the counts."""
+    counts at least ``2 * _COARSE_MIN`` start from one of about half the counts."""
     out = [(n1, n2)]
-    while min(out[-1]) >= 4 * _COARSE_MIN:
+    while min(out[-1]) >= 2 * _COARSE_MIN:
         c1, c2 = out[-1]
-        out.append((max(_COARSE_MIN, -(-c1 // 4)), max(_COARSE_MIN, -(-c2 // 4))))
+        out.append((max(_COARSE_MIN, -(-c1 // 2)), max(_COARSE_MIN, -(-c2 // 2))))
     return out
+
+
+@dataclass
+class _Level:
+    """A solved level: nodes ``grid`` (n2 + 1, n1 + 1, 2), feet on the tracked sides (each
+    (n2 + 1, n1 + 1), empty arrays for the others; none unless asked for), the estimated
+    error of each node ((n2 + 1, n1 + 1): 0 where solved), how far the solve moved each
+    node from its interpolated start ((n2 + 1, n1 + 1): the measured interpolation error; 0
+    where not solved, inf where solved from no interpolation) and counts."""
+
+    grid: FloatArray
+    feet: list[FloatArray]
+    error: FloatArray
+    moved: FloatArray
+    counts: dict[str, float]
 
 
 def _grid(
@@ -94,16 +119,17 @@ def _grid(
     side_t: list[list[tuple[FloatArray, FloatArray]]],
     tol: float,
     kinds: tuple[str, str],
+    node_tol: float,
     with_feet: bool = True,
-) -> tuple[FloatArray, list[FloatArray], dict[str, float]]:
-    """Nodes (n2 + 1, n1 + 1, 2) of ``levels[0]`` (boundary nodes and their ratios:
-    ``side_t[0]``, see :func:`~medax.mesh.boundary_nodes.side_params`), feet on
-    the tracked sides (each (n2 + 1, n1 + 1); none unless ``with_feet``: only a coarse
-    start needs them) and counts.
+) -> _Level:
+    """The grid of ``levels[0]`` (boundary nodes and their ratios: ``side_t[0]``, see
+    :func:`~medax.mesh.boundary_nodes.side_params`), feet only ``with_feet`` (a coarse
+    start needs them).
 
-    Large grids start from the coarser ``levels[1]`` (solved the same way) interpolated by
-    bicubic splines in the ratios, with feet interpolated too: Newton then takes small
-    steps with tracked feet, and one global query per side checks them.
+    Large grids start from the coarser ``levels[1]`` (solved the same way) interpolated
+    (:mod:`medax.mesh.grid_interp`), with feet interpolated too: Newton then takes small
+    steps with tracked feet, and one global query per side checks them. Nodes that
+    :func:`_hard_nodes` finds well interpolated keep the interpolated position.
     """
     n1, n2 = levels[0]
     idx = boundary_indices(n1, n2)
@@ -114,18 +140,132 @@ def _grid(
     params[idx[2][[0, -1]]] = region.corners[[2, 3]]
     grid = params.reshape(n2 + 1, n1 + 1, 2)
     ra, rb, axes = _targets(side_t[0], n1, n2)
+    m = (n1 - 1) * (n2 - 1)
     feet0: list[FloatArray] | None = None
     coarse_counts: dict[str, float] = {}
+    hard = np.ones(m, dtype=bool)
+    spread: list[FloatArray] = []
     if len(levels) > 1:
-        cgrid, cfeet, coarse_counts = _grid(region, levels[1:], side_t[1:], tol, kinds)
-        inner, feet0 = _refine_guess(cgrid, cfeet, n1, n2)
+        coarse = _grid(region, levels[1:], side_t[1:], tol, kinds, node_tol)
+        coarse_counts = coarse.counts
+        spread = [_spread(f) for f in coarse.feet]
+        kinks = _kink_cells(spread, coarse.feet, coarse.grid.shape[:2])
+        inner, err, cubic_feet = _refine_guess(
+            coarse.grid, coarse.feet, coarse.error, kinks, n1, n2
+        )
+        if (
+            node_tol > 0.0
+            and min(levels[1]) >= _INTERP_MIN
+            and not PlanarField.supports(region, kinds)
+        ):
+            hard = (
+                (err > _INTERP_SHARE * node_tol)
+                | _near_kinks(kinks, n1, n2)
+                | _rough(coarse.moved, n1, n2, _MOVED_SHARE * node_tol)
+            )
     else:
         inner = _coons(grid, n1, n2)[1:-1, 1:-1].reshape(-1, 2)
-    solved, feet, counts = _solve(region, inner, ra, rb, 1e-3 * tol, kinds, feet0, axes)
-    grid[1:-1, 1:-1] = solved.reshape(n2 - 1, n1 - 1, 2)
-    for key in ("newton_iterations", "global_resolved"):
+    rows = np.flatnonzero(hard)
+    start: list[FloatArray] | None = None
+    if len(levels) > 1:
+        # the feet: at every node if this level starts a finer one, else at the solved ones
+        at = None if with_feet else rows
+        feet0 = [
+            f if f.size == 0 else _start_feet(cf, sp, n1, n2, at)
+            for f, cf, sp in zip(coarse.feet, cubic_feet, spread, strict=True)
+        ]
+        start = [f[rows] if f.size and with_feet else f for f in feet0]
+    solved, feet, counts = _solve(
+        region, inner[rows], ra[rows], rb[rows], 1e-3 * tol, kinds, start,
+        axes if rows.size == m else (None, None),
+    )  # fmt: skip
+    moved = np.zeros((n2 + 1, n1 + 1))  # how far the solve moved each node from its start
+    if rows.size:
+        step = np.zeros(m)
+        step[rows] = np.linalg.norm(solved - inner[rows], axis=1) if len(levels) > 1 else np.inf
+        moved[1:-1, 1:-1] = step.reshape(n2 - 1, n1 - 1)
+    inner[rows] = solved
+    grid[1:-1, 1:-1] = inner.reshape(n2 - 1, n1 - 1, 2)
+    error = np.zeros((n2 + 1, n1 + 1))  # solved and boundary nodes: exact
+    if rows.size < m:
+        err[rows] = 0.0
+        error[1:-1, 1:-1] = err.reshape(n2 - 1, n1 - 1)
+    counts["interpolated"] = float(m - rows.size)
+    for key in ("newton_iterations", "global_resolved", "interpolated"):
         counts[f"coarse_{key}"] = coarse_counts.get(key, 0) + coarse_counts.get(f"coarse_{key}", 0)
-    return grid, _full_feet(region, grid, feet, kinds) if with_feet else [], counts
+    out_feet: list[FloatArray] = []
+    if with_feet:
+        if feet0 is None:
+            inner_feet = feet
+        else:
+            inner_feet = []
+            for k in range(4):
+                f = feet0[k].copy()
+                if f.size:
+                    f[rows] = feet[k]
+                inner_feet.append(f)
+        out_feet = _full_feet(region, grid, inner_feet, kinds)
+    return _Level(grid, out_feet, error, moved, counts)
+
+
+def _rough(moved: FloatArray, n1: int, n2: int, limit: float) -> np.ndarray:
+    """Interior nodes (bool ((n1 - 1) * (n2 - 1),)) of an ``n1 x n2`` grid whose coarse
+    cell has, among the 4 x 4 coarse nodes around it, one that the coarse level's solve
+    moved by more than ``limit`` from its interpolated start (``moved`` (c2 + 1, c1 + 1)).
+
+    A measured check of the estimate: halving the spacing divides the interpolation error
+    by about 16 where the node map is smooth, by only 2 at a kink, so where the coarser
+    interpolation was measured off by more than ``limit`` this one may be off by half of it.
+    """
+    c2, c1 = moved.shape[0] - 1, moved.shape[1] - 1
+    near = _window_max(_window_max(moved, 0, c2), 1, c1)  # (c2, c1)
+    ci = np.minimum((np.arange(1, n1) / n1 * c1).astype(np.int64), c1 - 1)
+    cj = np.minimum((np.arange(1, n2) / n2 * c2).astype(np.int64), c2 - 1)
+    return (near[cj][:, ci] > limit).ravel()
+
+
+def _window_max(values: FloatArray, axis: int, cells: int) -> FloatArray:
+    """Max of ``values`` along ``axis`` over nodes ``k - 1 .. k + 2`` (clipped) for each
+    cell ``k < cells``: the nodes of a cubic stencil around the cell."""
+    v = np.moveaxis(values, axis, 0)
+    idx = np.clip(np.arange(cells)[:, None] + np.arange(-1, 3), 0, v.shape[0] - 1)
+    return np.moveaxis(v[idx].max(axis=1), 0, axis)
+
+
+def _near_kinks(kinks: np.ndarray, n1: int, n2: int) -> np.ndarray:
+    """Interior nodes (bool ((n1 - 1) * (n2 - 1),)) of an ``n1 x n2`` grid in or next to
+    (one cell, diagonals included) a coarse cell of ``kinks`` (c2, c1): the feet place a
+    kink only to within a cell, and the error estimate next to one is not to be trusted."""
+    c2, c1 = kinks.shape
+    near = kinks.copy()
+    near[1:] |= kinks[:-1]
+    near[:-1] |= kinks[1:]
+    wide = near.copy()
+    wide[:, 1:] |= near[:, :-1]
+    wide[:, :-1] |= near[:, 1:]
+    ci = np.minimum((np.arange(1, n1) / n1 * c1).astype(np.int64), c1 - 1)
+    cj = np.minimum((np.arange(1, n2) / n2 * c2).astype(np.int64), c2 - 1)
+    return wide[cj][:, ci].ravel()
+
+
+def _kink_cells(
+    spread: list[FloatArray], feet: list[FloatArray], shape: tuple[int, ...]
+) -> np.ndarray:
+    """Cells (bool (c2, c1)) of a grid with nodes ``shape`` (c2 + 1, c1 + 1) where the node
+    map has a kink, from the feet on each tracked side at the cell's corners (``spread``:
+    :func:`_spread` of ``feet``): they spread over more than ``_FOOT_JUMP`` (a foot jumps)
+    or over more than ``_FOOT_TURN`` times the side's median (it turns fast, near a focal
+    point), or some are at an end of the side and some are not (a foot reaches it)."""
+    out = np.zeros((shape[0] - 1, shape[1] - 1), dtype=bool)
+    for sp, t in zip(spread, feet, strict=True):
+        if t.size == 0:
+            continue
+        width, lo, hi = sp
+        moving = width[width > 0.0]
+        typical = float(np.median(moving)) if moving.size else 0.0
+        out |= width > min(_FOOT_JUMP, _FOOT_TURN * typical)
+        out |= ((lo <= 0.0) | (hi >= 1.0)) & (width > 0.0)
+    return out
 
 
 def _targets(
@@ -173,51 +313,58 @@ def _full_feet(
 
 
 def _refine_guess(
-    cgrid: FloatArray, cfeet: list[FloatArray], n1: int, n2: int
-) -> tuple[FloatArray, list[FloatArray]]:
-    """Interior nodes ((n1 - 1) * (n2 - 1), 2) and feet of an ``n1 x n2`` grid interpolated
-    from a coarse grid: bicubic splines of the nodes over the ratios (uniform on both
-    grids), bilinear for the feet (which may jump)."""
-    c2, c1 = cgrid.shape[0] - 1, cgrid.shape[1] - 1
-    uc, vc = np.arange(c1 + 1) / c1, np.arange(c2 + 1) / c2
+    cgrid: FloatArray,
+    cfeet: list[FloatArray],
+    cerror: FloatArray,
+    kinks: np.ndarray,
+    n1: int,
+    n2: int,
+) -> tuple[FloatArray, FloatArray, list[FloatArray]]:
+    """Interior nodes ((n1 - 1) * (n2 - 1), 2) of an ``n1 x n2`` grid interpolated from a
+    coarse grid (:func:`~medax.mesh.grid_interp.interpolate`, uniform in the ratios on
+    both grids, no stencil across the ``kinks`` cells), the estimated error of each
+    ((n1 - 1) * (n2 - 1),: the interpolation's and the coarse nodes' own, ``cerror``) and
+    the feet on the tracked sides interpolated with the same weights (each
+    ((n1 - 1) * (n2 - 1),), empty for the others)."""
     uf, vf = np.arange(1, n1) / n1, np.arange(1, n2) / n2
-    nodes = _bicubic(cgrid, uc, vc, uf, vf)
-    feet = [f if f.size == 0 else _interpolate_feet(f, uf, vf) for f in cfeet]
-    return nodes.reshape(-1, 2), feet
+    tracked = [k for k, f in enumerate(cfeet) if f.size]
+    values = np.concatenate([cgrid] + [cfeet[k][..., None] for k in tracked], axis=-1)
+    out, err = interpolate(values, uf, vf, kinks, cerror, measured=2)
+    out = out.reshape(-1, values.shape[-1])
+    feet = [np.empty(0)] * len(cfeet)
+    for c, k in enumerate(tracked):
+        feet[k] = out[:, 2 + c]
+    return np.ascontiguousarray(out[:, :2]), err.ravel(), feet
 
 
-def _bicubic(
-    values: FloatArray, uc: FloatArray, vc: FloatArray, uf: FloatArray, vf: FloatArray
+def _spread(t: FloatArray) -> FloatArray:
+    """Spread (max - min, (c2, c1)) of the feet ``t`` (c2 + 1, c1 + 1) at each cell's
+    corners, and their min and max stacked: (3, c2, c1); empty for an untracked side."""
+    if t.size == 0:
+        return t
+    a, b, c, d = t[:-1, :-1], t[:-1, 1:], t[1:, :-1], t[1:, 1:]
+    lo = np.minimum(np.minimum(a, b), np.minimum(c, d))
+    hi = np.maximum(np.maximum(a, b), np.maximum(c, d))
+    return np.stack((hi - lo, lo, hi))
+
+
+def _start_feet(
+    cubic: FloatArray, spread: FloatArray, n1: int, n2: int, rows: np.ndarray | None
 ) -> FloatArray:
-    """The interpolating bicubic spline (not-a-knot ends, the spline of
-    ``RectBivariateSpline(vc, uc, ., kx=3, ky=3)``) of ``values`` (len(vc), len(uc), d) on
-    the grid ``vf x uf`` (len(vf), len(uf), d): the tensor product's coefficients on the
-    coarse grid, then two sparse basis matrices (four B-splines per point) applied."""
-    cv, cu, d = values.shape
-    kv = make_interp_spline(vc, values.reshape(cv, cu * d), k=3)  # coefficients along v
-    coef_v = kv.c.reshape(cv, cu, d).transpose(1, 0, 2).reshape(cu, cv * d)
-    ku = make_interp_spline(uc, coef_v, k=3)  # ... and along u: (cu, cv * d)
-    at_u = BSpline.design_matrix(uf, ku.t, 3) @ ku.c  # (len(uf), cv * d)
-    at_u = at_u.reshape(uf.size, cv, d).transpose(1, 0, 2).reshape(cv, uf.size * d)
-    out = BSpline.design_matrix(vf, kv.t, 3) @ at_u  # (len(vf), len(uf) * d)
-    return np.asarray(out).reshape(vf.size, uf.size, d)
-
-
-def _interpolate_feet(t: FloatArray, uf: FloatArray, vf: FloatArray) -> FloatArray:
-    """Feet ((len(vf) * len(uf),)) interpolated bilinearly from a coarse grid of feet ``t``
-    (c2 + 1, c1 + 1); NaN in cells whose corners' feet differ by more than ``_FOOT_JUMP``
-    (a foot jumps to another part of the side there: such nodes start from a global query)."""
-    c2, c1 = t.shape[0] - 1, t.shape[1] - 1
-    corners = np.stack((t[:-1, :-1], t[:-1, 1:], t[1:, :-1], t[1:, 1:]))
-    spread = corners.max(axis=0) - corners.min(axis=0)  # (c2, c1) per coarse cell
-    ci = np.minimum((uf * c1).astype(np.int64), c1 - 1)
-    cj = np.minimum((vf * c2).astype(np.int64), c2 - 1)
-    fu, fv = uf * c1 - ci, vf * c2 - cj
-    a = t[cj][:, ci] * (1 - fu)[None] + t[cj][:, ci + 1] * fu[None]
-    b = t[cj + 1][:, ci] * (1 - fu)[None] + t[cj + 1][:, ci + 1] * fu[None]
-    out = a * (1 - fv)[:, None] + b * fv[:, None]
-    out[spread[cj][:, ci] > _FOOT_JUMP] = np.nan
-    return out.ravel()
+    """Start feet (len(rows),) at the interior nodes ``rows`` (all if None) of an
+    ``n1 x n2`` grid: the interpolated feet ``cubic`` ((n1 - 1) * (n2 - 1),); NaN in coarse
+    cells whose corners' feet differ by more than ``_FOOT_JUMP`` (``spread``:
+    :func:`_spread` of the coarse feet; a foot jumps to another part of the side there:
+    such nodes start from a global query)."""
+    c2, c1 = spread.shape[1], spread.shape[2]
+    if rows is None:
+        rows = np.arange((n1 - 1) * (n2 - 1))
+    jj, ii = np.divmod(rows, n1 - 1)
+    ci = np.minimum(((ii + 1) / n1 * c1).astype(np.int64), c1 - 1)
+    cj = np.minimum(((jj + 1) / n2 * c2).astype(np.int64), c2 - 1)
+    out = np.clip(cubic[rows], 0.0, 1.0)
+    out[spread[0][cj, ci] > _FOOT_JUMP] = np.nan
+    return out
 
 
 def _coons(grid: FloatArray, n1: int, n2: int) -> FloatArray:
