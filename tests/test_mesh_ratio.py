@@ -123,6 +123,25 @@ def test_interpolated_nodes_within_the_tolerance(divisions, tol, share):
     assert np.all(fast.quality().scaled_jacobian > 0.0)
 
 
+def test_stalled_newton_is_solved_again_from_global_feet(monkeypatch):
+    """Quarter-size coarse levels leave one node of the 512x512 ``wavy`` grid whose damped
+    Newton stalls with tracked feet (residual 3e-7 x diagonal after 40 iterations); it is
+    solved again from global feet, and the grid is that of the half-size levels."""
+    r = REGIONS["wavy"]
+    halves = mesh_region(r, (512, 512), tol=0.0)
+
+    def quarters(n1, n2):
+        out = [(n1, n2)]
+        while min(out[-1]) >= 4 * rg._COARSE_MIN:
+            out.append(tuple(max(rg._COARSE_MIN, -(-c // 4)) for c in out[-1]))
+        return out
+
+    monkeypatch.setattr(rg, "_levels", quarters)
+    m = mesh_region(r, (512, 512), tol=0.0)
+    assert m.info["global_resolved"] > 0
+    assert np.abs(m.params - halves.params).max() <= 1e-9 * r.diagonal
+
+
 def test_line_and_arc_regions_are_always_solved():
     """Regions of lines and arcs have every foot in closed form: nothing is interpolated,
     whatever the tolerance."""

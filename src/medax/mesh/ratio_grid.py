@@ -418,7 +418,14 @@ def _solve(
     for round_ in range(_GLOBAL_ROUNDS + 1):
         p[rows], it, res[rows] = _newton(sides, p[rows], ra, rb, rows, tol, kinds)
         counts["newton_iterations"] += it
-        rows = _wrong_feet(sides, p, tol, rows)
+        # not converged: the tracked feet may have stalled it (a foot passing to another
+        # part of its side between trial points): solved again from global feet
+        wrong = _wrong_feet(sides, p, tol, rows)
+        stuck = rows[res[rows] > tol]
+        for k in range(4):
+            if sides.tracked[k]:
+                sides.t[k][stuck] = np.nan
+        rows = np.union1d(wrong, stuck)
         if rows.size == 0:
             break
         if round_ == _GLOBAL_ROUNDS:
