@@ -180,6 +180,7 @@ class SideDistances:
             for k, c in enumerate(self.curves)
         ]
         self.t = [np.full(n, np.nan) for _ in range(4)]  # accepted feet (tracked sides)
+        self.t_alt = [np.full(n, np.nan) for _ in range(4)]  # second starts (NaN: none)
         self.d = [np.full(n, np.nan) for _ in range(4)]  # accepted distances
 
     def dist(
@@ -197,14 +198,25 @@ class SideDistances:
         elif rows is None or not self.tracked[k]:
             c = curve.closest(x)
         else:
-            c = _tracked(curve, x, self.t[k][rows])
+            c = _tracked(curve, x, self.t[k][rows], self.t_alt[k][rows])
         u = (x - c.foot) / np.maximum(c.distance, _TINY)[:, None]
         return c.distance, u, c.t
 
 
-def _tracked(curve: Curve, x: FloatArray, t0: FloatArray) -> Closest:
+def _tracked(curve: Curve, x: FloatArray, t0: FloatArray, t1: FloatArray | None = None) -> Closest:
     """Feet from the accepted ones ``t0`` (n,) by :func:`track_closest`; a global query
-    for rows without one (NaN)."""
+    for rows without one (NaN). Rows with a second start in ``t1`` (n,) (NaN: none) track
+    it too and keep the nearer foot."""
+    if t1 is not None:
+        two = np.flatnonzero(~np.isnan(t1) & ~np.isnan(t0))
+        out = _tracked(curve, x, t0)
+        if two.size:
+            alt = track_closest(curve, x[two], t1[two])
+            better = alt.distance < out.distance[two]
+            sel = two[better]
+            out.t[sel], out.foot[sel] = alt.t[better], alt.foot[better]
+            out.distance[sel] = alt.distance[better]
+        return out
     cold = np.isnan(t0)
     if not cold.any():
         return track_closest(curve, x, t0)

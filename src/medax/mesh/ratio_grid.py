@@ -174,7 +174,7 @@ def _grid(
             f if f.size == 0 else _start_feet(cf, sp, n1, n2, at)
             for f, cf, sp in zip(coarse.feet, cubic_feet, spread, strict=True)
         ]
-        start = [f[rows] if f.size and with_feet else f for f in feet0]
+        start = [f[:, rows] if f.size and with_feet else f for f in feet0]
     solved, feet, counts = _solve(
         region, inner[rows], ra[rows], rb[rows], 1e-3 * tol, kinds, start,
         axes if rows.size == m else (None, None),
@@ -200,7 +200,7 @@ def _grid(
         else:
             inner_feet = []
             for k in range(4):
-                f = feet0[k].copy()
+                f = feet0[k][0].copy() if feet0[k].size else feet0[k]
                 if f.size:
                     f[rows] = feet[k]
                 inner_feet.append(f)
@@ -351,19 +351,24 @@ def _spread(t: FloatArray) -> FloatArray:
 def _start_feet(
     cubic: FloatArray, spread: FloatArray, n1: int, n2: int, rows: np.ndarray | None
 ) -> FloatArray:
-    """Start feet (len(rows),) at the interior nodes ``rows`` (all if None) of an
-    ``n1 x n2`` grid: the interpolated feet ``cubic`` ((n1 - 1) * (n2 - 1),); NaN in coarse
-    cells whose corners' feet differ by more than ``_FOOT_JUMP`` (``spread``:
-    :func:`_spread` of the coarse feet; a foot jumps to another part of the side there:
-    such nodes start from a global query)."""
+    """Start feet (2, len(rows)) at the interior nodes ``rows`` (all if None) of an
+    ``n1 x n2`` grid: the interpolated feet ``cubic`` ((n1 - 1) * (n2 - 1),) and a second
+    start NaN; in coarse cells whose corners' feet differ by more than ``_FOOT_JUMP``
+    (``spread``: :func:`_spread` of the coarse feet; a foot jumps to another part of the
+    side there) the lowest and the highest corner foot instead, one on each part: both are
+    tracked and the nearer kept (:func:`~medax.mesh.ratio_field._tracked`; the feet are
+    certified global at the end)."""
     c2, c1 = spread.shape[1], spread.shape[2]
     if rows is None:
         rows = np.arange((n1 - 1) * (n2 - 1))
     jj, ii = np.divmod(rows, n1 - 1)
     ci = np.minimum(((ii + 1) / n1 * c1).astype(np.int64), c1 - 1)
     cj = np.minimum(((jj + 1) / n2 * c2).astype(np.int64), c2 - 1)
-    out = np.clip(cubic[rows], 0.0, 1.0)
-    out[spread[0][cj, ci] > _FOOT_JUMP] = np.nan
+    out = np.full((2, rows.size), np.nan)
+    out[0] = np.clip(cubic[rows], 0.0, 1.0)
+    jump = spread[0][cj, ci] > _FOOT_JUMP
+    out[0, jump] = spread[1][cj[jump], ci[jump]]
+    out[1, jump] = spread[2][cj[jump], ci[jump]]
     return out
 
 
@@ -411,7 +416,9 @@ def _solve(
     if feet0 is not None:
         for k in range(4):
             if sides.tracked[k]:
-                sides.t[k] = np.clip(feet0[k], 0.0, 1.0)  # NaN stays: start from a global query
+                # NaN stays NaN: no start (a global query), or no second one
+                sides.t[k] = np.clip(feet0[k][0], 0.0, 1.0)
+                sides.t_alt[k] = np.clip(feet0[k][1], 0.0, 1.0)
     p = p.copy()
     res = np.zeros(n)
     rows = np.arange(n)
@@ -678,6 +685,8 @@ class _System:
         g, s = self.rows[sel], self.sides
         s.t[0][g], s.t[2][g], s.d[0][g], s.d[2][g] = v.feet_a
         s.t[1][g], s.t[3][g], s.d[1][g], s.d[3][g] = v.feet_b
+        for alt in s.t_alt:  # the accepted foot is the one to follow
+            alt[g] = np.nan
 
 
 def _newton_step(ga: FloatArray, Ga: FloatArray, gb: FloatArray, Gb: FloatArray) -> FloatArray:
