@@ -35,8 +35,15 @@ from medax.geometry._types import FloatArray
 from medax.geometry.certify import PointGroups, certify_many
 from medax.geometry.region import Region
 from medax.mesh.boundary_nodes import RULES, side_params
+from medax.mesh.coarse_start import (
+    INTERP_MIN,
+    feet_spread,
+    hard_nodes,
+    kink_cells,
+    refine_guess,
+    start_feet,
+)
 from medax.mesh.grid import boundary_indices
-from medax.mesh.grid_interp import interpolate
 from medax.mesh.ratio_field import (
     WEIGHTINGS,
     PlanarField,
@@ -49,11 +56,6 @@ log = logging.getLogger(__name__)
 _NEWTON_ITERS = 40
 _GLOBAL_ROUNDS = 3  # re-solves after the global foot check
 _COARSE_MIN = 12  # grids with both counts >= 2x this start from a coarser grid
-_FOOT_JUMP = 0.05  # coarse-cell spread of foot parameters taken as a jump
-_INTERP_SHARE = 0.2  # hard above this share of the tolerance: the estimate was seen up to 3.5x low
-_MOVED_SHARE = 2.0  # ... or where the coarse level's solve moved a node near by more than this
-_INTERP_MIN = 48  # divisions of a coarse level below which its interpolation is not trusted
-_FOOT_TURN = 8.0  # ... or this times the median spread on the side: the foot turns fast
 _TRACK_STEP = 1e-3  # Newton moves (x diagonal) below which feet are tracked, not searched
 _SAME = 1e-15  # boundary ratios at both ends of a node row or column taken as one value
 _BLOCK = 32768  # nodes solved together on the closed-form path (temporaries stay in cache)
@@ -148,21 +150,15 @@ def _grid(
     if len(levels) > 1:
         coarse = _grid(region, levels[1:], side_t[1:], tol, kinds, node_tol)
         coarse_counts = coarse.counts
-        spread = [_spread(f) for f in coarse.feet]
-        kinks = _kink_cells(spread, coarse.feet, coarse.grid.shape[:2])
-        inner, err, cubic_feet = _refine_guess(
-            coarse.grid, coarse.feet, coarse.error, kinks, n1, n2
-        )
+        spread = [feet_spread(f) for f in coarse.feet]
+        kinks = kink_cells(spread, coarse.feet, coarse.grid.shape[:2])
+        inner, err, cubic_feet = refine_guess(coarse.grid, coarse.feet, coarse.error, kinks, n1, n2)
         if (
             node_tol > 0.0
-            and min(levels[1]) >= _INTERP_MIN
+            and min(levels[1]) >= INTERP_MIN
             and not PlanarField.supports(region, kinds)
         ):
-            hard = (
-                (err > _INTERP_SHARE * node_tol)
-                | _near_kinks(kinks, n1, n2)
-                | _rough(coarse.moved, n1, n2, _MOVED_SHARE * node_tol)
-            )
+            hard = hard_nodes(err, kinks, coarse.moved, n1, n2, node_tol)
     else:
         inner = _coons(grid, n1, n2)[1:-1, 1:-1].reshape(-1, 2)
     rows = np.flatnonzero(hard)
@@ -171,7 +167,7 @@ def _grid(
         # the feet: at every node if this level starts a finer one, else at the solved ones
         at = None if with_feet else rows
         feet0 = [
-            f if f.size == 0 else _start_feet(cf, sp, n1, n2, at)
+            f if f.size == 0 else start_feet(cf, sp, n1, n2, at)
             for f, cf, sp in zip(coarse.feet, cubic_feet, spread, strict=True)
         ]
         start = [f[:, rows] if f.size and with_feet else f for f in feet0]
@@ -206,66 +202,6 @@ def _grid(
                 inner_feet.append(f)
         out_feet = _full_feet(region, grid, inner_feet, kinds)
     return _Level(grid, out_feet, error, moved, counts)
-
-
-def _rough(moved: FloatArray, n1: int, n2: int, limit: float) -> np.ndarray:
-    """Interior nodes (bool ((n1 - 1) * (n2 - 1),)) of an ``n1 x n2`` grid whose coarse
-    cell has, among the 4 x 4 coarse nodes around it, one that the coarse level's solve
-    moved by more than ``limit`` from its interpolated start (``moved`` (c2 + 1, c1 + 1)).
-
-    A measured check of the estimate: halving the spacing divides the interpolation error
-    by about 16 where the node map is smooth, by only 2 at a kink, so where the coarser
-    interpolation was measured off by more than ``limit`` this one may be off by half of it.
-    """
-    c2, c1 = moved.shape[0] - 1, moved.shape[1] - 1
-    near = _window_max(_window_max(moved, 0, c2), 1, c1)  # (c2, c1)
-    ci = np.minimum((np.arange(1, n1) / n1 * c1).astype(np.int64), c1 - 1)
-    cj = np.minimum((np.arange(1, n2) / n2 * c2).astype(np.int64), c2 - 1)
-    return (near[cj][:, ci] > limit).ravel()
-
-
-def _window_max(values: FloatArray, axis: int, cells: int) -> FloatArray:
-    """Max of ``values`` along ``axis`` over nodes ``k - 1 .. k + 2`` (clipped) for each
-    cell ``k < cells``: the nodes of a cubic stencil around the cell."""
-    v = np.moveaxis(values, axis, 0)
-    idx = np.clip(np.arange(cells)[:, None] + np.arange(-1, 3), 0, v.shape[0] - 1)
-    return np.moveaxis(v[idx].max(axis=1), 0, axis)
-
-
-def _near_kinks(kinks: np.ndarray, n1: int, n2: int) -> np.ndarray:
-    """Interior nodes (bool ((n1 - 1) * (n2 - 1),)) of an ``n1 x n2`` grid in or next to
-    (one cell, diagonals included) a coarse cell of ``kinks`` (c2, c1): the feet place a
-    kink only to within a cell, and the error estimate next to one is not to be trusted."""
-    c2, c1 = kinks.shape
-    near = kinks.copy()
-    near[1:] |= kinks[:-1]
-    near[:-1] |= kinks[1:]
-    wide = near.copy()
-    wide[:, 1:] |= near[:, :-1]
-    wide[:, :-1] |= near[:, 1:]
-    ci = np.minimum((np.arange(1, n1) / n1 * c1).astype(np.int64), c1 - 1)
-    cj = np.minimum((np.arange(1, n2) / n2 * c2).astype(np.int64), c2 - 1)
-    return wide[cj][:, ci].ravel()
-
-
-def _kink_cells(
-    spread: list[FloatArray], feet: list[FloatArray], shape: tuple[int, ...]
-) -> np.ndarray:
-    """Cells (bool (c2, c1)) of a grid with nodes ``shape`` (c2 + 1, c1 + 1) where the node
-    map has a kink, from the feet on each tracked side at the cell's corners (``spread``:
-    :func:`_spread` of ``feet``): they spread over more than ``_FOOT_JUMP`` (a foot jumps)
-    or over more than ``_FOOT_TURN`` times the side's median (it turns fast, near a focal
-    point), or some are at an end of the side and some are not (a foot reaches it)."""
-    out = np.zeros((shape[0] - 1, shape[1] - 1), dtype=bool)
-    for sp, t in zip(spread, feet, strict=True):
-        if t.size == 0:
-            continue
-        width, lo, hi = sp
-        moving = width[width > 0.0]
-        typical = float(np.median(moving)) if moving.size else 0.0
-        out |= width > min(_FOOT_JUMP, _FOOT_TURN * typical)
-        out |= ((lo <= 0.0) | (hi >= 1.0)) & (width > 0.0)
-    return out
 
 
 def _targets(
@@ -309,66 +245,6 @@ def _full_feet(
         t[1:-1, 1:-1] = inner[k].reshape(n2 - 1, n1 - 1)
         t[ring] = sides.curves[k].closest(x).t
         out.append(t)
-    return out
-
-
-def _refine_guess(
-    cgrid: FloatArray,
-    cfeet: list[FloatArray],
-    cerror: FloatArray,
-    kinks: np.ndarray,
-    n1: int,
-    n2: int,
-) -> tuple[FloatArray, FloatArray, list[FloatArray]]:
-    """Interior nodes ((n1 - 1) * (n2 - 1), 2) of an ``n1 x n2`` grid interpolated from a
-    coarse grid (:func:`~medax.mesh.grid_interp.interpolate`, uniform in the ratios on
-    both grids, no stencil across the ``kinks`` cells), the estimated error of each
-    ((n1 - 1) * (n2 - 1),: the interpolation's and the coarse nodes' own, ``cerror``) and
-    the feet on the tracked sides interpolated with the same weights (each
-    ((n1 - 1) * (n2 - 1),), empty for the others)."""
-    uf, vf = np.arange(1, n1) / n1, np.arange(1, n2) / n2
-    tracked = [k for k, f in enumerate(cfeet) if f.size]
-    values = np.concatenate([cgrid] + [cfeet[k][..., None] for k in tracked], axis=-1)
-    out, err = interpolate(values, uf, vf, kinks, cerror, measured=2)
-    out = out.reshape(-1, values.shape[-1])
-    feet = [np.empty(0)] * len(cfeet)
-    for c, k in enumerate(tracked):
-        feet[k] = out[:, 2 + c]
-    return np.ascontiguousarray(out[:, :2]), err.ravel(), feet
-
-
-def _spread(t: FloatArray) -> FloatArray:
-    """Spread (max - min, (c2, c1)) of the feet ``t`` (c2 + 1, c1 + 1) at each cell's
-    corners, and their min and max stacked: (3, c2, c1); empty for an untracked side."""
-    if t.size == 0:
-        return t
-    a, b, c, d = t[:-1, :-1], t[:-1, 1:], t[1:, :-1], t[1:, 1:]
-    lo = np.minimum(np.minimum(a, b), np.minimum(c, d))
-    hi = np.maximum(np.maximum(a, b), np.maximum(c, d))
-    return np.stack((hi - lo, lo, hi))
-
-
-def _start_feet(
-    cubic: FloatArray, spread: FloatArray, n1: int, n2: int, rows: np.ndarray | None
-) -> FloatArray:
-    """Start feet (2, len(rows)) at the interior nodes ``rows`` (all if None) of an
-    ``n1 x n2`` grid: the interpolated feet ``cubic`` ((n1 - 1) * (n2 - 1),) and a second
-    start NaN; in coarse cells whose corners' feet differ by more than ``_FOOT_JUMP``
-    (``spread``: :func:`_spread` of the coarse feet; a foot jumps to another part of the
-    side there) the lowest and the highest corner foot instead, one on each part: both are
-    tracked and the nearer kept (:func:`~medax.mesh.ratio_field._tracked`; the feet are
-    certified global at the end)."""
-    c2, c1 = spread.shape[1], spread.shape[2]
-    if rows is None:
-        rows = np.arange((n1 - 1) * (n2 - 1))
-    jj, ii = np.divmod(rows, n1 - 1)
-    ci = np.minimum(((ii + 1) / n1 * c1).astype(np.int64), c1 - 1)
-    cj = np.minimum(((jj + 1) / n2 * c2).astype(np.int64), c2 - 1)
-    out = np.full((2, rows.size), np.nan)
-    out[0] = np.clip(cubic[rows], 0.0, 1.0)
-    jump = spread[0][cj, ci] > _FOOT_JUMP
-    out[0, jump] = spread[1][cj[jump], ci[jump]]
-    out[1, jump] = spread[2][cj[jump], ci[jump]]
     return out
 
 
