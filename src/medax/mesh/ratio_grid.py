@@ -56,6 +56,7 @@ log = logging.getLogger(__name__)
 _NEWTON_ITERS = 40
 _GLOBAL_ROUNDS = 3  # re-solves after the global foot check
 _COARSE_MIN = 12  # grids with both counts >= 2x this start from a coarser grid
+_NEWTON_SHARE = 1e-4  # residual share of the node tolerance to which free-form grids are solved
 _TRACK_STEP = 1e-3  # Newton moves (x diagonal) below which feet are tracked, not searched
 _SAME = 1e-15  # boundary ratios at both ends of a node row or column taken as one value
 _BLOCK = 32768  # nodes solved together on the closed-form path (temporaries stay in cache)
@@ -172,7 +173,8 @@ def _grid(
         ]
         start = [f[:, rows] if f.size and with_feet else f for f in feet0]
     solved, feet, counts = _solve(
-        region, inner[rows], ra[rows], rb[rows], 1e-3 * tol, kinds, start,
+        region, inner[rows], ra[rows], rb[rows], _newton_tol(region, kinds, tol, node_tol),
+        kinds, start,
         axes if rows.size == m else (None, None),
     )  # fmt: skip
     moved = np.zeros((n2 + 1, n1 + 1))  # how far the solve moved each node from its start
@@ -202,6 +204,16 @@ def _grid(
                 inner_feet.append(f)
         out_feet = _full_feet(region, grid, inner_feet, kinds)
     return _Level(grid, out_feet, error, moved, counts)
+
+
+def _newton_tol(region: Region, kinds: tuple[str, str], tol: float, node_tol: float) -> float:
+    """Residual (region units) to which nodes are solved: ``1e-3 * tol``, or on regions
+    with free-form sides ``_NEWTON_SHARE`` of the node tolerance if that is larger (a node
+    then sits within about that of its root, far inside the tolerance, and one Newton
+    evaluation fewer is needed from an interpolated start)."""
+    if PlanarField.supports(region, kinds):
+        return 1e-3 * tol
+    return max(1e-3 * tol, _NEWTON_SHARE * node_tol)
 
 
 def _targets(
