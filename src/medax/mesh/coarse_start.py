@@ -120,8 +120,8 @@ def refine_guess(
     coarse grid (:func:`~medax.mesh.grid_interp.interpolate`, uniform in the ratios on
     both grids, no stencil across the ``kinks`` cells), the estimated error of each
     ((n1 - 1) * (n2 - 1),: the interpolation's and the coarse nodes' own, ``cerror``) and
-    the feet on the tracked sides interpolated with the same weights (each
-    ((n1 - 1) * (n2 - 1),), empty for the others)."""
+    the feet ``cfeet`` (each (c2 + 1, c1 + 1), empty for an untracked side; the list may be
+    empty: none wanted) interpolated with the same weights (each ((n1 - 1) * (n2 - 1),))."""
     uf, vf = np.arange(1, n1) / n1, np.arange(1, n2) / n2
     tracked = [k for k, f in enumerate(cfeet) if f.size]
     values = np.concatenate([cgrid] + [cfeet[k][..., None] for k in tracked], axis=-1)
@@ -145,22 +145,34 @@ def feet_spread(t: FloatArray) -> FloatArray:
 
 
 def start_feet(
-    cubic: FloatArray, spread: FloatArray, n1: int, n2: int, rows: np.ndarray | None
+    coarse: FloatArray,
+    cubic: FloatArray | None,
+    spread: FloatArray,
+    n1: int,
+    n2: int,
+    rows: np.ndarray | None,
 ) -> FloatArray:
     """Start feet (2, len(rows)) at the interior nodes ``rows`` (all if None) of an
-    ``n1 x n2`` grid: the interpolated feet ``cubic`` ((n1 - 1) * (n2 - 1),) and a second
-    start NaN; in coarse cells whose corners' feet differ by more than ``FOOT_JUMP``
-    (``spread``: :func:`feet_spread` of the coarse feet; a foot jumps to another part of the
-    side there) the lowest and the highest corner foot instead, one on each part: both are
-    tracked and the nearer kept (:func:`~medax.mesh.ratio_field._tracked`; the feet are
-    certified global at the end)."""
+    ``n1 x n2`` grid: the feet ``cubic`` ((n1 - 1) * (n2 - 1),) interpolated with the
+    nodes, or if None the ``coarse`` feet (c2 + 1, c1 + 1) bilinear, and a second start NaN;
+    in coarse cells whose corners' feet differ by more than ``FOOT_JUMP`` (``spread``:
+    :func:`feet_spread` of the coarse feet; a foot jumps to another part of the side there)
+    the lowest and the highest corner foot instead, one on each part: both are tracked and
+    the nearer kept (:func:`~medax.mesh.ratio_field._tracked`; the feet are certified
+    global at the end)."""
     c2, c1 = spread.shape[1], spread.shape[2]
     if rows is None:
         rows = np.arange((n1 - 1) * (n2 - 1))
     jj, ii = np.divmod(rows, n1 - 1)
     ci, cj = _cells(ii + 1, n1, c1), _cells(jj + 1, n2, c2)
     out = np.full((2, rows.size), np.nan)
-    out[0] = np.clip(cubic[rows], 0.0, 1.0)
+    if cubic is not None:
+        out[0] = np.clip(cubic[rows], 0.0, 1.0)
+    else:
+        fu, fv = (ii + 1) / n1 * c1 - ci, (jj + 1) / n2 * c2 - cj
+        lower = coarse[cj, ci] * (1.0 - fu) + coarse[cj, ci + 1] * fu
+        upper = coarse[cj + 1, ci] * (1.0 - fu) + coarse[cj + 1, ci + 1] * fu
+        out[0] = lower * (1.0 - fv) + upper * fv
     jump = spread[0][cj, ci] > FOOT_JUMP
     out[0, jump] = spread[1][cj[jump], ci[jump]]
     out[1, jump] = spread[2][cj[jump], ci[jump]]

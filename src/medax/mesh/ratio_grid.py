@@ -153,7 +153,10 @@ def _grid(
         coarse_counts = coarse.counts
         spread = [feet_spread(f) for f in coarse.feet]
         kinks = kink_cells(spread, coarse.feet, coarse.grid.shape[:2])
-        inner, err, cubic_feet = refine_guess(coarse.grid, coarse.feet, coarse.error, kinks, n1, n2)
+        # feet interpolated with the nodes where this level starts a finer one (all needed)
+        inner, err, cubic_feet = refine_guess(
+            coarse.grid, coarse.feet if with_feet else [], coarse.error, kinks, n1, n2
+        )
         if (
             node_tol > 0.0
             and min(levels[1]) >= INTERP_MIN
@@ -168,8 +171,10 @@ def _grid(
         # the feet: at every node if this level starts a finer one, else at the solved ones
         at = None if with_feet else rows
         feet0 = [
-            f if f.size == 0 else start_feet(cf, sp, n1, n2, at)
-            for f, cf, sp in zip(coarse.feet, cubic_feet, spread, strict=True)
+            f
+            if f.size == 0
+            else start_feet(f, cubic_feet[k] if with_feet else None, sp, n1, n2, at)
+            for k, (f, sp) in enumerate(zip(coarse.feet, spread, strict=True))
         ]
         start = [f[:, rows] if f.size and with_feet else f for f in feet0]
     solved, feet, counts = _solve(
