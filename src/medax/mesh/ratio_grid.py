@@ -73,10 +73,11 @@ def ratio_grid(
 ) -> tuple[FloatArray, dict[str, float]]:
     """Parameter-plane nodes (``(n1 + 1) * (n2 + 1)``, 2) of the ratio grid; and counts.
     ``boundary`` places the boundary nodes (:data:`~medax.mesh.boundary_nodes.RULES`).
-    Solved nodes meet both equations to ``1e-3 * point_tol`` (x diagonal); with
-    ``node_tol > 0`` (x diagonal) interior nodes on free-form sides whose interpolation from
-    the coarser level is measured to be within it are interpolated, not solved (see
-    :func:`_hard_nodes`)."""
+    Solved nodes meet both equations to ``1e-3 * point_tol`` (x diagonal; on free-form
+    sides to ``_NEWTON_SHARE * node_tol`` if that is larger); with ``node_tol > 0``
+    (x diagonal) interior nodes on free-form sides whose interpolation from the coarser
+    level is estimated within it keep the interpolated position
+    (:func:`~medax.mesh.coarse_start.hard_nodes` picks the others)."""
     if weighting not in WEIGHTINGS:
         raise ValueError(f"unknown weighting '{weighting}'")
     if boundary not in RULES:
@@ -130,9 +131,10 @@ def _grid(
     start needs them).
 
     Large grids start from the coarser ``levels[1]`` (solved the same way) interpolated
-    (:mod:`medax.mesh.grid_interp`), with feet interpolated too: Newton then takes small
+    (:mod:`medax.mesh.coarse_start`), with feet interpolated too: Newton then takes small
     steps with tracked feet, and one global query per side checks them. Nodes that
-    :func:`_hard_nodes` finds well interpolated keep the interpolated position.
+    :func:`~medax.mesh.coarse_start.hard_nodes` does not pick keep the interpolated
+    position.
     """
     n1, n2 = levels[0]
     idx = boundary_indices(n1, n2)
@@ -196,19 +198,30 @@ def _grid(
     counts["interpolated"] = float(m - rows.size)
     for key in ("newton_iterations", "global_resolved", "interpolated"):
         counts[f"coarse_{key}"] = coarse_counts.get(key, 0) + coarse_counts.get(f"coarse_{key}", 0)
-    out_feet: list[FloatArray] = []
-    if with_feet:
-        if feet0 is None:
-            inner_feet = feet
-        else:
-            inner_feet = []
-            for k in range(4):
-                f = feet0[k][0].copy() if feet0[k].size else feet0[k]
-                if f.size:
-                    f[rows] = feet[k]
-                inner_feet.append(f)
-        out_feet = _full_feet(region, grid, inner_feet, kinds)
+    out_feet = _level_feet(region, grid, feet0, feet, rows, kinds) if with_feet else []
     return _Level(grid, out_feet, error, moved, counts)
+
+
+def _level_feet(
+    region: Region,
+    grid: FloatArray,
+    start: list[FloatArray] | None,
+    solved: list[FloatArray],
+    rows: np.ndarray,
+    kinds: tuple[str, str],
+) -> list[FloatArray]:
+    """Feet (n2 + 1, n1 + 1) of every node of ``grid`` on each tracked side: those the
+    solve found at the interior nodes ``rows``, the interpolated ``start`` (2, m) at the
+    others (all interior nodes solved if None), a global query on the boundary."""
+    if start is None:
+        return _full_feet(region, grid, solved, kinds)
+    inner = []
+    for k in range(4):
+        f = start[k][0].copy() if start[k].size else start[k]
+        if f.size:
+            f[rows] = solved[k]
+        inner.append(f)
+    return _full_feet(region, grid, inner, kinds)
 
 
 def _newton_tol(region: Region, kinds: tuple[str, str], tol: float, node_tol: float) -> float:
