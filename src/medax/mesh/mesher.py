@@ -120,6 +120,7 @@ def mesh_region(
     else:
         params, n1, n2 = _paper_grid(region, n1, n2, size, tol)
     info["time_s"] = time.perf_counter() - t0
+    info["tol"] = tol
     points = region.embedding.evaluate(params)
     mesh = QuadMesh(region, params, points, n1, n2, method, info)
     bad = _inverted_count(mesh)
