@@ -162,6 +162,7 @@ def _grid(
         if (
             node_tol > 0.0
             and min(levels[1]) >= INTERP_MIN
+            and region.embedding.is_identity  # (the estimate is in parameter units)
             and not PlanarField.supports(region, kinds)
         ):
             hard = hard_nodes(err, kinks, coarse.moved, n1, n2, node_tol)
