@@ -61,20 +61,23 @@ def chord_points(
     g_scan = field(np.concatenate((b1.evaluate(lam), b2.evaluate(lam)))).g.reshape(2, SCAN)
     brackets = []
     for g in g_scan:
-        change = np.flatnonzero(np.sign(g[:-1]) * np.sign(g[1:]) <= 0.0)
-        if change.size != 1:
+        sg = np.sign(g)
+        change = np.flatnonzero(sg[:-1] * sg[1:] < 0.0)
+        zero = np.flatnonzero(sg == 0.0)
+        if change.size + zero.size != 1:
             return None
-        brackets.append(int(change[0]))
-    i1, i2 = brackets
+        # an exact root on a sample: the bracket [lam_i, lam_i] (solved at once)
+        brackets.append((int(change[0]), 1) if change.size else (int(zero[0]), 0))
+    (i1, w1), (i2, w2) = brackets
     # rows 0 and 1: B1 and B2 in their brackets; then the chords on [0, 1]
-    s = np.linspace(0.0, 1.0, n_chords + 2)[1:-1]
+    s = chord_spacing(n_chords)
     p0 = region.sides[roles.a1].evaluate(s)
     dp = region.sides[roles.a2].evaluate(1.0 - s) - p0
     n = n_chords + 2
     a = np.concatenate(([lam[i1], lam[i2]], np.zeros(n_chords)))
-    b = np.concatenate(([lam[i1 + 1], lam[i2 + 1]], np.ones(n_chords)))
+    b = np.concatenate(([lam[i1 + w1], lam[i2 + w2]], np.ones(n_chords)))
     ga = np.concatenate(([g_scan[0, i1], g_scan[1, i2]], np.full(n_chords, -1.0)))
-    gb = np.concatenate(([g_scan[0, i1 + 1], g_scan[1, i2 + 1]], np.ones(n_chords)))
+    gb = np.concatenate(([g_scan[0, i1 + w1], g_scan[1, i2 + w2]], np.ones(n_chords)))
     # regula falsi in the side brackets, the chords' middles (the field's values at the
     # chord ends are only known by sign)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -134,6 +137,15 @@ def chord_points(
 
 
 _FIELDS = tuple(FieldSample.__dataclass_fields__)
+#: weight of the cosine spacing in :func:`chord_spacing` (0: uniform)
+GRADING = 0.5
+
+
+def chord_spacing(n: int) -> FloatArray:
+    """Chord parameters ``s`` (n,) in (0, 1): uniform blended with the cosine spacing
+    (``GRADING``), finer near B1 and B2 where the not-a-knot fit's end intervals need it."""
+    x = np.linspace(0.0, 1.0, n + 2)[1:-1]
+    return (1.0 - GRADING) * x + GRADING * 0.5 * (1.0 - np.cos(np.pi * x))
 
 
 def _rows(

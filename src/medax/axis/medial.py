@@ -81,19 +81,23 @@ def trace_axis(
     b1, b2 = work.sides[roles.b1], work.sides[roles.b2]
     shortest = float(work.side_lengths().min())
     stats = TraceStats()
-    first = None
+    fit = None
     if method == "frame" and batch and work.embedding.is_identity:
         n_chords = max(4, int(np.ceil(CHORDS * (1e-6 / tol) ** 0.25)))
         first = chord_points(field, b1, b2, n_chords, tol_pt)
-    if first is not None:
-        s0, s1, pts = first.t_start, first.t_end, first.points
-        stats.corrector_iterations += first.iterations
-    else:
+        if first is not None:
+            fit = fit_and_refine(field, first.points, tol_pt, tol_cv, first.sample)
+            s0, s1 = first.t_start, first.t_end
+            stats.corrector_iterations += first.iterations + fit.corrector_iterations
+            if not fit.curve_error <= tol_cv:  # the refinement stalled: trace instead
+                log.debug("%s pair %s: batch start did not converge", region.name, pair)
+                fit = None
+    if fit is None:
         (s0, s1), (p0, p1) = end_points(
             field, (b1, b2), (f"side {roles.b1} (B1)", f"side {roles.b2} (B2)")
         )
     if method == "frame":
-        if first is None:
+        if fit is None:
             # the paper's first step (shortest side / 5), but at most half the chord: on a
             # thin non-convex quad the axis was shorter than one such step and the trace
             # was lost
@@ -102,10 +106,10 @@ def trace_axis(
                 h_min=1e-7 * diag, h_max=0.1 * diag,
                 tol=tol_pt, stats=stats,
             )  # fmt: skip
-        fit = fit_and_refine(field, pts, tol_pt, tol_cv)
+            fit = fit_and_refine(field, pts, tol_pt, tol_cv)
+            stats.corrector_iterations += fit.corrector_iterations
         pts, s, spline = fit.points, fit.sample, fit.spline
         curve_error, rounds = fit.curve_error, fit.rounds
-        stats.corrector_iterations += fit.corrector_iterations
     else:
         b2_curve = work.space_curve(roles.b2)
         pts = trace_paper(

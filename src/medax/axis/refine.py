@@ -59,15 +59,20 @@ def _cat(a: FieldSample, b: FieldSample) -> FieldSample:
 
 
 def fit_and_refine(
-    field: DistanceField, points: FloatArray, tol_point: float, tol_curve: float
+    field: DistanceField,
+    points: FloatArray,
+    tol_point: float,
+    tol_curve: float,
+    sample: FieldSample | None = None,
 ) -> Fitted:
     """Refine ``points`` (n, 2) (on the axis, ordered B1 -> B2, ends exact) until the fitted
     B-spline's equidistance error is within ``CHECK_MARGIN * tol_curve`` (absolute) at every
-    check sample, so within ``tol_curve`` between them."""
+    check sample, so within ``tol_curve`` between them. ``sample`` is the field at
+    ``points`` when the caller has it."""
     target = CHECK_MARGIN * tol_curve
     scale = field.region.diagonal
     pts = np.asarray(points, dtype=np.float64)
-    s = field(pts)
+    s = field(pts) if sample is None else sample
     breaks: set[int] = set()  # indices into pts of C0 break points
     tried: set[int] = set()  # kink intervals Newton did not confirm (refined instead)
     # transitions tried, keyed by their interval's end points (kept while it is unchanged)
