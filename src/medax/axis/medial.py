@@ -86,7 +86,7 @@ def trace_axis(
         n_chords = max(4, int(np.ceil(CHORDS * (1e-6 / tol) ** 0.25)))
         first = chord_points(field, b1, b2, n_chords, tol_pt)
         if first is not None:
-            fit = fit_and_refine(field, first.points, tol_pt, tol_cv, first.sample)
+            fit = fit_and_refine(field, first.points, tol_pt, tol_cv, first.sample, True)
             s0, s1 = first.t_start, first.t_end
             stats.corrector_iterations += first.iterations + fit.corrector_iterations
             if not fit.curve_error <= tol_cv:  # the refinement stalled: trace instead
