@@ -91,3 +91,31 @@ def test_chords_out_of_order_are_refused(regions):
     assert chord_points(field, b1, b2, 8, 1e-10) is not None
     # B1 and B2 swapped: the start is on B2, so every step goes backwards
     assert chord_points(field, b2, b1, 8, 1e-10) is None
+
+
+def test_a_stalled_refinement_falls_back_to_the_trace(regions, monkeypatch):
+    """Uniform chords on the 120-degree channel: the refinement from them stalled at
+    1.7e-6 x diagonal (splitting one interval made its neighbour stray); that result is not
+    returned, the trace runs and the axis is the circle r = 7 within the tolerance."""
+    import medax.axis.chords as chords
+
+    monkeypatch.setattr(chords, "GRADING", 0.0)
+    a = trace_axis(regions["annulus_sector"], (1, 3), closed_form=False)
+    assert not _batched(a)
+    d = a.diagonal
+    assert a.max_curve_error <= 1e-6 * d
+    assert np.max(np.abs(np.linalg.norm(a.points, axis=1) - 7.0)) <= 1e-10 * d
+    dense = a.spline.sample(10 * (a.n_points - 1) + 1)
+    assert np.max(np.abs(np.linalg.norm(dense, axis=1) - 7.0)) <= 1e-6 * d
+
+
+def test_graded_chords_on_the_channel_are_the_circle(regions):
+    """With the graded chords the batch start reaches the tolerance there itself."""
+    a = trace_axis(regions["annulus_sector"], (1, 3), closed_form=False)
+    assert _batched(a)
+    d = a.diagonal
+    assert np.max(np.abs(np.linalg.norm(a.points, axis=1) - 7.0)) <= 1e-10 * d
+    dense = a.spline.sample(10 * (a.n_points - 1) + 1)
+    assert np.max(np.abs(np.linalg.norm(dense, axis=1) - 7.0)) <= 1e-6 * d
+    ang = np.degrees(np.arctan2(a.points[[0, -1], 1], a.points[[0, -1], 0]))
+    assert abs(ang[0]) < 1e-9 and abs(ang[1] - 120.0) < 1e-9

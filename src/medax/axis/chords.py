@@ -6,14 +6,15 @@ end points. So the start point, the end point and one point per chord are each t
 the field along a curve ``c(lam)``, ``lam in [0, 1]``, with a known sign change: all of them
 are solved together by a safeguarded Newton iteration (the exact slope ``grad g . c'``, kept
 inside each row's shrinking bracket), one field evaluation per step for all rows, instead
-of the tracer's step-by-step predictor and corrector. The chords are spaced uniformly in
-``s``; the refinement (:mod:`medax.axis.refine`) then adds points where the fitted spline
-needs them.
+of the tracer's step-by-step predictor and corrector. The chords are spaced in ``s``
+finer towards ``B1`` and ``B2`` (:func:`chord_spacing`); the refinement
+(:mod:`medax.axis.refine`) then adds points where the fitted spline needs them.
 
 Preconditions, checked (``None`` otherwise, and the caller traces): exactly one sign change
-of the field along each of ``B1`` and ``B2`` on the scan, every chord point inside the
-region and the points in order along the axis (each step from one point to the next goes
-forward along the axis tangent at both of its ends), all rows converged.
+(or one exact zero) of the field along each of ``B1`` and ``B2`` on the scan, all rows
+converged, and the points in order along the axis (each step from one point to the next
+goes forward along the axis tangent at both of its ends); chord points outside the region
+are dropped.
 """
 
 from __future__ import annotations
@@ -32,14 +33,14 @@ log = logging.getLogger(__name__)
 
 #: samples of B1 and B2 scanned for the sign change of the field
 SCAN = 33
-#: Newton iterations at most (the rows converge quadratically: ~5 are used)
+#: Newton iterations at most (the rows converge quadratically: 5 - 8 are used)
 MAX_ITER = 60
 
 
 @dataclass(frozen=True)
 class ChordPoints:
     """Points (n, 2) on the axis from B1 to B2 (first on B1 at parameter ``t_start``, last
-    on B2 at ``t_end``), their field sample and the field evaluations and Newton steps."""
+    on B2 at ``t_end``), their field sample and the number of Newton steps taken."""
 
     points: FloatArray
     sample: FieldSample
@@ -65,6 +66,7 @@ def chord_points(
         change = np.flatnonzero(sg[:-1] * sg[1:] < 0.0)
         zero = np.flatnonzero(sg == 0.0)
         if change.size + zero.size != 1:
+            log.debug("%s: %d axis ends on a B side; tracing", region.name, change.size)
             return None
         # an exact root on a sample: the bracket [lam_i, lam_i] (solved at once)
         brackets.append((int(change[0]), 1) if change.size else (int(zero[0]), 0))
@@ -120,6 +122,7 @@ def chord_points(
         ok = (2.0 * np.abs(g) <= goal) | (hi - lo <= 4e-16)
         done[rows[ok]] = True
     if not done.all() or cols is None:
+        log.debug("%s: chord roots did not converge; tracing", region.name)
         return None
     # the chord points in order along the axis: inside the region, each step forward
     keep = np.concatenate(([True, True], region.contains(pts[2:])))
