@@ -359,7 +359,7 @@ def test_tracer_follows_the_sliver():
     than the whole axis (0.9 of a 17-long region), and it lost the axis (6e-3 x diagonal);
     with the first step at most half the chord it matches the closed form."""
     reg = _quad(SLIVER, "sliver")
-    a = trace_axis(reg, (0, 2), closed_form=False)
+    a = trace_axis(reg, (0, 2), closed_form=False, batch=False)
     b = trace_axis(reg, (0, 2))
     d = a.diagonal
     assert a.counts.closed_form_pieces == 0
@@ -382,4 +382,4 @@ def test_tracer_refuses_a_lost_trace(monkeypatch):
 
     monkeypatch.setattr(medial, "trace_frame", past_the_end)
     with pytest.raises(TraceError, match="lost the axis"):
-        trace_axis(_quad(SLIVER, "sliver"), (0, 2), closed_form=False)
+        trace_axis(_quad(SLIVER, "sliver"), (0, 2), closed_form=False, batch=False)

@@ -41,22 +41,27 @@ def locate_kinks(
     intervals: list[int],
     tol: float,
     iters: int = 40,
-) -> list[FloatArray | None]:
-    """The kinks (2,) between axis points ``p[i]``, ``p[i+1]`` (parameter plane) for each
-    ``i`` of ``intervals``, or ``None`` where Newton does not confirm one (then the interval
-    is simply refined). All kinks of a round are solved at once, grouped by the constraint
-    whose foot jumps."""
-    out: list[FloatArray | None] = [None] * len(intervals)
+    speed: float = KINK_TRY,
+) -> list[tuple[int, FloatArray]]:
+    """The kinks ``(i, q)`` (``q`` (2,)) confirmed by Newton between axis points ``p[i]``,
+    ``p[i+1]`` (parameter plane) for ``i`` of ``intervals`` (an interval without one is
+    simply refined). All kinks of a round are solved at once, grouped by the constraint
+    whose foot jumps: the one that moves more, and the other too where it also moves
+    ``speed`` times as far as the axis point (both feet jumping in one interval: two kinks,
+    e.g. near a corner of the wavy region), ordered along each interval."""
+    out: list[tuple[int, float, FloatArray]] = []
     if not intervals:
-        return out
+        return []
     idx = np.asarray(intervals, dtype=np.int64)
-    jumps_a1 = np.linalg.norm(s.q1[idx + 1] - s.q1[idx], axis=1) >= np.linalg.norm(
-        s.q2[idx + 1] - s.q2[idx], axis=1
-    )
+    dx = np.linalg.norm(s.x[idx + 1] - s.x[idx], axis=1)
+    j1 = np.linalg.norm(s.q1[idx + 1] - s.q1[idx], axis=1)
+    j2 = np.linalg.norm(s.q2[idx + 1] - s.q2[idx], axis=1)
+    jumps_a1 = j1 >= j2
+    both = (j1 > speed * dx) & (j2 > speed * dx)
     emb = field.region.embedding
     r = field.ratio
     for flag in (True, False):
-        rows = np.flatnonzero(jumps_a1 == flag)
+        rows = np.flatnonzero((jumps_a1 == flag) | both)
         if rows.size == 0:
             continue
         ii = idx[rows]
@@ -107,16 +112,27 @@ def locate_kinks(
         on_axis = field(q[good]).error <= tol
         for j, ok in zip(good.tolist(), on_axis.tolist(), strict=True):
             i = int(ii[j])
-            if ok and _in_interval(p, i, q[j]) and abs(ta[j] - tb[j]) >= 1e-9:
-                out[int(rows[j])] = q[j]
-    return out
+            along = _along(p, i, q[j])
+            if ok and along is not None and abs(ta[j] - tb[j]) >= 1e-9:
+                out.append((i, along, q[j]))
+    out.sort(key=lambda k: (k[0], k[1]))
+    kept: list[tuple[int, FloatArray]] = []
+    for i, _, q in out:  # (two kinks of one interval that coincide are one)
+        if (
+            kept
+            and kept[-1][0] == i
+            and np.linalg.norm(q - kept[-1][1]) <= 1e-12 * (np.linalg.norm(p[i + 1] - p[i]))
+        ):
+            continue
+        kept.append((i, q))
+    return kept
 
 
-def _in_interval(p: FloatArray, i: int, q: FloatArray) -> bool:
-    """Whether ``q`` (2,) lies along the interval ``p[i]``, ``p[i+1]`` (Newton can also find
-    a crossing of the two branches' fields far away, not on this piece of the axis)."""
+def _along(p: FloatArray, i: int, q: FloatArray) -> float | None:
+    """Where ``q`` (2,) lies along the interval ``p[i]``, ``p[i+1]`` (its projection's
+    fraction), or ``None`` if it is not on this piece of the axis (Newton can also find a
+    crossing of the two branches' fields far away)."""
     ab = p[i + 1] - p[i]
     along = float((q - p[i]) @ ab / (ab @ ab))
-    return 1e-9 < along < 1.0 - 1e-9 and bool(
-        np.linalg.norm(q - p[i] - along * ab) <= np.linalg.norm(ab)
-    )
+    near = bool(np.linalg.norm(q - p[i] - along * ab) <= np.linalg.norm(ab))
+    return along if 1e-9 < along < 1.0 - 1e-9 and near else None

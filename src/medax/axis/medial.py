@@ -7,6 +7,7 @@ import logging
 import numpy as np
 
 from medax import tolerances
+from medax.axis.chords import chord_points
 from medax.axis.conics import conic_axis
 from medax.axis.endpoints import end_points
 from medax.axis.field import DistanceField
@@ -25,6 +26,9 @@ METHODS = ("frame", "paper")
 #: Stalled refinements that end near the tolerance (the paper mesher's sub-traces, ~1e-7)
 #: only warn.
 LOST_FACTOR = 1e4
+#: chords of the batch start (:mod:`medax.axis.chords`) at ``tol = 1e-6``; the cubic fit's
+#: error falls like ``h^4``, so the count grows like ``tol^(-1/4)``
+CHORDS = 16
 
 
 def trace_axis(
@@ -35,6 +39,7 @@ def trace_axis(
     ratio: float = 0.5,
     point_tol: float = tolerances.POINT_TOL,
     closed_form: bool = True,
+    batch: bool = True,
 ) -> MedialAxis:
     """Trace the curve ``d1 / (d1 + d2) = ratio`` (the medial axis for ``ratio = 1/2``)
     between constraints ``A1 = S[pair[0]]`` and ``A2 = S[pair[1]]``, from B1 to B2.
@@ -47,6 +52,10 @@ def trace_axis(
     With ``closed_form`` (default), ``method="frame"`` and ``ratio = 1/2``, two line-segment
     constraints of a planar region get the exact axis instead (lines and parabolas, an exact
     quadratic B-spline: :mod:`medax.axis.segments`); ``closed_form=False`` always traces.
+
+    With ``batch`` (default) a planar region's first points come in one batch (the roots of
+    the field along B1, B2 and chords across the region, :mod:`medax.axis.chords`) instead
+    of the step-by-step trace, where that applies (else the trace).
 
     Planar regions are traced in normalised coordinates (centred, unit diagonal) so that
     regions far from the origin or in small units keep their relative accuracy.
@@ -70,23 +79,37 @@ def trace_axis(
     diag = work.diagonal
     tol_pt, tol_cv = point_tol * diag, tol * diag
     b1, b2 = work.sides[roles.b1], work.sides[roles.b2]
-    (s0, s1), (p0, p1) = end_points(
-        field, (b1, b2), (f"side {roles.b1} (B1)", f"side {roles.b2} (B2)")
-    )
     shortest = float(work.side_lengths().min())
     stats = TraceStats()
+    fit = None
+    if method == "frame" and batch and work.embedding.is_identity:
+        n_chords = max(4, int(np.ceil(CHORDS * (1e-6 / tol) ** 0.25)))
+        first = chord_points(field, b1, b2, n_chords, tol_pt)
+        if first is not None:
+            fit = fit_and_refine(field, first.points, tol_pt, tol_cv, first.sample, True)
+            s0, s1 = first.t_start, first.t_end
+            stats.corrector_iterations += first.iterations + fit.corrector_iterations
+            if not fit.curve_error <= tol_cv:  # the refinement stalled: trace instead
+                log.debug("%s pair %s: batch start did not converge", region.name, pair)
+                fit = None
+    if fit is None:
+        (s0, s1), (p0, p1) = end_points(
+            field, (b1, b2), (f"side {roles.b1} (B1)", f"side {roles.b2} (B2)")
+        )
     if method == "frame":
-        # the paper's first step (shortest side / 5), but at most half the chord: on a thin
-        # non-convex quad the axis was shorter than one such step and the trace was lost
-        pts = trace_frame(
-            field, p0, p1, h0=min(shortest / 5.0, 0.5 * float(np.linalg.norm(p1 - p0))),
-            h_min=1e-7 * diag, h_max=0.1 * diag,
-            tol=tol_pt, stats=stats,
-        )  # fmt: skip
-        fit = fit_and_refine(field, pts, tol_pt, tol_cv)
+        if fit is None:
+            # the paper's first step (shortest side / 5), but at most half the chord: on a
+            # thin non-convex quad the axis was shorter than one such step and the trace
+            # was lost
+            pts = trace_frame(
+                field, p0, p1, h0=min(shortest / 5.0, 0.5 * float(np.linalg.norm(p1 - p0))),
+                h_min=1e-7 * diag, h_max=0.1 * diag,
+                tol=tol_pt, stats=stats,
+            )  # fmt: skip
+            fit = fit_and_refine(field, pts, tol_pt, tol_cv)
+            stats.corrector_iterations += fit.corrector_iterations
         pts, s, spline = fit.points, fit.sample, fit.spline
         curve_error, rounds = fit.curve_error, fit.rounds
-        stats.corrector_iterations += fit.corrector_iterations
     else:
         b2_curve = work.space_curve(roles.b2)
         pts = trace_paper(

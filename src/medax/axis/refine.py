@@ -59,15 +59,23 @@ def _cat(a: FieldSample, b: FieldSample) -> FieldSample:
 
 
 def fit_and_refine(
-    field: DistanceField, points: FloatArray, tol_point: float, tol_curve: float
+    field: DistanceField,
+    points: FloatArray,
+    tol_point: float,
+    tol_curve: float,
+    sample: FieldSample | None = None,
+    both_kinks: bool = False,
 ) -> Fitted:
     """Refine ``points`` (n, 2) (on the axis, ordered B1 -> B2, ends exact) until the fitted
     B-spline's equidistance error is within ``CHECK_MARGIN * tol_curve`` (absolute) at every
-    check sample, so within ``tol_curve`` between them."""
+    check sample, so within ``tol_curve`` between them. ``sample`` is the field at
+    ``points`` when the caller has it; ``both_kinks`` looks for a kink of each constraint
+    where both feet jump in one interval (sparse first points, e.g. the batch start's),
+    else only for that of the foot that moves more."""
     target = CHECK_MARGIN * tol_curve
     scale = field.region.diagonal
     pts = np.asarray(points, dtype=np.float64)
-    s = field(pts)
+    s = field(pts) if sample is None else sample
     breaks: set[int] = set()  # indices into pts of C0 break points
     tried: set[int] = set()  # kink intervals Newton did not confirm (refined instead)
     # transitions tried, keyed by their interval's end points (kept while it is unchanged)
@@ -103,8 +111,11 @@ def fit_and_refine(
             for i in kink_intervals(s, scale, KINK_TRY)
             if i not in tried and i not in breaks and i + 1 not in breaks
         ]
-        found = list(zip(kinks, locate_kinks(field, s, pts, kinks, tol_point), strict=True))
+        found = locate_kinks(
+            field, s, pts, kinks, tol_point, speed=KINK_TRY if both_kinks else np.inf
+        )
         tried |= set(kinks)
+        kinked = {i for i, _ in found}
         trans = [
             f
             for f in transition_intervals(s, vertices)
@@ -112,15 +123,19 @@ def fit_and_refine(
             and f[0] not in breaks
             and f[0] + 1 not in breaks
             and f[0] not in jumps  # a foot jumping onto an end is a kink, not a transition
+            and f[0] not in kinked  # (one round's breaks: the kinks there)
         ]
         tried_t |= {_key(pts, f) for f in trans}
         ti, tq = locate_transitions(field, pts, s, trans, tol_point)
-        # one new break per interval and round, kinks first
-        new_breaks = {i: q for i, q in zip(ti.tolist(), tq, strict=True)}
-        new_breaks |= {i: q for i, q in found if q is not None}
+        # new breaks: one transition per interval, or the interval's kinks (in order along it)
+        one = {i: q for i, q in zip(ti.tolist(), tq, strict=True)}  # one per interval
+        new_breaks = sorted(
+            [(i, 0, q) for i, q in one.items()] + [(i, 1 + k, q) for k, (i, q) in enumerate(found)],
+            key=lambda b: (b[0], b[1]),
+        )
         if new_breaks:
-            idx = np.array(sorted(new_breaks), dtype=np.int64)
-            kp = np.array([new_breaks[i] for i in idx])
+            idx = np.array([b[0] for b in new_breaks], dtype=np.int64)
+            kp = np.array([b[2] for b in new_breaks])
             # a break found on an existing point (e.g. a foot reaching its constraint's end
             # exactly at B1 or B2) is not inserted again: interior points become breaks
             on = _existing(pts, idx, kp, 1e-12 * scale)

@@ -35,6 +35,8 @@ def interpolate(
         i = int(np.argmin(np.diff(u)))
         raise CurveError(f"cannot fit a spline: points {i} and {i + 1} of {len(pts)} coincide")
     cuts = [0, *sorted(int(b) for b in breaks), len(pts) - 1]
+    if degree % 2:
+        return _interpolate_odd(pts, u, cuts, degree), u
     knots: list[FloatArray] = []
     ctrl: list[FloatArray] = []
     for j, (a, b) in enumerate(zip(cuts[:-1], cuts[1:], strict=True)):
@@ -57,3 +59,21 @@ def interpolate(
     kn = np.concatenate(knots)
     cp = np.concatenate(ctrl)
     return BSpline(cp, degree, kn), u
+
+
+def _interpolate_odd(pts: FloatArray, u: FloatArray, cuts: list[int], degree: int) -> BSpline:
+    """:func:`interpolate` for odd degrees in one solve: one knot vector for all pieces,
+    each piece's not-a-knot interior knots (its data sites but the ``(degree - 1) / 2``
+    next to each end) and ``degree`` knots at each break (a C0 joint interpolating there),
+    so the pieces decouple and one banded solve fits them all (the same spline as piece by
+    piece)."""
+    half = (degree - 1) // 2
+    knots: list[FloatArray] = [np.full(degree + 1, u[0])]
+    for j, (a, b) in enumerate(zip(cuts[:-1], cuts[1:], strict=True)):
+        if b - a + 1 < degree + 1:
+            raise ValueError(f"piece {j} has {b - a + 1} points; degree {degree} needs more")
+        knots.append(u[a + 1 + half : b - half])
+        knots.append(np.full(degree if j < len(cuts) - 2 else degree + 1, u[b]))
+    kn = np.concatenate(knots)
+    spl = make_interp_spline(u, pts, k=degree, t=kn)
+    return BSpline(np.asarray(spl.c), degree, kn)
