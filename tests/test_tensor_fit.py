@@ -120,3 +120,27 @@ def test_too_large_a_band_falls_back_to_the_general_solve(monkeypatch):
     general = fit_height((0.9, 20.0), (0.9, 20.0), [1.1716, R], [1.1716, R], _h, 2e-5, R / 4)
     assert general.coef.shape == fit.coef.shape
     assert abs(general.error - fit.error) <= 1e-9
+
+
+def _oblique_kink(x, y):
+    """A parabolic rise beyond the oblique line x = 1.3 + 0.15 y, smooth along y: the
+    curvature jumps along a line that is no knot line, so the error converges only as h^2
+    in the x spacing, and barely depends on the y spacing."""
+    d = np.maximum(x - 1.3 - 0.15 * y, 0.0)
+    z = 0.25 * d * d * (1.0 + 0.2 * np.sin(y))
+    ones = np.ones(x.shape, bool)
+    return z, ones, ones.copy()
+
+
+def test_only_the_direction_that_matters_is_refined(monkeypatch):
+    """Across the kink line the x spacing decides the error: refined along x only (and y as
+    far as needed), the fit meets the tolerance with under a third of the unknowns of the
+    fit refined in both directions (ONE_DIRECTION 0: never one direction alone)."""
+    from medax.geometry import tensor_fit as tf
+
+    one = fit_height((0.0, 4.0), (0.0, 4.0), [], [], _oblique_kink, 1e-4, 0.25)
+    monkeypatch.setattr(tf, "ONE_DIRECTION", 0.0)
+    both = fit_height((0.0, 4.0), (0.0, 4.0), [], [], _oblique_kink, 1e-4, 0.25)
+    assert one.error <= 1e-4 and both.error <= 1e-4
+    assert one.coef.shape[0] == both.coef.shape[0]  # the same x spacing
+    assert 3 * one.coef.size < both.coef.size
