@@ -44,8 +44,9 @@ SAMPLES_PER_SPAN = 4
 CHECK_PER_SPAN = 7
 #: Refinement stops when two halvings of the spacing did not divide the error by 1 / STALL.
 STALL = 0.25
-#: Largest number of coefficients of one fit (a finer level is not tried): 8e4 unknowns
-#: take SuperLU about a second; a plate under many bosses would otherwise ask for 10^6.
+#: Largest number of coefficients of one fit (a finer level is not tried): 8e4 unknowns (too
+#: wide a band for MAX_BAND_ENTRIES: SuperLU) take about a second; a plate under many bosses
+#: would otherwise ask for 10^6.
 MAX_COEFFICIENTS = 80_000
 #: Weight of the second-difference penalty (data rows have weight 1). It only has to make
 #: the coefficients without data determinate: larger values bias the fit (measured on the
