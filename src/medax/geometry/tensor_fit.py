@@ -16,8 +16,9 @@ halved until the error, measured on a grid 7 points per span (not the fitting sa
 is within the tolerance; in one direction only when the first halvings show that the other
 hardly matters (a curvature jump along a curve that is no knot line, see
 :func:`_one_direction`). The normal equations are assembled from the tensor structure and
-solved by banded Cholesky (:func:`solve_masked`). scipy has no constrained/penalised tensor-product fit on a masked
-grid (``LSQBivariateSpline`` takes no penalty and fails on large empty areas), hence this.
+solved by banded Cholesky (:func:`solve_masked`). scipy has no constrained/penalised
+tensor-product fit on a masked grid (``LSQBivariateSpline`` takes no penalty and fails on
+large empty areas), hence this.
 """
 
 from __future__ import annotations
