@@ -182,3 +182,16 @@ def _occt_nurbs(s: NurbsSurface):
     uk, um = knots(s.uknots)
     vk, vm = knots(s.vknots)
     return Geom_BSplineSurface(poles, weights, uk, vk, um, vm, s.udeg, s.vdeg)
+
+
+def test_nurbs_evaluation_in_chunks_is_the_same(monkeypatch):
+    """Many points are evaluated in chunks (see PARTS_CHUNK): the same points, derivatives
+    and order as one pass."""
+    from medax.geometry import surfaces
+
+    surf = wavy_nurbs()
+    p = sample(((1.0, 3.0), (0.0, 1.0)), 1000, seed=4)
+    whole = surf.jet(p)
+    monkeypatch.setattr(surfaces, "PARTS_CHUNK", 64)
+    for a, b in zip(whole, surf.jet(p), strict=True):
+        assert np.array_equal(a, b)

@@ -88,3 +88,59 @@ def test_a_fit_too_large_to_solve_is_refused():
         return z, np.ones(z.shape, bool), np.ones(z.shape, bool)
 
     assert fit_height((0.0, 100.0), (0.0, 100.0), [], [], waves, 0.0, 0.05, levels=1) is None
+
+
+def test_banded_cholesky_matches_the_general_sparse_solve():
+    """The normal equations assembled from the tensor structure and solved by banded
+    Cholesky give the fit SuperLU gives from the Kronecker design matrix: the same heights
+    wherever data pin them (the corner's face, a third of the rectangle empty), in both
+    orientations (the band runs along the smaller direction)."""
+    from scipy.interpolate import BSpline
+
+    from medax.geometry import tensor_fit as tf
+
+    for nx, ny in ((40, 16), (16, 40)):
+        tx = tf._knots(0.9, 20.0, [R], [True, False], 20.0 / nx)
+        ty = tf._knots(0.9, 20.0, [R], [True, True], 20.0 / ny)
+        xs, ys = tf._samples(tx, tf.SAMPLES_PER_SPAN), tf._samples(ty, tf.SAMPLES_PER_SPAN)
+        z, ok, _ = _h(*np.meshgrid(xs, ys, indexing="ij"))
+        bx = BSpline.design_matrix(xs, tx, tf.DEGREE).tocsr()
+        by = BSpline.design_matrix(ys, ty, tf.DEGREE).tocsr()
+        banded, general = tf.solve_masked(bx, by, ok, z), tf._solve_superlu(bx, by, ok, z)
+        assert banded.shape == general.shape == (bx.shape[1], by.shape[1])
+        on_data = (bx @ (by @ banded.T).T)[ok] - (bx @ (by @ general.T).T)[ok]
+        assert np.abs(on_data).max() <= 1e-9
+
+
+def test_too_large_a_band_falls_back_to_the_general_solve(monkeypatch):
+    from medax.geometry import tensor_fit as tf
+
+    fit = fit_height((0.9, 20.0), (0.9, 20.0), [1.1716, R], [1.1716, R], _h, 2e-5, R / 4)
+    monkeypatch.setattr(tf, "MAX_BAND_ENTRIES", 0)
+    general = fit_height((0.9, 20.0), (0.9, 20.0), [1.1716, R], [1.1716, R], _h, 2e-5, R / 4)
+    assert general.coef.shape == fit.coef.shape
+    assert abs(general.error - fit.error) <= 1e-9
+
+
+def _oblique_kink(x, y):
+    """A parabolic rise beyond the oblique line x = 1.3 + 0.15 y, smooth along y: the
+    curvature jumps along a line that is no knot line, so the error converges only as h^2
+    in the x spacing, and barely depends on the y spacing."""
+    d = np.maximum(x - 1.3 - 0.15 * y, 0.0)
+    z = 0.25 * d * d * (1.0 + 0.2 * np.sin(y))
+    ones = np.ones(x.shape, bool)
+    return z, ones, ones.copy()
+
+
+def test_only_the_direction_that_matters_is_refined(monkeypatch):
+    """Across the kink line the x spacing decides the error: refined along x only (and y as
+    far as needed), the fit meets the tolerance with under a third of the unknowns of the
+    fit refined in both directions (ONE_DIRECTION 0: never one direction alone)."""
+    from medax.geometry import tensor_fit as tf
+
+    one = fit_height((0.0, 4.0), (0.0, 4.0), [], [], _oblique_kink, 1e-4, 0.25)
+    monkeypatch.setattr(tf, "ONE_DIRECTION", 0.0)
+    both = fit_height((0.0, 4.0), (0.0, 4.0), [], [], _oblique_kink, 1e-4, 0.25)
+    assert one.error <= 1e-4 and both.error <= 1e-4
+    assert one.coef.shape[0] == both.coef.shape[0]  # the same x spacing
+    assert 3 * one.coef.size < both.coef.size

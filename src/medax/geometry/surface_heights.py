@@ -47,23 +47,24 @@ def graph_heights(
         mu, mv = CONTINUE * (b1 - b0), CONTINUE * (c1 - c0)
         b0, b1, c0, c1 = b0 - mu, b1 + mu, c0 - mv, c1 + mv
     lo, hi = np.array([b0, c0]), np.array([b1, c1])
-    uv = _grid_start(surf, frame, xy, uv_box)
     if len(xy) > 16 * SEED_EVERY:
-        # seeds: every SEED_EVERY-th point solved first; the others start from their nearest
-        # seed's foot moved by the inverse in-plane Jacobian there (one Newton step from a
-        # nearby solution), so most of them take one or two iterations instead of four
+        # seeds: every SEED_EVERY-th point solved first (from the start grid); the others
+        # start from their nearest seed's foot moved by the inverse in-plane Jacobian there
+        # (one Newton step from a nearby solution), so most of them take one or two
+        # iterations instead of four
         seed = np.arange(0, len(xy), SEED_EVERY)
-        uv[seed] = _newton(surf, frame, xy[seed], uv[seed], lo, hi, tol)
-        _, su, sv = surf.jet(uv[seed])
+        start = _grid_start(surf, frame, xy[seed], uv_box)
+        suv, (_, su, sv) = _newton(surf, frame, xy[seed], start, lo, hi, tol)
         a, b, c, d = su @ ex, sv @ ex, su @ ey, sv @ ey
         det = a * d - b * c
         det = np.where(np.abs(det) > 1e-300, det, 1e-300)
         _, k = cKDTree(xy[seed]).query(xy)
         dx, dy = xy[:, 0] - xy[seed[k], 0], xy[:, 1] - xy[seed[k], 1]
         move = np.column_stack([(d[k] * dx - b[k] * dy) / det[k], (a[k] * dy - c[k] * dx) / det[k]])
-        uv = np.clip(uv[seed[k]] + move, lo, hi)
-    uv = _newton(surf, frame, xy, uv, lo, hi, tol)
-    s, su, sv = surf.jet(uv)
+        uv = np.clip(suv[k] + move, lo, hi)
+    else:
+        uv = _grid_start(surf, frame, xy, uv_box)
+    uv, (s, su, sv) = _newton(surf, frame, xy, uv, lo, hi, tol)
     q = s - o
     res = np.hypot(q @ ex - xy[:, 0], q @ ey - xy[:, 1])
     normal = np.cross(su, sv)
@@ -96,22 +97,34 @@ def _newton(
     lo: FloatArray,
     hi: FloatArray,
     tol: float,
-) -> FloatArray:
+) -> tuple[FloatArray, tuple[FloatArray, FloatArray, FloatArray]]:
     """Newton on the in-plane coordinates from ``uv`` (m, 2), each row until its residual
-    is below ``0.01 tol``; the parameters kept within ``lo``, ``hi`` (2,)."""
+    is below ``0.01 tol``; the parameters kept within ``lo``, ``hi`` (2,). Returns the
+    parameters and the surface's jet (points, d/du, d/dv, each (m, 3)) there: a row's last
+    evaluation, the one that found it converged (no evaluation of its own afterwards), or
+    one more for the rows still moving after ``NEWTON_STEPS``."""
     o, ex, ey, _ = frame
     uv = uv.copy()
+    jet = tuple(np.empty((len(xy), 3)) for _ in range(3))
     live = np.arange(len(xy))  # points still moving
     for _ in range(NEWTON_STEPS):
         s, su, sv = surf.jet(uv[live])
         q = s - o
         fx, fy = q @ ex - xy[live, 0], q @ ey - xy[live, 1]
+        done = np.hypot(fx, fy) < 0.01 * tol
+        for out, val in zip(jet, (s, su, sv), strict=True):
+            out[live[done]] = val[done]
+        move = ~done
+        live, fx, fy = live[move], fx[move], fy[move]
+        if live.size == 0:
+            break
+        su, sv = su[move], sv[move]
         a, b, c, d = su @ ex, sv @ ex, su @ ey, sv @ ey
         det = a * d - b * c
         det = np.where(np.abs(det) > 1e-300, det, 1e-300)
         step = np.column_stack([(d * fx - b * fy) / det, (a * fy - c * fx) / det])
         uv[live] = np.clip(uv[live] - step, lo, hi)
-        live = live[np.hypot(fx, fy) >= 0.01 * tol]
-        if live.size == 0:
-            break
-    return uv
+    if live.size:
+        for out, val in zip(jet, surf.jet(uv[live]), strict=True):
+            out[live] = val
+    return uv, (jet[0], jet[1], jet[2])

@@ -292,6 +292,10 @@ class SpanBasis:
         return span, values, ders
 
 
+#: Points per chunk of a NURBS evaluation (see ``NurbsSurface._parts``).
+PARTS_CHUNK = 32768
+
+
 @dataclass(frozen=True)
 class NurbsSurface(_Surface):
     """Tensor-product NURBS surface on its own knot domain (OCCT's parameters).
@@ -330,6 +334,16 @@ class NurbsSurface(_Surface):
 
     def _parts(self, p: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         u, v = _p(p)
+        if len(u) > PARTS_CHUNK:
+            # in chunks: the per-point pole blocks of 10^5 - 10^6 points are 0.1 - 1 GB of
+            # temporaries, and streaming them through memory took 2 - 4x longer than the
+            # same work on chunks that stay in cache (measured on the freeform fitted merge)
+            out = tuple(np.empty((len(u), 4)) for _ in range(3))
+            pts = np.column_stack((u, v))
+            for k in range(0, len(u), PARTS_CHUNK):
+                for o, r in zip(out, self._parts(pts[k : k + PARTS_CHUNK]), strict=True):
+                    o[k : k + PARTS_CHUNK] = r
+            return out[0], out[1], out[2]
         su, nu_, du_ = self._ubasis(u)
         sv, nv_, dv_ = self._vbasis(v)
         # the (pu+1, pv+1) homogeneous poles of each point's span, by one flat take
