@@ -26,14 +26,13 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
-from functools import cache
-from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.interpolate import BSpline
 from scipy.linalg import LinAlgError, cho_solve_banded, cholesky_banded
 from scipy.sparse.linalg import spsolve
+from threadpoolctl import threadpool_limits
 
 from medax.geometry._types import FloatArray
 
@@ -353,41 +352,12 @@ def solve_masked(bx: sp.csr_matrix, by: sp.csr_matrix, ok: np.ndarray, z: FloatA
 
 @contextmanager
 def _one_lapack_thread() -> Iterator[None]:
-    """scipy's OpenBLAS limited to one thread inside the block: the banded factorisation is
-    thousands of small BLAS calls, and their thread hand-offs stalled it for 2 - 17 s (0.3 s
-    single-threaded, the same otherwise) on a shared 2-core machine under other loads. A
-    no-op when scipy's OpenBLAS cannot be found."""
-    lib = _scipy_openblas()
-    if lib is None:
+    """BLAS (scipy's and numpy's OpenBLAS) limited to one thread inside the block: the banded
+    factorisation is thousands of small BLAS calls, and their thread hand-offs stalled it
+    for 2 - 17 s (0.3 s single-threaded, the same otherwise) on a shared 2-core machine under
+    other loads. threadpoolctl finds the libraries loaded in the process."""
+    with threadpool_limits(limits=1, user_api="blas"):
         yield
-        return
-    before = int(lib.scipy_openblas_get_num_threads())
-    lib.scipy_openblas_set_num_threads(1)
-    try:
-        yield
-    finally:
-        lib.scipy_openblas_set_num_threads(before)
-
-
-@cache
-def _scipy_openblas() -> Any:
-    """scipy's bundled OpenBLAS (ctypes), or None."""
-    import ctypes
-    from pathlib import Path
-
-    import scipy
-
-    for path in sorted(
-        (Path(scipy.__file__).parent.parent / "scipy.libs").glob("libscipy_openblas*.so")
-    ):
-        try:
-            lib = ctypes.CDLL(str(path))
-            lib.scipy_openblas_get_num_threads.restype = ctypes.c_int
-            lib.scipy_openblas_set_num_threads.argtypes = [ctypes.c_int]
-            return lib
-        except (OSError, AttributeError):
-            continue
-    return None
 
 
 def _pair_products(b: sp.csr_matrix, lo: int) -> sp.csr_matrix:
