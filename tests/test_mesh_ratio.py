@@ -7,6 +7,7 @@ import pytest
 
 from medax.geometry import Arc, Line, Region, read_regions, sample_regions_path
 from medax.geometry.curve import certify_closest, closest_from, track_closest
+from medax.geometry.region_io import region_from_dict
 from medax.mesh import ratio_field as rf
 from medax.mesh import ratio_grid as rg
 from medax.mesh.grid import boundary_indices
@@ -105,15 +106,61 @@ def test_coarse_start_gives_the_same_nodes(monkeypatch):
     assert np.abs(fast.params - slow.params).max() <= 1e-9 * r.diagonal
 
 
+def _free_form_region(name: str):
+    """Free-form regions besides ``wavy`` (10 x 8 box corners): B-splines and a line
+    (``bulge``), two zig-zag polylines and lines (``zigzag``), a degree-5 B-spline, arcs and
+    a polyline (``mixed``)."""
+    c = [[0, 0], [10, 0], [10, 8], [0, 8]]
+
+    def zig(p0, p1, n, amp, seed):
+        t = np.linspace(0.0, 1.0, n)[1:-1]
+        p0, p1 = np.asarray(p0, float), np.asarray(p1, float)
+        d = p1 - p0
+        nrm = np.array([-d[1], d[0]]) / np.linalg.norm(d)
+        off = amp * np.sin(7 * t) + 0.3 * amp * np.random.default_rng(seed).uniform(-1, 1, t.size)
+        return [p0.tolist(), *(p0 + t[:, None] * d + off[:, None] * nrm).tolist(), p1.tolist()]
+
+    sides = {
+        "bulge": [
+            {"kind": "bspline", "degree": 3, "points": [c[0], [3, -1.5], [7, 1.0], c[1]]},
+            {"kind": "bspline", "degree": 3, "points": [c[1], [11.5, 3], [9.2, 5], c[2]]},
+            {"kind": "bspline", "degree": 3, "points": [c[2], [6, 9.8], [3, 7.2], c[3]]},
+            {"kind": "line"},
+        ],
+        "zigzag": [
+            {"kind": "polyline", "points": zig(c[0], c[1], 9, 0.6, 1)},
+            {"kind": "line"},
+            {"kind": "polyline", "points": zig(c[2], c[3], 7, 0.5, 2)},
+            {"kind": "line"},
+        ],
+        "mixed": [
+            {"kind": "bspline", "degree": 5,
+             "points": [c[0], [2, 1.4], [4, -1.2], [6, 1.1], [8, -0.9], c[1]]},
+            {"kind": "arc", "sagitta": 0.8},
+            {"kind": "polyline", "points": zig(c[2], c[3], 12, 0.3, 3)},
+            {"kind": "arc", "sagitta": -0.5},
+        ],
+    }  # fmt: skip
+    return region_from_dict({"corners": c, "sides": sides[name]}, name)
+
+
 @pytest.mark.parametrize(
-    ("divisions", "tol", "share"),
-    [((200, 200), 1e-6, 0.3), ((400, 150), 1e-6, 0.25), ((300, 300), 1e-7, 0.2)],
+    ("name", "divisions", "tol", "share"),
+    [
+        ("wavy", (512, 512), 1e-6, 0.6),
+        ("wavy", (400, 150), 1e-6, 0.05),
+        ("wavy", (300, 300), 1e-7, 0.02),
+        ("bulge", (300, 300), 1e-6, 0.6),
+        ("bulge", (512, 200), 1e-6, 0.6),
+        ("zigzag", (512, 200), 1e-6, 0.3),
+        ("mixed", (300, 300), 1e-6, 0.2),
+    ],
 )
-def test_interpolated_nodes_within_the_tolerance(divisions, tol, share):
+def test_interpolated_nodes_within_the_tolerance(name, divisions, tol, share):
     """Interior nodes interpolated from the coarser level where the estimate allows (at
-    least ``share`` of them on ``wavy``, whose four B-spline sides put foot jumps across the
-    grid): every node within ``tol`` x diagonal of the grid with every node solved."""
-    r = REGIONS["wavy"]
+    least ``share`` of them; ``wavy``'s four B-spline sides put foot jumps across the grid):
+    every node within ``tol`` x diagonal of the grid with every node solved."""
+    r = REGIONS[name] if name in REGIONS else _free_form_region(name)
     fast = mesh_region(r, divisions, tol=tol)
     exact = mesh_region(r, divisions, tol=0.0)
     assert exact.info["interpolated"] == 0
