@@ -54,8 +54,11 @@ def side_params(
             curve = region.sides[side]
             if not region.embedding.is_identity:
                 curve = EmbeddedCurve(curve, region.embedding)
-            t = arclength_params(curve, fr)
-            r = side_ratios(region, region.sides[side].evaluate(t), a, b, kinds[kind])
+            # levels share most fractions (halved counts): each one measured once
+            uniq, back = np.unique(fr, return_inverse=True)
+            tu = arclength_params(curve, uniq)
+            ru = side_ratios(region, region.sides[side].evaluate(tu), a, b, kinds[kind])
+            t, r = tu[back], ru[back]
         else:
             r = 1.0 - fr if side in (0, 3) else fr  # (ratio 1 at S3's end of S0, at S2's of S3)
             t = side_nodes(region, side, a, b, r, tol, kinds[kind])
