@@ -59,8 +59,9 @@ def test_traced_medial_edge_equidistant_by_occt(slanted):
     assert m.iso == TRACED
     ad = BRepAdaptor_Curve(m.edge)
     ts = np.linspace(ad.FirstParameter(), ad.LastParameter(), 61)
-    pts = np.array([[ad.Value(float(t)).X(), ad.Value(float(t)).Y(), ad.Value(float(t)).Z()]
-                    for t in ts])
+    pts = np.array(
+        [[ad.Value(float(t)).X(), ad.Value(float(t)).Y(), ad.Value(float(t)).Z()] for t in ts]
+    )
     d0 = np.array([_occt_distance(p, edges[0]) for p in pts])
     d1 = np.array([_occt_distance(p, edges[1]) for p in pts])
     assert np.max(np.abs(d0 - d1)) < 1e-9 * m.radius

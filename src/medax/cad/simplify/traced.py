@@ -127,8 +127,9 @@ def _joined(splines: list[BSpline]) -> tuple[Array, Array]:
 
 
 def _geom_bspline(t: Array, c: Array) -> Any:
-    """A ``Geom_BSplineCurve`` (degree ``DEGREE``) or ``Geom2d_BSplineCurve`` of knots ``t``, poles ``c``."""
-    from OCP.collections import Array1_double, Array1_int, Array1_gp_Pnt, Array1_gp_Pnt2d
+    """A ``Geom_BSplineCurve`` (degree ``DEGREE``) or ``Geom2d_BSplineCurve`` of knots
+    ``t``, poles ``c``."""
+    from OCP.collections import Array1_double, Array1_gp_Pnt, Array1_gp_Pnt2d, Array1_int
     from OCP.Geom import Geom_BSplineCurve
     from OCP.Geom2d import Geom2d_BSplineCurve
     from OCP.gp import gp_Pnt2d
@@ -175,8 +176,12 @@ def traced_medial_edge(
             c = trace_cross_params(surf, k, a, cross[0], cross[1], curves, 1e-2 * tol)
             if c is None:
                 return "traced medial curve: Newton did not converge on a cross-section"
-            pts = np.array([xyz(surf.Value(*map(float, (ci, ai) if k == 0 else (ai, ci))))
-                            for ci, ai in zip(c, a, strict=True)])
+            pts = np.array(
+                [
+                    xyz(surf.Value(*map(float, (ci, ai) if k == 0 else (ai, ci))))
+                    for ci, ai in zip(c, a, strict=True)
+                ]
+            )
             uv = np.column_stack([c, a] if k == 0 else [a, c])
             s3.append(make_interp_spline(a, pts, k=DEGREE))
             s2.append(make_interp_spline(a, uv, k=DEGREE))
@@ -185,7 +190,8 @@ def traced_medial_edge(
         closed = float(np.linalg.norm(c3[0] - c3[-1])) <= tol
         if closed:  # one point, so that the edge gets one vertex
             c3[-1] = c3[0]
-        err = _measure(surf, k, edges, curves, BSpline(t3, c3, DEGREE), BSpline(t2, c2, DEGREE), spans, n)
+        space, plane = BSpline(t3, c3, DEGREE), BSpline(t2, c2, DEGREE)
+        err = _measure(surf, k, edges, curves, space, plane, spans, n)
         if err <= tol:
             break
         n *= 2
