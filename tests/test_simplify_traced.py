@@ -95,3 +95,46 @@ def test_slanted_boss_keeps_its_fillet_with_the_missing_route(slanted):
     assert "not equidistant" not in why  # the medial curve is there now
     assert "cylinder" in why and "planar supporting faces only" in why
     assert r.volume_rel_change == 0.0
+
+
+def test_degree_13_blend_evaluated_to_occt_precision(slanted):
+    """The blend is of degree 13 along the boss: the power basis lost ~1e-9 there (the plate
+    half's heights then failed to converge); Cox-de Boor matches OCCT to ~1e-13."""
+    from OCP.gp import gp_Vec
+
+    from medax.cad.face_region import surface_embedding
+
+    _, _, face, _, _ = slanted
+    emb = surface_embedding(face)
+    surf = BRep_Tool.Surface_s(face)
+    u0, u1, v0, v1 = surf.Bounds()
+    rng = np.random.default_rng(3)
+    uv = np.column_stack([rng.uniform(u0, u1, 200), rng.uniform(v0, v1, 200)])
+    x, du, dv = emb.jet(uv)
+    worst = 0.0
+    for (u, v), p, a, b in zip(uv, x, du, dv, strict=True):
+        q, qu, qv = gp_Pnt(), gp_Vec(), gp_Vec()
+        surf.D1(float(u), float(v), q, qu, qv)
+        worst = max(worst, np.linalg.norm(p - [q.X(), q.Y(), q.Z()]))
+        assert np.allclose(a, [qu.X(), qu.Y(), qu.Z()], rtol=1e-9, atol=1e-9)
+        assert np.allclose(b, [qv.X(), qv.Y(), qv.Z()], rtol=1e-9, atol=1e-9)
+    assert worst < 1e-12
+
+
+def test_plate_half_is_a_height_field(slanted):
+    """Split along the traced medial curve, the plate and its half blend are a height field
+    over the plate (the probe fit: defined everywhere on the face)."""
+    from medax.cad.simplify.fitted import FittedSurface, graph_surface
+    from medax.cad.simplify.groups import build_groups
+    from medax.cad.simplify.occ import diagonal
+
+    cls, spec, _, _, m = slanted
+    split = split_along(cls.shape, [m.edge])
+    groups = build_groups(split, {spec.face: spec.supporting}, {})
+    (g,) = [g for g in groups if g.support == spec.supporting[0]]
+    plate = TopoDS.Face(shape_map(cls.shape, TopAbs_FACE).FindKey(g.support + 1))
+    members = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
+    diag = diagonal(cls.shape)
+    r = graph_surface(plate, members, 1e-6 * diag, 1e-7 * diag, probe=True)
+    assert isinstance(r, FittedSurface), r
+    assert np.isfinite(r.error)
