@@ -4,8 +4,9 @@ On a fillet whose two smooth edges are iso-lines of its surface in one direction
 cylinder between two planes, a torus around a boss), the curve at the mid parameter in that
 direction is equidistant from both smooth edges by symmetry of the circular section. This
 is verified, not assumed: :func:`medial_curve` measures ``|d1 - d2|`` with
-``BRepExtrema_DistShapeShape`` at samples and refuses the fillet when it is above the tolerance
-(the general case needs the traced axis of ``medax.axis``).
+``BRepExtrema_DistShapeShape`` at samples and refuses the fillet when it is above the tolerance,
+except on a B-spline blend, whose medial curve is then traced per cross-section
+(:mod:`.traced`).
 """
 
 from __future__ import annotations

@@ -5,8 +5,9 @@ A rolling-ball blend between a plane and a slanted cylinder has its smooth edges
 parameter is not equidistant from them (1.4e-3 off on the catalogue's slanted boss). Here the
 medial curve is traced per cross-section: on every cross iso-line ``a = const`` (``a`` the
 parameter along the blend) the point ``S(c*(a), a)`` where the distances to the two smooth
-edges (their own 3-D curves) are equal, found by Newton on ``g(c) = d1 - d2`` (all sections
-at once: ``g'(c) = ((S - F1) / d1 - (S - F2) / d2) . dS/dc``, ``F`` the feet on the edges).
+edges (their own 3-D curves) are equal, found by Newton on ``g(c) = d1 - d2`` from the mid
+parameter (``g'(c) = ((S - F1) / d1 - (S - F2) / d2) . dS/dc``, ``F`` the feet on the edges
+by ``GeomAPI_ProjectPointOnCurve``, section by section: two or three steps each).
 The traced points are interpolated by a quintic spline in space per knot span of the surface
 along ``a`` (C0 joins at the surface's own knots, where ``c*(a)`` may lose smoothness), and
 the cross parameters by the same spline in the plane (the edge's pcurve on the blend).
