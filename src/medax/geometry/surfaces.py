@@ -22,6 +22,7 @@ import numpy as np
 
 from medax.errors import InputError
 from medax.geometry._types import FloatArray
+from medax.geometry.bspline import POWER_BASIS_MAX_DEGREE
 
 
 def _p(p: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -277,6 +278,10 @@ class SpanBasis:
         as :func:`basis_and_derivative`."""
         kn, p = self.knots, self.degree
         t = np.asarray(t, dtype=np.float64)
+        if p > POWER_BASIS_MAX_DEGREE:
+            # the power basis of a high degree loses digits (a degree-13 fillet blend: 1e-9
+            # noise in the points, Newton on them stalled there): Cox-de Boor instead
+            return basis_and_derivative(kn, p, t, self.extrapolate)
         if not self.extrapolate:
             t = np.clip(t, self.lo, self.hi)
         span = np.searchsorted(kn, t, side="right") - 1

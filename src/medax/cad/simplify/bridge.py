@@ -47,6 +47,8 @@ def bridge_edge(
     fillet's two supporting faces; ``tol``: length tolerance for the bridge's start on
     ``smooth_edge``. Returns a one-line reason when there is no such bridge.
     """
+    if rider_medial.iso not in ("u", "v"):
+        return "the rider's medial curve is traced, not an iso-line (no bridge along it)"
     found = [(plane_normal(p), face_inside_point(p)) for p in planes]
     normals = [n for n, _ in found if n is not None]
     points = [q for _, q in found if q is not None]

@@ -4,8 +4,9 @@ On a fillet whose two smooth edges are iso-lines of its surface in one direction
 cylinder between two planes, a torus around a boss), the curve at the mid parameter in that
 direction is equidistant from both smooth edges by symmetry of the circular section. This
 is verified, not assumed: :func:`medial_curve` measures ``|d1 - d2|`` with
-``BRepExtrema_DistShapeShape`` at samples and refuses the fillet when it is above the tolerance
-(the general case needs the traced axis of ``medax.axis``).
+``BRepExtrema_DistShapeShape`` at samples and refuses the fillet when it is above the tolerance,
+except on a B-spline blend, whose medial curve is then traced per cross-section
+(:mod:`.traced`).
 """
 
 from __future__ import annotations
@@ -19,21 +20,25 @@ from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeVertex
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
-from OCP.GeomAbs import GeomAbs_Cylinder, GeomAbs_Torus
+from OCP.GeomAbs import GeomAbs_BSplineSurface, GeomAbs_Cylinder, GeomAbs_Torus
 from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
 from OCP.gp import gp_Pnt
 
 from medax.cad.simplify.occ import edge_points, uv_bounds
+from medax.cad.simplify.traced import traced_medial_edge
 
 #: The medial tool edge is extended past the fillet by this fraction of its length on both
 #: sides (the splitter keeps only the part on the face), unless it is closed.
 EXTEND = 0.02
+#: ``Medial.iso`` of a traced medial curve (no iso-line; see :mod:`.traced`).
+TRACED = "traced"
 
 
 @dataclass(frozen=True)
 class Medial:
     """Medial curve of a fillet: ``edge`` (the splitter tool), the iso direction (``"u"``
-    when the curve is ``u = mid``), the mid parameter, the measured equidistance error
+    when the curve is ``u = mid``; ``TRACED`` when it is no iso-line, then ``mid`` is nan),
+    the mid parameter, the measured equidistance error
     ``error`` (length unit) and the blend ``radius``."""
 
     edge: Any
@@ -90,6 +95,7 @@ def medial_curve(face: Any, edge1: Any, edge2: Any, rel_tol: float = 1e-9) -> Me
     if cross_period and abs(c2 - c1) > 0.5 * cross_period:
         c2 -= math.copysign(cross_period, c2 - c1)
     mid = 0.5 * (c1 + c2)
+    cross = (c1, c2)
     period = _period(ad, 1 - k) or 2 * math.pi
     full = closed_dir and abs((hi - lo) - period) < 1e-9
     if not full:
@@ -116,8 +122,16 @@ def medial_curve(face: Any, edge1: Any, edge2: Any, rel_tol: float = 1e-9) -> Me
             ext = BRepExtrema_DistShapeShape(vtx, e)
             d.append(ext.Value())
         err, near = max(err, abs(d[0] - d[1])), min(near, *d)
+    freeform = radius is None
     if radius is None:  # a variable-radius or freeform blend: the scale is its half-width
         radius = near
+    if err > rel_tol * radius and freeform and kind == GeomAbs_BSplineSurface:
+        # a B-spline blend whose mid iso-line is off (a rolling ball between a plane and a
+        # slanted cylinder): the medial curve traced per cross-section
+        traced = traced_medial_edge(face, (edge1, edge2), k, cross, (lo, hi), rel_tol * radius)
+        if isinstance(traced, str):
+            return f"mid iso-line not equidistant ({err:.2e} > {rel_tol:g} x radius), {traced}"
+        return Medial(traced[0], TRACED, float("nan"), traced[1], float(radius))
     if err > rel_tol * radius:
         return f"mid iso-line not equidistant ({err:.2e} > {rel_tol:g} x radius)"
     return Medial(edge, iso, float(mid), float(err), float(radius))

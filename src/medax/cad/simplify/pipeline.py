@@ -420,6 +420,12 @@ def _refresh_surfaces(job: _Job) -> None:
                     ms = f"surface construction failed: {err}"
                 if isinstance(ms, str) and planar:
                     ms = FITTED
+                elif isinstance(ms, str):
+                    kind = str(BRepAdaptor_Surface(support).GetType()).split("_")[-1].lower()
+                    ms = (
+                        f"{ms}; the fitted route takes planar supporting faces only (this one "
+                        f"is a {kind}: no height field over it yet)"
+                    )
             if isinstance(ms, str) and ms != FITTED:
                 for f, _ in hs:
                     kept.setdefault(f, f"supporting face {sup}: {ms}")
