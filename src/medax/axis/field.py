@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from medax.geometry._types import FloatArray
-from medax.geometry.curve import Closest, Curve
+from medax.geometry.curve import Closest, Curve, closest_near
 from medax.geometry.pair_search import PairSearch
 from medax.geometry.region import PairRoles, Region
 
@@ -63,6 +63,23 @@ class DistanceField:
         if isinstance(pair, PairSearch) and pair.fits(x.shape[0]):
             return pair.closest(x)
         return self.a1.closest(x), self.a2.closest(x)
+
+    def closest_near(self, on2: np.ndarray, x: FloatArray, t0: FloatArray, width: float) -> Closest:
+        """Local (branch-restricted) closest points for space points ``x`` (n, dim): row
+        ``i`` on A2 where ``on2[i]`` (bool (n,)), else on A1, with its parameter within
+        ``width`` of ``t0[i]`` (:func:`medax.geometry.curve.closest_near`); two B-spline
+        constraints in one bracketed Newton (:meth:`PairSearch.closest_near`)."""
+        if self._pair is False:
+            self._pair = PairSearch.build(self.a1, self.a2)
+        pair = self._pair
+        if isinstance(pair, PairSearch):
+            return pair.closest_near(on2, x, t0, width)
+        t, foot, dist = np.empty(len(x)), np.empty_like(x), np.empty(len(x))
+        for curve, rows in ((self.a1, np.flatnonzero(~on2)), (self.a2, np.flatnonzero(on2))):
+            if rows.size:
+                c = closest_near(curve, x[rows], t0[rows], width)
+                t[rows], foot[rows], dist[rows] = c.t, c.foot, c.distance
+        return Closest(t=t, foot=foot, distance=dist)
 
     def __call__(self, p: FloatArray) -> FieldSample:
         """The field at parameter points ``p`` of shape ``(n, 2)``."""
