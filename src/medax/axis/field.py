@@ -36,10 +36,28 @@ class FieldSample:
     g: FloatArray
     grad: FloatArray
 
+    def take(self, idx: np.ndarray) -> FieldSample:
+        """The sample at rows ``idx`` (k,) (indices or a mask)."""
+        return FieldSample(*(getattr(self, f)[idx] for f in _FIELDS))
+
+    @staticmethod
+    def empty(dim: int) -> FieldSample:
+        """No rows (points in ``dim`` dimensions)."""
+        v, s = np.zeros((0, dim)), np.zeros(0)
+        return FieldSample(v, s, s, v, v, s, s, s, np.zeros((0, 2)))
+
+    @staticmethod
+    def concat(samples: list[FieldSample]) -> FieldSample:
+        """The samples' rows one after the other."""
+        return FieldSample(*(np.concatenate([getattr(s, f) for s in samples]) for f in _FIELDS))
+
     @property
     def error(self) -> FloatArray:
         """Equidistance error ``2 |g|``: exactly ``|d1 - d2|`` on the axis (r = 1/2)."""
         return np.abs(self.g) * 2.0
+
+
+_FIELDS = ("x", "d1", "d2", "q1", "q2", "t1", "t2", "g", "grad")
 
 
 class DistanceField:

@@ -42,10 +42,11 @@ def locate_kinks(
     tol: float,
     iters: int = 40,
     speed: float = KINK_TRY,
-) -> list[tuple[int, FloatArray]]:
+) -> tuple[list[tuple[int, FloatArray]], FieldSample]:
     """The kinks ``(i, q)`` (``q`` (2,)) confirmed by Newton between axis points ``p[i]``,
     ``p[i+1]`` (parameter plane) for ``i`` of ``intervals`` (an interval without one is
-    simply refined), ordered along each interval. The foot that jumps is that of the
+    simply refined), ordered along each interval, and the global field at them (one row
+    per kink: the sample of the confirming check). The foot that jumps is that of the
     constraint that moves more, and the other's too where it also moves ``speed`` times as
     far as the axis point (both feet jumping in one interval: two kinks, e.g. near a corner
     of the wavy region).
@@ -59,7 +60,7 @@ def locate_kinks(
     row confirms is solved again with global queries of the other constraint, as the
     tracer did before the batch (a foot of the other constraint that jumps too)."""
     if not intervals:
-        return []
+        return [], FieldSample.empty(field.a1.dim)
     idx = np.asarray(intervals, dtype=np.int64)
     dx = np.linalg.norm(s.x[idx + 1] - s.x[idx], axis=1)
     j1 = np.linalg.norm(s.q1[idx + 1] - s.q1[idx], axis=1)
@@ -74,25 +75,31 @@ def locate_kinks(
     ii, on2 = g_int[group], g_on2[group]
     end = ii + np.repeat([0, 1], n_g)  # the end whose other foot starts the row
     q0 = _start(p, s, ii)
-    ok, q = _solve(field, s, ii, on2, end, q0, tol, iters, global_other=False)
+    ok, q, fs = _solve(field, s, ii, on2, end, q0, tol, iters, global_other=False)
     first = np.full(n_g, -1, dtype=np.int64)  # the first confirmed row of each group
     for r in np.flatnonzero(ok)[::-1].tolist():
         first[group[r]] = r
-    found = [(int(ii[r]), q[r]) for r in first[first >= 0].tolist()]
+    rows = first[first >= 0]
+    found = [(int(ii[r]), q[r]) for r in rows.tolist()]
+    samples = [fs.take(rows)]
     again = np.flatnonzero(first < 0)
     if again.size:  # global queries of the other constraint for the groups not confirmed
-        ok2, q2 = _solve(
+        ok2, q2, fs2 = _solve(
             field, s, g_int[again], g_on2[again], g_int[again], q0[again], tol, iters, True
         )
-        found += [(int(g_int[again[r]]), q2[r]) for r in np.flatnonzero(ok2).tolist()]
+        rows2 = np.flatnonzero(ok2)
+        found += [(int(g_int[again[r]]), q2[r]) for r in rows2.tolist()]
+        samples.append(fs2.take(rows2))
     out = []
-    for i, qk in found:
+    for j, (i, qk) in enumerate(found):
         along = _along(p, i, qk)
         if along is not None:
-            out.append((i, along, qk))
+            out.append((i, along, j))
     out.sort(key=lambda k: (k[0], k[1]))
     kept: list[tuple[int, FloatArray]] = []
-    for i, _, qk in out:  # (two kinks of one interval that coincide are one)
+    keep: list[int] = []
+    for i, _, j in out:  # (two kinks of one interval that coincide are one)
+        qk = found[j][1]
         if (
             kept
             and kept[-1][0] == i
@@ -100,7 +107,8 @@ def locate_kinks(
         ):
             continue
         kept.append((i, qk))
-    return kept
+        keep.append(j)
+    return kept, FieldSample.concat(samples).take(np.array(keep, dtype=np.int64))
 
 
 def _start(p: FloatArray, s: FieldSample, ii: np.ndarray) -> FloatArray:
@@ -134,13 +142,14 @@ def _solve(
     tol: float,
     iters: int,
     global_other: bool,
-) -> tuple[np.ndarray, FloatArray]:
+) -> tuple[np.ndarray, FloatArray, FieldSample]:
     """Newton on ``wj d_a - wo d_o = wj d_b - wo d_o = 0`` for rows (k,) in intervals ``ii``
     whose jumping constraint is A2 where ``on2`` (else A1): ``d_a``, ``d_b`` the distances
     to its branches at the feet ``t[ii]``, ``t[ii + 1]``, ``d_o`` to the other constraint,
     local from its foot at point ``end`` (or global with ``global_other``), from ``q0``
     (k, 2). Returns the rows confirmed (bool (k,): converged, a kink of the global field,
-    distinct branches) and the points (k, 2)."""
+    distinct branches), the points (k, 2) and the global field there (k rows; meaningful
+    where confirmed)."""
     emb = field.region.embedding
     r = field.ratio
     k = ii.size
@@ -199,10 +208,11 @@ def _solve(
         if act.size == 0:
             break
     ok = conv & (np.abs(ta - tb) >= 1e-9)
-    good = np.flatnonzero(ok)
-    if good.size:  # the kink must be on the axis of the full (global) field
-        ok[good] = field(q[good]).error <= tol
-    return ok, q
+    # the kink must be on the axis of the full (global) field (one query for all rows:
+    # the unconfirmed ones ride along)
+    fs = field(q)
+    ok &= fs.error <= tol
+    return ok, q, fs
 
 
 def _along(p: FloatArray, i: int, q: FloatArray) -> float | None:

@@ -89,17 +89,16 @@ def fit_and_refine(
     checked: _Checked | None = None
     history: list[float] = []  # curve error per checked round
     for rounds in range(1, MAX_ROUNDS + 1):  # noqa: B007
-        # 1. pieces between breaks need DEGREE + 1 points: insert chord midpoints where short
-        cuts = [0, *sorted(breaks), len(pts) - 1]
-        short = [
-            i
-            for a, b in zip(cuts[:-1], cuts[1:], strict=True)
-            if b - a < DEGREE
-            for i in range(a, b)
-        ]
-        if short:
+        # 1. pieces between breaks need DEGREE + 1 points: where short, all of the piece's
+        # intervals split evenly along their chords into enough pieces, in one insertion
+        cuts = np.array([0, *sorted(breaks), len(pts) - 1])
+        span = np.diff(cuts)
+        if np.any(span < DEGREE):
+            short = np.flatnonzero(span < DEGREE)
+            intervals = np.concatenate([np.arange(cuts[j], cuts[j + 1]) for j in short])
+            parts = np.repeat(-(-DEGREE // span[short]), span[short])  # ceil(DEGREE / span)
             pts, s, breaks, it = _insert(
-                field, pts, s, breaks, np.array(short), None, None, tol_point
+                field, pts, s, breaks, intervals, None, None, tol_point, parts
             )
             iters += it
             continue
@@ -111,7 +110,7 @@ def fit_and_refine(
             for i in kink_intervals(s, scale, KINK_TRY)
             if i not in tried and i not in breaks and i + 1 not in breaks
         ]
-        found = locate_kinks(
+        found, kink_s = locate_kinks(
             field, s, pts, kinks, tol_point, speed=KINK_TRY if both_kinks else np.inf
         )
         tried |= set(kinks)
@@ -126,16 +125,20 @@ def fit_and_refine(
             and f[0] not in kinked  # (one round's breaks: the kinks there)
         ]
         tried_t |= {_key(pts, f) for f in trans}
-        ti, tq = locate_transitions(field, pts, s, trans, tol_point)
-        # new breaks: one transition per interval, or the interval's kinks (in order along it)
-        one = {i: q for i, q in zip(ti.tolist(), tq, strict=True)}  # one per interval
+        ti, tq, trans_s = locate_transitions(field, pts, s, trans, tol_point)
+        # new breaks: one transition per interval, or the interval's kinks (in order along
+        # it); each with its row in the field samples of both (transitions, then kinks)
+        one = {i: j for j, i in enumerate(ti.tolist())}  # one per interval
+        nt = len(ti)
         new_breaks = sorted(
-            [(i, 0, q) for i, q in one.items()] + [(i, 1 + k, q) for k, (i, q) in enumerate(found)],
+            [(i, 0, tq[j], j) for i, j in one.items()]
+            + [(i, 1 + k, q, nt + k) for k, (i, q) in enumerate(found)],
             key=lambda b: (b[0], b[1]),
         )
         if new_breaks:
             idx = np.array([b[0] for b in new_breaks], dtype=np.int64)
             kp = np.array([b[2] for b in new_breaks])
+            rows = np.array([b[3] for b in new_breaks], dtype=np.int64)
             # a break found on an existing point (e.g. a foot reaching its constraint's end
             # exactly at B1 or B2) is not inserted again: interior points become breaks
             on = _existing(pts, idx, kp, 1e-12 * scale)
@@ -143,8 +146,9 @@ def fit_and_refine(
             marked = {int(j) for j in on[~fresh] if 0 < j < len(pts) - 1} - breaks
             if np.any(fresh):
                 breaks |= marked
-                kf = kp[fresh]
-                pts, s, breaks = _insert_at(pts, s, breaks, idx[fresh], kf, field(kf), True)
+                # (the field at the breaks is that of their global check: no evaluation)
+                ks = _take(_cat(trans_s, kink_s), rows[fresh])
+                pts, s, breaks = _insert_at(pts, s, breaks, idx[fresh], kp[fresh], ks, True)
             elif marked:
                 breaks |= marked
             else:
