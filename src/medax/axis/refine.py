@@ -174,7 +174,9 @@ def fit_and_refine(
             break
         # cubic interpolation error ~ h^4: split each bad interval into enough pieces
         pieces = np.clip(np.ceil(1.3 * (err[bad] / target) ** 0.25), 2, 8).astype(np.int64)
-        pts, s, breaks, it = _insert(field, pts, s, breaks, bad, spline, u, tol_point, pieces)
+        pts, s, breaks, it = _insert(
+            field, pts, s, breaks, bad, spline, u, tol_point, pieces, checked
+        )
         iters += it
     if spline is None or len(u) != len(pts):  # rounds ran out while inserting breaks
         spline, u = interpolate(pts, sorted(breaks), DEGREE)
@@ -197,11 +199,16 @@ def _existing(pts: FloatArray, idx: np.ndarray, q: FloatArray, eps: float) -> np
 @dataclass
 class _Checked:
     """Check samples of the last round: per-interval endpoint keys, space points
-    (n_int, m, dim) and equidistance errors (n_int, m) (measured or bounded)."""
+    (n_int, m, dim) and equidistance errors (n_int, m) (measured or bounded); the parameter
+    points (n_int, m, 2), and the field ``sample`` at the measured ones, row ``rows[i, j]``
+    ((n_int, m), -1 where only bounded)."""
 
     keys: dict[bytes, int]
     x: FloatArray
     err: FloatArray
+    y: FloatArray
+    rows: np.ndarray
+    sample: FieldSample
 
 
 def _check(
@@ -234,10 +241,13 @@ def _check(
         moved = np.linalg.norm(x[same] - prev.x[j[same]], axis=2)
         err[same] = prev.err[j[same]] + 2.0 * moved
     need = ~(err <= 0.5 * tol_curve)
-    if np.any(need):
-        err[need] = field(y.reshape(len(u) - 1, m, 2)[need]).error
+    y = y.reshape(len(u) - 1, m, 2)
+    rows = np.full(need.shape, -1, dtype=np.int64)
+    rows[need] = np.arange(int(need.sum()))
+    measured = field(y[need]) if np.any(need) else FieldSample.empty(x.shape[2])
+    err[need] = measured.error
     keys = {k: i for i, k in enumerate(ends)}
-    return err.max(axis=1), _Checked(keys, x, err)
+    return err.max(axis=1), _Checked(keys, x, err, y, rows, measured)
 
 
 def _insert(
@@ -250,19 +260,36 @@ def _insert(
     u: FloatArray | None,
     tol: float,
     pieces: np.ndarray | None = None,
+    checked: _Checked | None = None,
 ) -> tuple[FloatArray, FieldSample, set[int], int]:
     """Split each interval into ``pieces`` (default 2) by corrected points taken on the
-    spline (or the chord when there is no spline yet)."""
+    spline (or the chord when there is no spline yet). With the spline's ``checked``
+    samples, the points start from the check samples nearest the even split (``pieces <=
+    CHECK_SAMPLES`` keeps them distinct) and Newton from their field where measured."""
     if pieces is None:
         pieces = np.full(len(intervals), 2, dtype=np.int64)
     rep = pieces - 1
     intervals = np.repeat(intervals, rep)
     frac = np.concatenate([np.arange(1, m) / m for m in pieces])
-    if spline is not None and u is not None:
+    start: FieldSample | None = None
+    if checked is not None:
+        j = np.rint(frac * CHECK_SAMPLES).astype(np.int64) - 1  # sample j of the interval
+        guess = checked.y[intervals, j]
+        row = checked.rows[intervals, j]
+        known = row >= 0
+        if known.all():
+            start = checked.sample.take(row)
+        else:  # the rest evaluated, all in the guesses' order
+            rest = FieldSample.concat([checked.sample.take(row[known]), field(guess[~known])])
+            at = np.empty(len(row), dtype=np.int64)
+            at[known] = np.arange(int(known.sum()))
+            at[~known] = int(known.sum()) + np.arange(int((~known).sum()))
+            start = rest.take(at)
+    elif spline is not None and u is not None:
         guess = spline.evaluate(u[intervals] + frac * (u[intervals + 1] - u[intervals]))
     else:
         guess = pts[intervals] + frac[:, None] * (pts[intervals + 1] - pts[intervals])
-    new, sn, _, it = correct_newton(field, guess, tol)
+    new, sn, _, it = correct_newton(field, guess, tol, sample=start)
     # a corrected point that left its interval (slid onto a neighbour near a singularity)
     # would break the order of the points: it is dropped
     a, b = pts[intervals], pts[intervals + 1]
