@@ -52,7 +52,7 @@ class PairSearch:
     points; :meth:`build` returns ``None`` where the stacking does not apply."""
 
     def __init__(self, c1: BSpline, c2: BSpline, k: int = 2) -> None:
-        (t1, p1, _), (t2, p2, _) = c1._search, c2._search
+        (t1, p1), (t2, p2) = c1._search, c2._search
         self.k, self.m1, self.m = k, t1.size, t1.size + t2.size
         self.ts = np.concatenate((t1, t2 + SHIFT))
         self.pts = np.concatenate((p1, p2))
