@@ -3,7 +3,10 @@
 The fitted curve is checked between the points (10 samples per interval); where it strays
 beyond the tolerance, the interval's midpoint on the curve is corrected onto the axis and
 inserted, all such points of a round at once. Kinks of the axis (where a foot point jumps
-between distant parts of a wavy constraint) are located by bisection and become C0 breaks.
+between distant parts of a wavy constraint) are located by Newton, all of a round in one
+batch (:mod:`medax.axis.kinks`), and become C0 breaks, inserted with the field of their
+global check; short pieces between breaks are split in one insertion, and points inserted
+after a check start from its samples (their field measured there).
 """
 
 from __future__ import annotations
