@@ -386,7 +386,7 @@ def test_certify_closest_is_the_documented_rule(monkeypatch):
     x = np.random.default_rng(11).uniform(lo, hi, (700, 2))
     monkeypatch.setattr(gc, "_TABLE_BLOCK", 5000)  # several blocks
     for c in r.sides:
-        ts, pts, _ = c._search
+        ts, pts = c._search
         t0 = np.random.default_rng(1).uniform(0.0, 1.0, len(x))
         loc = closest_from(c, x, t0, iters=60)
         d = np.linalg.norm(x[:, None] - pts[None], axis=2)

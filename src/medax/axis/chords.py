@@ -57,9 +57,14 @@ def chord_points(
     ``None`` where a precondition of the module docstring fails."""
     region = field.region
     roles = field.roles
-    # the scan: the sign change along each start / end side
+    # the scan: the sign change along each start / end side, evaluated together with the
+    # chords' middles (their first Newton step)
     lam = np.linspace(0.0, 1.0, SCAN)
-    g_scan = field(np.concatenate((b1.evaluate(lam), b2.evaluate(lam)))).g.reshape(2, SCAN)
+    s = chord_spacing(n_chords)
+    p0 = region.sides[roles.a1].evaluate(s)
+    dp = region.sides[roles.a2].evaluate(1.0 - s) - p0
+    first = field(np.concatenate((b1.evaluate(lam), b2.evaluate(lam), p0 + 0.5 * dp)))
+    g_scan = first.g[: 2 * SCAN].reshape(2, SCAN)
     brackets = []
     for g in g_scan:
         sg = np.sign(g)
@@ -72,9 +77,6 @@ def chord_points(
         brackets.append((int(change[0]), 1) if change.size else (int(zero[0]), 0))
     (i1, w1), (i2, w2) = brackets
     # rows 0 and 1: B1 and B2 in their brackets; then the chords on [0, 1]
-    s = chord_spacing(n_chords)
-    p0 = region.sides[roles.a1].evaluate(s)
-    dp = region.sides[roles.a2].evaluate(1.0 - s) - p0
     n = n_chords + 2
     a = np.concatenate(([lam[i1], lam[i2]], np.zeros(n_chords)))
     b = np.concatenate(([lam[i1 + w1], lam[i2 + w2]], np.ones(n_chords)))
@@ -92,16 +94,19 @@ def chord_points(
     done = np.zeros(n, dtype=bool)
     pts = np.empty((n, 2))
     lam_at = np.empty(n)  # the parameter of each row's last evaluated point
-    cols: dict[str, FloatArray] | None = None
+    cols = {f: np.empty((n, *getattr(first, f).shape[1:])) for f in _FIELDS}
     it = 0
     for it in range(1, MAX_ITER + 1):  # noqa: B007
-        rows = np.flatnonzero(~done)
-        if rows.size == 0:
-            break
-        c, dc = _rows(rows, t, b1, b2, p0, dp)
-        fs = field(c)
-        if cols is None:
-            cols = {f: np.empty((n, *getattr(fs, f).shape[1:])) for f in _FIELDS}
+        if it == 1:  # the chords' middles, from the scan's evaluation (the ends next step)
+            rows = np.arange(2, n)
+            c, dc = p0 + 0.5 * dp, dp
+            fs = first.take(np.arange(2 * SCAN, 2 * SCAN + n_chords))
+        else:
+            rows = np.flatnonzero(~done)
+            if rows.size == 0:
+                break
+            c, dc = _rows(rows, t, b1, b2, p0, dp)
+            fs = field(c)
         for f in _FIELDS:
             cols[f][rows] = getattr(fs, f)
         pts[rows] = c
@@ -121,7 +126,7 @@ def chord_points(
         t[rows] = new
         ok = (2.0 * np.abs(g) <= goal) | (hi - lo <= 4e-16)
         done[rows[ok]] = True
-    if not done.all() or cols is None:
+    if not done.all():
         log.debug("%s: chord roots did not converge; tracing", region.name)
         return None
     # the chord points in order along the axis: inside the region, each step forward

@@ -313,6 +313,9 @@ def conic_axis(
     """
     if not region.embedding.is_identity or region.space_sides is not None:
         return None
+    # (the kinds first: normalising is not free, and a transformed side keeps its kind)
+    if not all(isinstance(region.sides[k], (Line, Arc)) for k in (roles.a1, roles.a2)):
+        return None
     work, offset, scale = normalised_region(region)
     a1, a2 = work.sides[roles.a1], work.sides[roles.a2]
     if not (isinstance(a1, (Line, Arc)) and isinstance(a2, (Line, Arc))):

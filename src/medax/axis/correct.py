@@ -9,7 +9,12 @@ from medax.geometry._types import FloatArray
 
 
 def correct_newton(
-    field: DistanceField, p: FloatArray, tol: float, max_iter: int = 40, target: float = 1e-3
+    field: DistanceField,
+    p: FloatArray,
+    tol: float,
+    max_iter: int = 40,
+    target: float = 1e-3,
+    sample: FieldSample | None = None,
 ) -> tuple[FloatArray, FieldSample, np.ndarray, int]:
     """Safeguarded Newton along the field gradient for points ``p`` (n, 2).
 
@@ -17,10 +22,11 @@ def correct_newton(
     reduce ``|g|``. Iterates per point until the equidistance error ``2|g|`` is below
     ``target * tol`` (Newton is quadratic: the margin costs about one step) or stalls at
     round-off; a point has converged when ``2|g| <= tol`` (absolute).
+    ``sample`` is the field at ``p`` where the caller has it (not evaluated again).
     Returns the points, the field at them, a converged mask (n,) and the iteration count.
     """
     p = np.array(p, dtype=np.float64, copy=True)
-    s = field(p)
+    s = field(p) if sample is None else sample
     cols = {f: getattr(s, f).copy() for f in FieldSample.__dataclass_fields__}
     g, grad = cols["g"], cols["grad"]
     lam = np.ones(len(p))

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from medax.geometry._types import FloatArray
-from medax.geometry.curve import Closest, Curve
+from medax.geometry.curve import Closest, Curve, closest_near
 from medax.geometry.pair_search import PairSearch
 from medax.geometry.region import PairRoles, Region
 
@@ -36,10 +36,28 @@ class FieldSample:
     g: FloatArray
     grad: FloatArray
 
+    def take(self, idx: np.ndarray) -> FieldSample:
+        """The sample at rows ``idx`` (k,) (indices or a mask)."""
+        return FieldSample(*(getattr(self, f)[idx] for f in _FIELDS))
+
+    @staticmethod
+    def empty(dim: int) -> FieldSample:
+        """No rows (points in ``dim`` dimensions)."""
+        v, s = np.zeros((0, dim)), np.zeros(0)
+        return FieldSample(v, s, s, v, v, s, s, s, np.zeros((0, 2)))
+
+    @staticmethod
+    def concat(samples: list[FieldSample]) -> FieldSample:
+        """The samples' rows one after the other."""
+        return FieldSample(*(np.concatenate([getattr(s, f) for s in samples]) for f in _FIELDS))
+
     @property
     def error(self) -> FloatArray:
         """Equidistance error ``2 |g|``: exactly ``|d1 - d2|`` on the axis (r = 1/2)."""
         return np.abs(self.g) * 2.0
+
+
+_FIELDS = ("x", "d1", "d2", "q1", "q2", "t1", "t2", "g", "grad")
 
 
 class DistanceField:
@@ -63,6 +81,23 @@ class DistanceField:
         if isinstance(pair, PairSearch) and pair.fits(x.shape[0]):
             return pair.closest(x)
         return self.a1.closest(x), self.a2.closest(x)
+
+    def closest_near(self, on2: np.ndarray, x: FloatArray, t0: FloatArray, width: float) -> Closest:
+        """Local (branch-restricted) closest points for space points ``x`` (n, dim): row
+        ``i`` on A2 where ``on2[i]`` (bool (n,)), else on A1, with its parameter within
+        ``width`` of ``t0[i]`` (:func:`medax.geometry.curve.closest_near`); two B-spline
+        constraints in one bracketed Newton (:meth:`PairSearch.closest_near`)."""
+        if self._pair is False:
+            self._pair = PairSearch.build(self.a1, self.a2)
+        pair = self._pair
+        if isinstance(pair, PairSearch):
+            return pair.closest_near(on2, x, t0, width)
+        t, foot, dist = np.empty(len(x)), np.empty_like(x), np.empty(len(x))
+        for curve, rows in ((self.a1, np.flatnonzero(~on2)), (self.a2, np.flatnonzero(on2))):
+            if rows.size:
+                c = closest_near(curve, x[rows], t0[rows], width)
+                t[rows], foot[rows], dist[rows] = c.t, c.foot, c.distance
+        return Closest(t=t, foot=foot, distance=dist)
 
     def __call__(self, p: FloatArray) -> FieldSample:
         """The field at parameter points ``p`` of shape ``(n, 2)``."""

@@ -12,7 +12,7 @@ import numpy as np
 
 from medax.axis.field import DistanceField, FieldSample
 from medax.geometry._types import FloatArray
-from medax.geometry.curve import Closest, closest_near
+from medax.geometry.curve import Closest
 
 #: a foot point moving this many times faster than the axis point marks a kink
 KINK_SPEED = 25.0
@@ -42,90 +42,177 @@ def locate_kinks(
     tol: float,
     iters: int = 40,
     speed: float = KINK_TRY,
-) -> list[tuple[int, FloatArray]]:
+) -> tuple[list[tuple[int, FloatArray]], FieldSample]:
     """The kinks ``(i, q)`` (``q`` (2,)) confirmed by Newton between axis points ``p[i]``,
     ``p[i+1]`` (parameter plane) for ``i`` of ``intervals`` (an interval without one is
-    simply refined). All kinks of a round are solved at once, grouped by the constraint
-    whose foot jumps: the one that moves more, and the other too where it also moves
-    ``speed`` times as far as the axis point (both feet jumping in one interval: two kinks,
-    e.g. near a corner of the wavy region), ordered along each interval."""
-    out: list[tuple[int, float, FloatArray]] = []
+    simply refined), ordered along each interval, and the global field at them (one row
+    per kink: the sample of the confirming check). The foot that jumps is that of the
+    constraint that moves more, and the other's too where it also moves ``speed`` times as
+    far as the axis point (both feet jumping in one interval: two kinks, e.g. near a corner
+    of the wavy region).
+
+    All kinks of a round are solved in one Newton batch (:func:`_solve`): each row's three
+    distances (the jumping constraint's two branches, the other constraint) are local,
+    branch-bracketed queries, one stacked query per step for all rows. The other
+    constraint's foot starts from its foot at either end of the interval (one row each:
+    where both feet jump it is that of one end or the other, by the kinks' order); a kink
+    is kept only where the global field confirms it (``2|g| <= tol``). A kink that no local
+    row confirms is solved again with global queries of the other constraint, as the
+    tracer did before the batch (a foot of the other constraint that jumps too)."""
     if not intervals:
-        return []
+        return [], FieldSample.empty(field.a1.dim)
     idx = np.asarray(intervals, dtype=np.int64)
     dx = np.linalg.norm(s.x[idx + 1] - s.x[idx], axis=1)
     j1 = np.linalg.norm(s.q1[idx + 1] - s.q1[idx], axis=1)
     j2 = np.linalg.norm(s.q2[idx + 1] - s.q2[idx], axis=1)
     jumps_a1 = j1 >= j2
     both = (j1 > speed * dx) & (j2 > speed * dx)
-    emb = field.region.embedding
-    r = field.ratio
-    for flag in (True, False):
-        rows = np.flatnonzero((jumps_a1 == flag) | both)
-        if rows.size == 0:
-            continue
-        ii = idx[rows]
-        jumping, other = (field.a1, field.a2) if flag else (field.a2, field.a1)
-        t_par = s.t1 if flag else s.t2
-        ta, tb = t_par[ii].copy(), t_par[ii + 1].copy()
-        wj, wo = (1.0 - r, r) if flag else (r, 1.0 - r)  # weights of jumping / other distance
-        q = 0.5 * (p[ii] + p[ii + 1])
-        conv = np.zeros(len(ii), dtype=bool)
-        act = np.arange(len(ii))
-        for _ in range(iters):
-            x = emb.evaluate(q[act])
-            nb = len(act)  # both branches in one query
-            cab = closest_near(
-                jumping, np.concatenate((x, x)), np.concatenate((ta[act], tb[act])), BRANCH_WIDTH
-            )
-            ca, cb = (
-                Closest(cab.t[sl], cab.foot[sl], cab.distance[sl])
-                for sl in (slice(0, nb), slice(nb, None))
-            )
-            co = other.closest(x)
-            ta[act], tb[act] = ca.t, cb.t
-            ua, ub, uo = (
-                (x - c.foot) / np.maximum(c.distance, 1e-300)[:, None] for c in (ca, cb, co)
-            )
-            f0 = wj * ca.distance - wo * co.distance
-            f1 = wj * cb.distance - wo * co.distance
-            jac = emb.jacobian(q[act])
-            ga = np.einsum("mi,mij->mj", wj * ua - wo * uo, jac)
-            gb = np.einsum("mi,mij->mj", wj * ub - wo * uo, jac)
-            done = 2.0 * np.maximum(np.abs(f0), np.abs(f1)) <= tol
-            conv[act[done]] = True
-            det = ga[:, 0] * gb[:, 1] - ga[:, 1] * gb[:, 0]
-            move = ~done & (det != 0.0) & np.isfinite(det)  # singular rows: no kink
-            with np.errstate(divide="ignore", invalid="ignore"):
-                step = np.column_stack(
-                    (f0 * gb[:, 1] - f1 * ga[:, 1], ga[:, 0] * f1 - gb[:, 0] * f0)
-                )
-                step /= det[:, None]
-            q[act[move]] -= step[move]
-            act = act[move]
-            if act.size == 0:
-                break
-        good = np.flatnonzero(conv)
-        if good.size == 0:
-            continue
-        # the kink must be on the axis of the full (global) field
-        on_axis = field(q[good]).error <= tol
-        for j, ok in zip(good.tolist(), on_axis.tolist(), strict=True):
-            i = int(ii[j])
-            along = _along(p, i, q[j])
-            if ok and along is not None and abs(ta[j] - tb[j]) >= 1e-9:
-                out.append((i, along, q[j]))
+    # groups (interval, jumping constraint); rows: each group from either end's other foot
+    g_int = np.concatenate((idx[jumps_a1 | both], idx[~jumps_a1 | both]))
+    g_on2 = np.repeat([False, True], [int(np.sum(jumps_a1 | both)), int(np.sum(~jumps_a1 | both))])
+    n_g = g_int.size
+    group = np.tile(np.arange(n_g), 2)
+    ii, on2 = g_int[group], g_on2[group]
+    end = ii + np.repeat([0, 1], n_g)  # the end whose other foot starts the row
+    q0 = _start(p, s, ii)
+    ok, q, fs = _solve(field, s, ii, on2, end, q0, tol, iters, global_other=False)
+    first = np.full(n_g, -1, dtype=np.int64)  # the first confirmed row of each group
+    for r in np.flatnonzero(ok)[::-1].tolist():
+        first[group[r]] = r
+    rows = first[first >= 0]
+    found = [(int(ii[r]), q[r]) for r in rows.tolist()]
+    samples = [fs.take(rows)]
+    again = np.flatnonzero(first < 0)
+    if again.size:  # global queries of the other constraint for the groups not confirmed
+        ok2, q2, fs2 = _solve(
+            field, s, g_int[again], g_on2[again], g_int[again], q0[again], tol, iters, True
+        )
+        rows2 = np.flatnonzero(ok2)
+        found += [(int(g_int[again[r]]), q2[r]) for r in rows2.tolist()]
+        samples.append(fs2.take(rows2))
+    out = []
+    for j, (i, qk) in enumerate(found):
+        along = _along(p, i, qk)
+        if along is not None:
+            out.append((i, along, j))
     out.sort(key=lambda k: (k[0], k[1]))
     kept: list[tuple[int, FloatArray]] = []
-    for i, _, q in out:  # (two kinks of one interval that coincide are one)
+    keep: list[int] = []
+    for i, _, j in out:  # (two kinks of one interval that coincide are one)
+        qk = found[j][1]
         if (
             kept
             and kept[-1][0] == i
-            and np.linalg.norm(q - kept[-1][1]) <= 1e-12 * (np.linalg.norm(p[i + 1] - p[i]))
+            and np.linalg.norm(qk - kept[-1][1]) <= 1e-12 * (np.linalg.norm(p[i + 1] - p[i]))
         ):
             continue
-        kept.append((i, q))
-    return kept
+        kept.append((i, qk))
+        keep.append(j)
+    return kept, FieldSample.concat(samples).take(np.array(keep, dtype=np.int64))
+
+
+def _start(p: FloatArray, s: FieldSample, ii: np.ndarray) -> FloatArray:
+    """Newton starts (k, 2) for kinks in the intervals ``ii`` (k,): the crossing of the
+    axis tangents at the interval's ends (each side of a kink is a smooth bisector, so the
+    crossing is off by the square of the interval), or the interval's middle where the
+    tangents are nearly parallel or cross outside it."""
+    a, b = p[ii], p[ii + 1]
+    ga, gb = s.grad[ii], s.grad[ii + 1]
+    ta = np.column_stack((ga[:, 1], -ga[:, 0]))  # tangents: the gradients turned by -90 deg
+    tb = np.column_stack((gb[:, 1], -gb[:, 0]))
+    ta /= np.maximum(np.linalg.norm(ta, axis=1), 1e-300)[:, None]
+    tb /= np.maximum(np.linalg.norm(tb, axis=1), 1e-300)[:, None]
+    ab = b - a
+    det = ta[:, 0] * (-tb[:, 1]) - ta[:, 1] * (-tb[:, 0])  # [ta, -tb] [u, v] = b - a
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = (ab[:, 0] * (-tb[:, 1]) - ab[:, 1] * (-tb[:, 0])) / det
+        v = (ta[:, 0] * ab[:, 1] - ta[:, 1] * ab[:, 0]) / det
+    h = np.linalg.norm(ab, axis=1)
+    ok = (np.abs(det) > 1e-3) & (u > 0.0) & (v > 0.0) & (u < 2.0 * h) & (v < 2.0 * h)
+    return np.where(ok[:, None], a + u[:, None] * ta, 0.5 * (a + b))
+
+
+def _solve(
+    field: DistanceField,
+    s: FieldSample,
+    ii: np.ndarray,
+    on2: np.ndarray,
+    end: np.ndarray,
+    q0: FloatArray,
+    tol: float,
+    iters: int,
+    global_other: bool,
+) -> tuple[np.ndarray, FloatArray, FieldSample]:
+    """Newton on ``wj d_a - wo d_o = wj d_b - wo d_o = 0`` for rows (k,) in intervals ``ii``
+    whose jumping constraint is A2 where ``on2`` (else A1): ``d_a``, ``d_b`` the distances
+    to its branches at the feet ``t[ii]``, ``t[ii + 1]``, ``d_o`` to the other constraint,
+    local from its foot at point ``end`` (or global with ``global_other``), from ``q0``
+    (k, 2). Returns the rows confirmed (bool (k,): converged, a kink of the global field,
+    distinct branches), the points (k, 2) and the global field there (k rows; meaningful
+    where confirmed)."""
+    emb = field.region.embedding
+    r = field.ratio
+    k = ii.size
+    ta = np.where(on2, s.t2[ii], s.t1[ii])
+    tb = np.where(on2, s.t2[ii + 1], s.t1[ii + 1])
+    to = np.where(on2, s.t1[end], s.t2[end])
+    wj = np.where(on2, r, 1.0 - r)[:, None]  # weights of the jumping / other distance
+    wo = np.where(on2, 1.0 - r, r)[:, None]
+    q = np.array(q0, dtype=np.float64, copy=True)
+    conv = np.zeros(k, dtype=bool)
+    act = np.arange(k)
+    for _ in range(iters):
+        x = emb.evaluate(q[act])
+        n = act.size
+        o2 = on2[act]
+        if global_other:  # both branches in one query, the other constraint global
+            c = field.closest_near(np.concatenate((o2, o2)), np.concatenate((x, x)),
+                                   np.concatenate((ta[act], tb[act])), BRANCH_WIDTH)  # fmt: skip
+            c1, c2 = field.closest(x)
+            co = Closest(
+                np.where(o2, c1.t, c2.t),
+                np.where(o2[:, None], c1.foot, c2.foot),
+                np.where(o2, c1.distance, c2.distance),
+            )
+        else:  # the two branches and the other constraint in one query
+            c = field.closest_near(
+                np.concatenate((o2, o2, ~o2)), np.concatenate((x, x, x)),
+                np.concatenate((ta[act], tb[act], to[act])), BRANCH_WIDTH,
+            )  # fmt: skip
+            co = Closest(c.t[2 * n :], c.foot[2 * n :], c.distance[2 * n :])
+            to[act] = co.t
+        ca = Closest(c.t[:n], c.foot[:n], c.distance[:n])
+        cb = Closest(c.t[n : 2 * n], c.foot[n : 2 * n], c.distance[n : 2 * n])
+        ta[act], tb[act] = ca.t, cb.t
+        ua, ub, uo = (
+            (x - cc.foot) / np.maximum(cc.distance, 1e-300)[:, None] for cc in (ca, cb, co)
+        )
+        wja, woa = wj[act], wo[act]
+        f0 = wja[:, 0] * ca.distance - woa[:, 0] * co.distance
+        f1 = wja[:, 0] * cb.distance - woa[:, 0] * co.distance
+        ga = wja * ua - woa * uo
+        gb = wja * ub - woa * uo
+        if not emb.is_identity:
+            jac = emb.jacobian(q[act])
+            ga = np.einsum("mi,mij->mj", ga, jac)
+            gb = np.einsum("mi,mij->mj", gb, jac)
+        done = 2.0 * np.maximum(np.abs(f0), np.abs(f1)) <= tol
+        conv[act[done]] = True
+        det = ga[:, 0] * gb[:, 1] - ga[:, 1] * gb[:, 0]
+        move = ~done & (det != 0.0) & np.isfinite(det)  # singular rows: no kink
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = np.column_stack((f0 * gb[:, 1] - f1 * ga[:, 1], ga[:, 0] * f1 - gb[:, 0] * f0))
+            step /= det[:, None]
+        q[act[move]] -= step[move]
+        act = act[move]
+        if act.size == 0:
+            break
+    ok = conv & (np.abs(ta - tb) >= 1e-9)
+    # the kink must be on the axis of the full (global) field (one query for all rows:
+    # the unconfirmed ones ride along)
+    fs = field(q)
+    ok &= fs.error <= tol
+    return ok, q, fs
 
 
 def _along(p: FloatArray, i: int, q: FloatArray) -> float | None:

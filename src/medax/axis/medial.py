@@ -79,7 +79,6 @@ def trace_axis(
     diag = work.diagonal
     tol_pt, tol_cv = point_tol * diag, tol * diag
     b1, b2 = work.sides[roles.b1], work.sides[roles.b2]
-    shortest = float(work.side_lengths().min())
     stats = TraceStats()
     fit = None
     if method == "frame" and batch and work.embedding.is_identity:
@@ -98,6 +97,7 @@ def trace_axis(
         )
     if method == "frame":
         if fit is None:
+            shortest = float(work.side_lengths().min())
             # the paper's first step (shortest side / 5), but at most half the chord: on a
             # thin non-convex quad the axis was shorter than one such step and the trace
             # was lost
@@ -111,6 +111,7 @@ def trace_axis(
         pts, s, spline = fit.points, fit.sample, fit.spline
         curve_error, rounds = fit.curve_error, fit.rounds
     else:
+        shortest = float(work.side_lengths().min())
         b2_curve = work.space_curve(roles.b2)
         pts = trace_paper(
             field, p0, p1, shortest / 5.0,

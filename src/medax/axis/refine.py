@@ -3,7 +3,10 @@
 The fitted curve is checked between the points (10 samples per interval); where it strays
 beyond the tolerance, the interval's midpoint on the curve is corrected onto the axis and
 inserted, all such points of a round at once. Kinks of the axis (where a foot point jumps
-between distant parts of a wavy constraint) are located by bisection and become C0 breaks.
+between distant parts of a wavy constraint) are located by Newton, all of a round in one
+batch (:mod:`medax.axis.kinks`), and become C0 breaks, inserted with the field of their
+global check; short pieces between breaks are split in one insertion, and points inserted
+after a check start from its samples (their field measured there).
 """
 
 from __future__ import annotations
@@ -89,17 +92,16 @@ def fit_and_refine(
     checked: _Checked | None = None
     history: list[float] = []  # curve error per checked round
     for rounds in range(1, MAX_ROUNDS + 1):  # noqa: B007
-        # 1. pieces between breaks need DEGREE + 1 points: insert chord midpoints where short
-        cuts = [0, *sorted(breaks), len(pts) - 1]
-        short = [
-            i
-            for a, b in zip(cuts[:-1], cuts[1:], strict=True)
-            if b - a < DEGREE
-            for i in range(a, b)
-        ]
-        if short:
+        # 1. pieces between breaks need DEGREE + 1 points: where short, all of the piece's
+        # intervals split evenly along their chords into enough pieces, in one insertion
+        cuts = np.array([0, *sorted(breaks), len(pts) - 1])
+        span = np.diff(cuts)
+        if np.any(span < DEGREE):
+            short = np.flatnonzero(span < DEGREE)
+            intervals = np.concatenate([np.arange(cuts[j], cuts[j + 1]) for j in short])
+            parts = np.repeat(-(-DEGREE // span[short]), span[short])  # ceil(DEGREE / span)
             pts, s, breaks, it = _insert(
-                field, pts, s, breaks, np.array(short), None, None, tol_point
+                field, pts, s, breaks, intervals, None, None, tol_point, parts
             )
             iters += it
             continue
@@ -111,7 +113,7 @@ def fit_and_refine(
             for i in kink_intervals(s, scale, KINK_TRY)
             if i not in tried and i not in breaks and i + 1 not in breaks
         ]
-        found = locate_kinks(
+        found, kink_s = locate_kinks(
             field, s, pts, kinks, tol_point, speed=KINK_TRY if both_kinks else np.inf
         )
         tried |= set(kinks)
@@ -126,16 +128,20 @@ def fit_and_refine(
             and f[0] not in kinked  # (one round's breaks: the kinks there)
         ]
         tried_t |= {_key(pts, f) for f in trans}
-        ti, tq = locate_transitions(field, pts, s, trans, tol_point)
-        # new breaks: one transition per interval, or the interval's kinks (in order along it)
-        one = {i: q for i, q in zip(ti.tolist(), tq, strict=True)}  # one per interval
+        ti, tq, trans_s = locate_transitions(field, pts, s, trans, tol_point)
+        # new breaks: one transition per interval, or the interval's kinks (in order along
+        # it); each with its row in the field samples of both (transitions, then kinks)
+        one = {i: j for j, i in enumerate(ti.tolist())}  # one per interval
+        nt = len(ti)
         new_breaks = sorted(
-            [(i, 0, q) for i, q in one.items()] + [(i, 1 + k, q) for k, (i, q) in enumerate(found)],
+            [(i, 0, tq[j], j) for i, j in one.items()]
+            + [(i, 1 + k, q, nt + k) for k, (i, q) in enumerate(found)],
             key=lambda b: (b[0], b[1]),
         )
         if new_breaks:
             idx = np.array([b[0] for b in new_breaks], dtype=np.int64)
             kp = np.array([b[2] for b in new_breaks])
+            rows = np.array([b[3] for b in new_breaks], dtype=np.int64)
             # a break found on an existing point (e.g. a foot reaching its constraint's end
             # exactly at B1 or B2) is not inserted again: interior points become breaks
             on = _existing(pts, idx, kp, 1e-12 * scale)
@@ -143,8 +149,9 @@ def fit_and_refine(
             marked = {int(j) for j in on[~fresh] if 0 < j < len(pts) - 1} - breaks
             if np.any(fresh):
                 breaks |= marked
-                kf = kp[fresh]
-                pts, s, breaks = _insert_at(pts, s, breaks, idx[fresh], kf, field(kf), True)
+                # (the field at the breaks is that of their global check: no evaluation)
+                ks = _take(_cat(trans_s, kink_s), rows[fresh])
+                pts, s, breaks = _insert_at(pts, s, breaks, idx[fresh], kp[fresh], ks, True)
             elif marked:
                 breaks |= marked
             else:
@@ -170,7 +177,9 @@ def fit_and_refine(
             break
         # cubic interpolation error ~ h^4: split each bad interval into enough pieces
         pieces = np.clip(np.ceil(1.3 * (err[bad] / target) ** 0.25), 2, 8).astype(np.int64)
-        pts, s, breaks, it = _insert(field, pts, s, breaks, bad, spline, u, tol_point, pieces)
+        pts, s, breaks, it = _insert(
+            field, pts, s, breaks, bad, spline, u, tol_point, pieces, checked
+        )
         iters += it
     if spline is None or len(u) != len(pts):  # rounds ran out while inserting breaks
         spline, u = interpolate(pts, sorted(breaks), DEGREE)
@@ -193,11 +202,16 @@ def _existing(pts: FloatArray, idx: np.ndarray, q: FloatArray, eps: float) -> np
 @dataclass
 class _Checked:
     """Check samples of the last round: per-interval endpoint keys, space points
-    (n_int, m, dim) and equidistance errors (n_int, m) (measured or bounded)."""
+    (n_int, m, dim) and equidistance errors (n_int, m) (measured or bounded); the parameter
+    points (n_int, m, 2), and the field ``sample`` at the measured ones, row ``rows[i, j]``
+    ((n_int, m), -1 where only bounded)."""
 
     keys: dict[bytes, int]
     x: FloatArray
     err: FloatArray
+    y: FloatArray
+    rows: np.ndarray
+    sample: FieldSample
 
 
 def _check(
@@ -230,10 +244,13 @@ def _check(
         moved = np.linalg.norm(x[same] - prev.x[j[same]], axis=2)
         err[same] = prev.err[j[same]] + 2.0 * moved
     need = ~(err <= 0.5 * tol_curve)
-    if np.any(need):
-        err[need] = field(y.reshape(len(u) - 1, m, 2)[need]).error
+    y = y.reshape(len(u) - 1, m, 2)
+    rows = np.full(need.shape, -1, dtype=np.int64)
+    rows[need] = np.arange(int(need.sum()))
+    measured = field(y[need]) if np.any(need) else FieldSample.empty(x.shape[2])
+    err[need] = measured.error
     keys = {k: i for i, k in enumerate(ends)}
-    return err.max(axis=1), _Checked(keys, x, err)
+    return err.max(axis=1), _Checked(keys, x, err, y, rows, measured)
 
 
 def _insert(
@@ -246,19 +263,36 @@ def _insert(
     u: FloatArray | None,
     tol: float,
     pieces: np.ndarray | None = None,
+    checked: _Checked | None = None,
 ) -> tuple[FloatArray, FieldSample, set[int], int]:
     """Split each interval into ``pieces`` (default 2) by corrected points taken on the
-    spline (or the chord when there is no spline yet)."""
+    spline (or the chord when there is no spline yet). With the spline's ``checked``
+    samples, the points start from the check samples nearest the even split (``pieces <=
+    CHECK_SAMPLES`` keeps them distinct) and Newton from their field where measured."""
     if pieces is None:
         pieces = np.full(len(intervals), 2, dtype=np.int64)
     rep = pieces - 1
     intervals = np.repeat(intervals, rep)
     frac = np.concatenate([np.arange(1, m) / m for m in pieces])
-    if spline is not None and u is not None:
+    start: FieldSample | None = None
+    if checked is not None:
+        j = np.rint(frac * CHECK_SAMPLES).astype(np.int64) - 1  # sample j of the interval
+        guess = checked.y[intervals, j]
+        row = checked.rows[intervals, j]
+        known = row >= 0
+        if known.all():
+            start = checked.sample.take(row)
+        else:  # the rest evaluated, all in the guesses' order
+            rest = FieldSample.concat([checked.sample.take(row[known]), field(guess[~known])])
+            at = np.empty(len(row), dtype=np.int64)
+            at[known] = np.arange(int(known.sum()))
+            at[~known] = int(known.sum()) + np.arange(int((~known).sum()))
+            start = rest.take(at)
+    elif spline is not None and u is not None:
         guess = spline.evaluate(u[intervals] + frac * (u[intervals + 1] - u[intervals]))
     else:
         guess = pts[intervals] + frac[:, None] * (pts[intervals + 1] - pts[intervals])
-    new, sn, _, it = correct_newton(field, guess, tol)
+    new, sn, _, it = correct_newton(field, guess, tol, sample=start)
     # a corrected point that left its interval (slid onto a neighbour near a singularity)
     # would break the order of the points: it is dropped
     a, b = pts[intervals], pts[intervals + 1]

@@ -51,12 +51,13 @@ def locate_transitions(
     found: list[tuple[int, int, float, int]],
     tol: float,
     iters: int = 12,
-) -> tuple[np.ndarray, FloatArray]:
+) -> tuple[np.ndarray, FloatArray, FieldSample]:
     """Transition points for the intervals ``found`` (from :func:`transition_intervals`):
-    indices ``i`` (m,) of the intervals where one was confirmed and the points (m, 2) in the
-    parameter plane (equidistance within ``tol`` and strictly between the interval's ends)."""
+    indices ``i`` (m,) of the intervals where one was confirmed, the points (m, 2) in the
+    parameter plane (equidistance within ``tol`` and strictly between the interval's ends)
+    and the field there."""
     if not found:
-        return np.zeros(0, dtype=np.int64), np.zeros((0, 2))
+        return np.zeros(0, dtype=np.int64), np.zeros((0, 2)), FieldSample.empty(field.a1.dim)
     idx = np.array([f[0] for f in found], dtype=np.int64)
     curves = [field.a1 if k == 1 else field.a2 for _, k, _, _ in found]
     ends = [np.array([e]) for _, _, e, _ in found]
@@ -94,4 +95,4 @@ def locate_transitions(
     # strictly inside the interval (projection onto the chord) and on the axis
     along = np.einsum("ij,ij->i", q - a, b - a) / np.einsum("ij,ij->i", b - a, b - a)
     good = (fs.error <= tol) & (along > 1e-9) & (along < 1.0 - 1e-9) & np.all(np.isfinite(q), 1)
-    return idx[good], q[good]
+    return idx[good], q[good], fs.take(np.flatnonzero(good))

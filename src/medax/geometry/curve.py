@@ -102,11 +102,16 @@ class Curve(ABC):
         return self.evaluate(np.linspace(0.0, 1.0, n))
 
     @cached_property
-    def _search(self) -> tuple[FloatArray, FloatArray, cKDTree]:
+    def _search(self) -> tuple[FloatArray, FloatArray]:
+        """The search samples: parameters (m,) and points (m, dim)."""
         n = self.samples_per_piece * max(self.complexity(), 1) + 1
         t = np.linspace(0.0, 1.0, n)
-        pts = self.evaluate(t)
-        return t, pts, cKDTree(pts)
+        return t, self.evaluate(t)
+
+    @cached_property
+    def _tree(self) -> cKDTree:
+        """k-d tree of the search samples (built on first use: only very large queries)."""
+        return cKDTree(self._search[1])
 
     @cached_property
     def _slopes(self) -> FloatArray:
@@ -308,7 +313,7 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
     sign change, whose linear interpolation starts :func:`_newton_in_brackets`; a bracket
     without a sign change keeps its nearest sample (an end of the curve).
     """
-    ts, pts, _ = curve._search
+    ts, pts = curve._search
     slopes = curve._slopes
     n, m = points.shape[0], ts.size
     cand = _candidate_samples(curve, points, k).ravel()
@@ -385,10 +390,10 @@ _TABLE_BLOCK = 65_536  # entries per block of the tables actually computed (in c
 
 def _candidate_samples(curve: Curve, points: FloatArray, k: int) -> np.ndarray:
     """Indices (n, k) of the ``k`` nearest local minima of the sample distance per point."""
-    ts, pts, tree = curve._search
+    ts, pts = curve._search
     n, m = points.shape[0], pts.shape[0]
     if m * n > 50 * _TREE_ABOVE:  # very long curves: nearest samples from the k-d tree
-        _, idx = tree.query(points, k=4 * k)
+        _, idx = curve._tree.query(points, k=4 * k)
         return np.asarray(idx)[:, ::4][:, :k]
     centre, pts, pp = curve._table
     points = points - centre

@@ -15,7 +15,14 @@ import numpy as np
 
 from medax.geometry._types import FloatArray
 from medax.geometry.bspline import POWER_BASIS_MAX_DEGREE, BSpline
-from medax.geometry.curve import Closest, Curve, _quick_newton, _start, sign_brackets
+from medax.geometry.curve import (
+    Closest,
+    Curve,
+    _bracketed_newton,
+    _quick_newton,
+    _start,
+    sign_brackets,
+)
 
 #: parameter offset of the second curve in the stacked tables
 SHIFT = 2.0
@@ -45,7 +52,7 @@ class PairSearch:
     points; :meth:`build` returns ``None`` where the stacking does not apply."""
 
     def __init__(self, c1: BSpline, c2: BSpline, k: int = 2) -> None:
-        (t1, p1, _), (t2, p2, _) = c1._search, c2._search
+        (t1, p1), (t2, p2) = c1._search, c2._search
         self.k, self.m1, self.m = k, t1.size, t1.size + t2.size
         self.ts = np.concatenate((t1, t2 + SHIFT))
         self.pts = np.concatenate((p1, p2))
@@ -113,6 +120,22 @@ class PairSearch:
             tj = t[r, j, pj] - shift
             out.append(Closest(t=tj, foot=foot[r, j, pj], distance=dist[r, j, pj]))
         return out[0], out[1]
+
+    def closest_near(
+        self, on2: np.ndarray, points: FloatArray, t0: FloatArray, width: float
+    ) -> Closest:
+        """Local closest points as :func:`medax.geometry.curve.closest_near`, all rows in
+        one bracketed Newton: row ``i`` on curve 2 where ``on2[i]`` (bool (n,)), else on
+        curve 1, its parameter in ``[t0 - width, t0 + width]`` clipped to ``[0, 1]``.
+        Parameters (n,), foot points (n, dim) and distances (n,)."""
+        x = np.asarray(points, dtype=np.float64)
+        t0 = np.asarray(t0, dtype=np.float64)
+        shift = np.where(on2, SHIFT, 0.0)
+        lo = np.minimum(np.maximum(t0 - width, 0.0), 1.0) + shift
+        hi = np.minimum(np.maximum(t0 + width, 0.0), 1.0) + shift
+        start = np.minimum(np.maximum(t0, 0.0), 1.0) + shift
+        t, foot = _bracketed_newton(self.pieces, x, lo, hi, start=start)  # type: ignore[arg-type]
+        return Closest(t=t - shift, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
 
     def _candidates(self, points: FloatArray) -> np.ndarray:
         """Indices (n, 2, k) into the stacked samples: the ``k`` nearest local minima of the

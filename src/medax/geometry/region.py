@@ -114,7 +114,11 @@ class Region:
     @cached_property
     def diagonal(self) -> float:
         """Diagonal of the bounding box of the region in space: the length scale."""
-        pts = np.concatenate([self.space_curve(k).sample(_SAMPLES) for k in range(4)])
+        if self.embedding.is_identity and self.space_sides is None:
+            # the sides' samples are the boundary's (each side's last is the next's first)
+            pts = self.boundary
+        else:
+            pts = np.concatenate([self.space_curve(k).sample(_SAMPLES) for k in range(4)])
         return float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
 
     def signed_area(self) -> float:
