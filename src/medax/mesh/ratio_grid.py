@@ -150,6 +150,7 @@ def _grid(
     coarse_counts: dict[str, float] = {}
     hard = np.ones(m, dtype=bool)
     spread: list[FloatArray] = []
+    fine = src = np.empty(0, dtype=np.int64)  # interior nodes copied from coarse nodes
     if len(levels) > 1:
         coarse = _grid(region, levels[1:], side_t[1:], tol, kinds, node_tol)
         coarse_counts = coarse.counts
@@ -166,6 +167,14 @@ def _grid(
             and not PlanarField.supports(region, kinds)
         ):
             hard = hard_nodes(err, kinks, coarse.moved, n1, n2, node_tol)
+        if not PlanarField.supports(region, kinds):
+            # nodes on a coarse node solve the same equations: copied, with its feet (free-
+            # form sides only: the closed-form path is cheaper whole, with its row weights)
+            fine, src = _coincident(n1, n2, levels[1])
+            copy = coarse.error.ravel()[src] == 0.0  # solved (or copied) there
+            fine, src = fine[copy], src[copy]
+            inner[fine] = coarse.grid.reshape(-1, 2)[src]
+            err[fine], hard[fine] = 0.0, False
     else:
         inner = _coons(grid, n1, n2)[1:-1, 1:-1].reshape(-1, 2)
     rows = np.flatnonzero(hard)
@@ -179,6 +188,10 @@ def _grid(
             else start_feet(f, cubic_feet[k] if with_feet else None, sp, n1, n2, at)
             for k, (f, sp) in enumerate(zip(coarse.feet, spread, strict=True))
         ]
+        if with_feet and fine.size:  # the copied nodes' feet are the coarse nodes' own
+            for f, cf in zip(feet0, coarse.feet, strict=True):
+                if f.size:
+                    f[0, fine], f[1, fine] = cf.ravel()[src], np.nan
         start = [f[:, rows] if f.size and with_feet else f for f in feet0]
     solved, feet, counts = _solve(
         region, inner[rows], ra[rows], rb[rows], _newton_tol(region, kinds, tol, node_tol),
@@ -196,8 +209,9 @@ def _grid(
     if rows.size < m:
         err[rows] = 0.0
         error[1:-1, 1:-1] = err.reshape(n2 - 1, n1 - 1)
-    counts["interpolated"] = float(m - rows.size)
-    for key in ("newton_iterations", "global_resolved", "interpolated"):
+    counts["copied"] = float(fine.size)  # on a solved coarse node: solved there
+    counts["interpolated"] = float(m - rows.size - fine.size)
+    for key in ("newton_iterations", "global_resolved", "interpolated", "copied"):
         counts[f"coarse_{key}"] = coarse_counts.get(key, 0) + coarse_counts.get(f"coarse_{key}", 0)
     out_feet = _level_feet(region, grid, feet0, feet, rows, kinds) if with_feet else []
     return _Level(grid, out_feet, error, moved, counts)
@@ -223,6 +237,16 @@ def _level_feet(
             f[rows] = solved[k]
         inner.append(f)
     return _full_feet(region, grid, inner, kinds)
+
+
+def _coincident(n1: int, n2: int, coarse: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    c1, c2 = coarse
+    i, j = np.arange(1, n1), np.arange(1, n2)
+    i, j = i[(i * c1) % n1 == 0], j[(j * c2) % n2 == 0]
+    jj, ii = np.meshgrid(j, i, indexing="ij")
+    fine = ((jj - 1) * (n1 - 1) + (ii - 1)).ravel()
+    src = ((jj * c2 // n2) * (c1 + 1) + ii * c1 // n1).ravel()
+    return fine, src
 
 
 def _newton_tol(region: Region, kinds: tuple[str, str], tol: float, node_tol: float) -> float:
