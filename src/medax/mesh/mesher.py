@@ -81,7 +81,8 @@ def mesh_region(
     node error of the crossings: for ``"ratio"`` and ``"angle"`` (default
     :data:`NODE_TOL`) interior nodes of regions with free-form sides are interpolated from
     the coarser level where its error estimate allows, and solved elsewhere (``0``: every
-    node solved; boundary nodes and regions of lines and arcs are always exact); for
+    node solved; boundary nodes, regions of lines and arcs and regions on curved faces are
+    always solved); for
     ``"paper"`` (default :data:`PAPER_TOL`) it is the traced splines' error. ``boundary``
     (``"ratio"`` and ``"angle"`` methods): boundary nodes at equal arc length
     (``"arclength"``) or at the ends of the curves of constant ratio (``"ratio"``), see
@@ -111,8 +112,8 @@ def mesh_region(
     info: dict = {}
     if method in ("angle", "ratio"):
         weighting = "angle" if method == "angle" else "auto"
-        # solved centred and at unit diagonal, so that far from the origin the node tolerance
-        # (1e-13 x diagonal) is still above round-off
+        # solved centred and at unit diagonal, so that far from the origin the residual
+        # tolerance (down to 1e-13 x diagonal) is still above round-off
         work, offset, scale = normalised_region(region)
         point_tol = min(tol or tolerances.POINT_TOL, tolerances.POINT_TOL)
         params, info = ratio_grid(work, n1, n2, point_tol, weighting, boundary, node_tol=tol)

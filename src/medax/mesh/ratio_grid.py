@@ -151,6 +151,7 @@ def _grid(
     hard = np.ones(m, dtype=bool)
     spread: list[FloatArray] = []
     fine = src = np.empty(0, dtype=np.int64)  # interior nodes copied from coarse nodes
+    planar = PlanarField.supports(region, kinds)  # every foot in closed form
     if len(levels) > 1:
         coarse = _grid(region, levels[1:], side_t[1:], tol, kinds, node_tol)
         coarse_counts = coarse.counts
@@ -164,10 +165,10 @@ def _grid(
             node_tol > 0.0
             and min(levels[1]) >= INTERP_MIN
             and region.embedding.is_identity  # (the estimate is in parameter units)
-            and not PlanarField.supports(region, kinds)
+            and not planar
         ):
             hard = hard_nodes(err, kinks, coarse.moved, n1, n2, node_tol)
-        if not PlanarField.supports(region, kinds):
+        if not planar:
             # nodes on a coarse node solve the same equations: copied, with its feet (free-
             # form sides only: the closed-form path is cheaper whole, with its row weights)
             fine, src = _coincident(n1, n2, levels[1])
@@ -194,7 +195,7 @@ def _grid(
                     f[0, fine], f[1, fine] = cf.ravel()[src], np.nan
         start = [f[:, rows] if f.size and with_feet else f for f in feet0]
     solved, feet, counts = _solve(
-        region, inner[rows], ra[rows], rb[rows], _newton_tol(region, kinds, tol, node_tol),
+        region, inner[rows], ra[rows], rb[rows], _newton_tol(planar, tol, node_tol),
         kinds, start,
         axes if rows.size == m else (None, None),
     )  # fmt: skip
@@ -249,12 +250,13 @@ def _coincident(n1: int, n2: int, coarse: tuple[int, int]) -> tuple[np.ndarray, 
     return fine, src
 
 
-def _newton_tol(region: Region, kinds: tuple[str, str], tol: float, node_tol: float) -> float:
+def _newton_tol(planar: bool, tol: float, node_tol: float) -> float:
     """Residual (region units) to which nodes are solved: ``1e-3 * tol``, or on regions
-    with free-form sides ``_NEWTON_SHARE`` of the node tolerance if that is larger (a node
-    then sits within about that of its root, far inside the tolerance, and one Newton
-    evaluation fewer is needed from an interpolated start)."""
-    if PlanarField.supports(region, kinds):
+    with free-form sides (not ``planar``: not every foot in closed form) ``_NEWTON_SHARE``
+    of the node tolerance if that is larger (a node then sits within about that of its
+    root, far inside the tolerance, and one Newton evaluation fewer is needed from an
+    interpolated start)."""
+    if planar:
         return 1e-3 * tol
     return max(1e-3 * tol, _NEWTON_SHARE * node_tol)
 

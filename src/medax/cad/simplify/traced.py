@@ -6,8 +6,10 @@ parameter is not equidistant from them (1.4e-3 off on the catalogue's slanted bo
 medial curve is traced per cross-section: on every cross iso-line ``a = const`` (``a`` the
 parameter along the blend) the point ``S(c*(a), a)`` where the distances to the two smooth
 edges (their own 3-D curves) are equal, found by Newton on ``g(c) = d1 - d2`` from the mid
-parameter (``g'(c) = ((S - F1) / d1 - (S - F2) / d2) . dS/dc``, ``F`` the feet on the edges
-by ``GeomAPI_ProjectPointOnCurve``, section by section: two or three steps each).
+parameter (``g'(c) = ((S - F1) / d1 - (S - F2) / d2) . dS/dc``, ``F`` the feet on the edges),
+all sections at once on the numpy copies of the blend and the edges
+(:func:`~medax.cad.face_region.bspline_embedding`, :func:`~medax.cad.face_region.curve_copy`,
+global :meth:`~medax.geometry.curve.Curve.closest`): two or three steps.
 The traced points are interpolated by a quintic spline in space per knot span of the surface
 along ``a`` (C0 joins at the surface's own knots, where ``c*(a)`` may lose smoothness), and
 the cross parameters by the same spline in the plane (the edge's pcurve on the blend).
@@ -21,17 +23,22 @@ are within the tolerance.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from OCP.BRep import BRep_Tool
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeVertex
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+from OCP.Geom import Geom_BSplineCurve, Geom_BSplineSurface
 from OCP.GeomAPI import GeomAPI_ProjectPointOnCurve
-from OCP.gp import gp_Pnt, gp_Vec
+from OCP.gp import gp_Pnt
 from scipy.interpolate import BSpline, make_interp_spline
 
+from medax.cad.face_region import bspline_embedding, curve_copy
 from medax.cad.simplify.occ import Array, edge_curve, pnt, xyz
+from medax.geometry.curve import Curve
+from medax.geometry.surfaces import NurbsSurface
 
 #: Interpolation nodes per knot span of the surface along the blend, first try; doubled up
 #: to MAX_NODES while the measured error is above the tolerance.
@@ -59,38 +66,39 @@ def _foot(curve: tuple[Any, float, float], p: Array) -> tuple[Array, float]:
     return xyz(proj.NearestPoint()), float(proj.LowerDistance())
 
 
-def _jet(surf: Any, k: int, c: float, a: float) -> tuple[Array, Array]:
-    """Point and derivative along the cross parameter at cross ``c``, along ``a``."""
-    p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
-    u, v = (c, a) if k == 0 else (a, c)
-    surf.D1(float(u), float(v), p, du, dv)
-    return xyz(p), xyz(du if k == 0 else dv)
-
-
 def trace_cross_params(
-    surf: Any, k: int, along: Array, c1: float, c2: float, curves: list[Any], tol: float
+    surf: NurbsSurface,
+    k: int,
+    along: Array,
+    c1: float,
+    c2: float,
+    edges: Sequence[Curve],
+    tol: float,
 ) -> Array | None:
     """Cross parameters ``c*`` (n,) of the equidistant points on the cross iso-lines
-    ``along`` (``k``: index of the cross parameter in (u, v)), between ``c1`` and ``c2``;
-    Newton from the mid parameter until ``|d1 - d2| < tol``. None when a section does not
-    converge."""
+    ``along`` (``k``: index of the cross parameter in (u, v)) of the numpy copy ``surf`` of
+    the blend, between ``c1`` and ``c2``, from the numpy copies ``edges`` of the smooth
+    edges (global closest points): Newton on all sections at once from the mid parameter
+    until ``|d1 - d2| < tol``. None when a section does not converge."""
     c = np.full(len(along), 0.5 * (c1 + c2))
     lo, hi = min(c1, c2), max(c1, c2)
-    live = np.ones(len(along), bool)
+    live = np.arange(len(along))
     for _ in range(NEWTON_STEPS):
-        for i in np.flatnonzero(live):
-            p, dp = _jet(surf, k, c[i], along[i])
-            f1, d1 = _foot(curves[0], p)
-            f2, d2 = _foot(curves[1], p)
-            g = d1 - d2
-            if abs(g) < tol:
-                live[i] = False
-                continue
-            dg = float(((p - f1) / max(d1, 1e-300) - (p - f2) / max(d2, 1e-300)) @ dp)
-            if dg == 0.0:
-                return None
-            c[i] = min(max(c[i] - g / dg, lo), hi)
-        if not live.any():
+        uv = np.column_stack((c[live], along[live]) if k == 0 else (along[live], c[live]))
+        p, du, dv = surf.jet(uv)
+        dp = du if k == 0 else dv
+        f1, f2 = edges[0].closest(p), edges[1].closest(p)
+        g = f1.distance - f2.distance
+        done = np.abs(g) < tol
+        u1 = (p - f1.foot) / np.maximum(f1.distance, 1e-300)[:, None]
+        u2 = (p - f2.foot) / np.maximum(f2.distance, 1e-300)[:, None]
+        dg = np.einsum("ij,ij->i", u1 - u2, dp)
+        if np.any((dg == 0.0) & ~done):
+            return None
+        step = np.where(done, 0.0, g / np.where(dg == 0.0, 1.0, dg))
+        c[live] = np.clip(c[live] - step, lo, hi)
+        live = live[~done]
+        if live.size == 0:
             return c
     return None
 
@@ -166,6 +174,12 @@ def traced_medial_edge(
     reason when the error stays above ``tol``."""
     surf = BRep_Tool.Surface_s(face)
     curves = [edge_curve(e) for e in edges]
+    if not isinstance(surf, Geom_BSplineSurface) or not all(
+        isinstance(cv, Geom_BSplineCurve) for cv, _, _ in curves
+    ):
+        return "traced medial curve: the blend or its smooth edges are not B-splines"
+    numpy_surf = bspline_embedding(surf)
+    numpy_edges = [curve_copy(cv) for cv, _, _ in curves]
     lo, hi = along
     spans = _spans(surf, k, lo, hi)
     closed = False
@@ -174,16 +188,11 @@ def traced_medial_edge(
         s3, s2 = [], []
         for a0, a1 in spans:
             a = np.linspace(a0, a1, n + 1)
-            c = trace_cross_params(surf, k, a, cross[0], cross[1], curves, 1e-2 * tol)
+            c = trace_cross_params(numpy_surf, k, a, cross[0], cross[1], numpy_edges, 1e-2 * tol)
             if c is None:
                 return "traced medial curve: Newton did not converge on a cross-section"
-            pts = np.array(
-                [
-                    xyz(surf.Value(*map(float, (ci, ai) if k == 0 else (ai, ci))))
-                    for ci, ai in zip(c, a, strict=True)
-                ]
-            )
             uv = np.column_stack([c, a] if k == 0 else [a, c])
+            pts = numpy_surf.evaluate(uv)
             s3.append(make_interp_spline(a, pts, k=DEGREE))
             s2.append(make_interp_spline(a, uv, k=DEGREE))
         t3, c3 = _joined(s3)
