@@ -44,7 +44,7 @@ def periodic_knots(n: int) -> FloatArray:
     """Uniform knots ``k 2 pi / n``, ``k = -DEGREE .. n + DEGREE``: the ``n + DEGREE``
     B-splines on them, folded modulo ``n`` (:func:`periodic_design`), are the ``n``
     periodic cubic B-splines of period ``2 pi``."""
-    return np.arange(-DEGREE, n + DEGREE + 1) * (PERIOD / n)
+    return np.asarray(np.arange(-DEGREE, n + DEGREE + 1) * (PERIOD / n), dtype=np.float64)
 
 
 def periodic_design(theta: FloatArray, n: int) -> sp.csr_matrix:
