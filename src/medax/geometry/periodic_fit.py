@@ -1,0 +1,159 @@
+"""Least-squares radial height ``r(theta, s)`` over a cylinder's own frame: a tensor cubic
+B-spline, periodic in the angle ``theta`` (period ``2 pi``, uniform knots, no seam: the
+surface and all its derivatives match across ``theta = 0``), clamped in the axial
+coordinate ``s`` with double (C1) knots at prescribed ``s`` breaks.
+
+The route a fillet half over a cylinder needs (issue 5: the slanted boss's cylinder side):
+the merged face is ``x = o + s a + r(theta, s) (cos theta e1 + sin theta e2)`` in the
+cylinder's frame, ``r`` the cylinder's radius where the face is the cylinder and the
+blend's distance from the axis on the half. Same conventions as
+:mod:`medax.geometry.tensor_fit` (masked data, a small second-difference penalty decides
+where there are none, error measured on a check grid of 7 points per span, not the fitting
+samples), but the periodic direction wraps the normal matrix, so no banded Cholesky: the
+Kronecker design matrix and SuperLU (the fits here are a few thousand unknowns).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.interpolate import BSpline
+from scipy.sparse.linalg import spsolve
+
+from medax.geometry._types import FloatArray
+from medax.geometry.tensor_fit import (
+    CHECK_PER_SPAN,
+    DEGREE,
+    MAX_COEFFICIENTS,
+    PENALTY,
+    SAMPLES_PER_SPAN,
+    STALL,
+    HeightFn,
+    _knots,
+    _samples,
+    _second_diff,
+)
+
+PERIOD = 2.0 * np.pi
+
+
+def periodic_knots(n: int) -> FloatArray:
+    """Uniform knots ``k 2 pi / n``, ``k = -DEGREE .. n + DEGREE``: the ``n + DEGREE``
+    B-splines on them, folded modulo ``n`` (:func:`periodic_design`), are the ``n``
+    periodic cubic B-splines of period ``2 pi``."""
+    return np.asarray(np.arange(-DEGREE, n + DEGREE + 1) * (PERIOD / n), dtype=np.float64)
+
+
+def periodic_design(theta: FloatArray, n: int) -> sp.csr_matrix:
+    """(len(theta), n) design matrix of the periodic cubic B-splines with ``n`` uniform
+    spans at the angles ``theta`` (any real values: reduced modulo ``2 pi``)."""
+    t = periodic_knots(n)
+    x = np.mod(np.asarray(theta, dtype=float), PERIOD)
+    b = BSpline.design_matrix(x, t, DEGREE).tocoo()
+    return sp.csr_matrix((b.data, (b.row, b.col % n)), shape=(x.size, n))
+
+
+def _periodic_second_diff(n: int) -> sp.spmatrix:
+    """Cyclic second differences of ``n`` coefficients."""
+    i = np.arange(n)
+    rows = np.repeat(i, 3)
+    cols = np.column_stack([i, (i + 1) % n, (i + 2) % n]).ravel()
+    vals = np.tile([1.0, -2.0, 1.0], n)
+    return sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
+
+
+@dataclass(frozen=True)
+class PeriodicFit:
+    """``r(theta, s) = sum_ij c_ij T_i(theta) S_j(s)``: ``n_theta`` periodic uniform spans
+    in theta, clamped cubic knot vector ``ts`` in s (with repeats), coefficients ``coef``
+    (n_theta, ns), measured ``error`` (max |r - h| on the check grid where ``inside``,
+    length unit)."""
+
+    n_theta: int
+    ts: FloatArray
+    coef: FloatArray
+    error: float
+
+    def __call__(self, theta: FloatArray, s: FloatArray) -> FloatArray:
+        """Radii on the tensor grid ``theta`` (n,) by ``s`` (m,), shape (n, m)."""
+        bt = periodic_design(theta, self.n_theta)
+        bs = BSpline.design_matrix(np.asarray(s, dtype=float), self.ts, DEGREE)
+        return np.asarray(bt @ (bs @ self.coef.T).T)
+
+    def at(self, theta: FloatArray, s: FloatArray) -> FloatArray:
+        """Radii at the points ``(theta[k], s[k])`` (scattered, not a grid)."""
+        bt = periodic_design(theta, self.n_theta)
+        bs = BSpline.design_matrix(np.asarray(s, dtype=float), self.ts, DEGREE).tocsr()
+        return np.asarray(((bt @ self.coef).T * bs.T.toarray()).sum(axis=0)).ravel()
+
+
+def _solve(bt: sp.csr_matrix, bs: sp.csr_matrix, ok: np.ndarray, z: FloatArray) -> FloatArray:
+    nt, ns = bt.shape[1], bs.shape[1]
+    rows = np.flatnonzero(ok.ravel())
+    a = sp.kron(bt, bs, format="csr")[rows]
+    d = sp.vstack(
+        [sp.kron(_periodic_second_diff(nt), sp.eye(ns)), sp.kron(sp.eye(nt), _second_diff(ns))]
+    )
+    normal = (a.T @ a + PENALTY * (d.T @ d)).tocsc()
+    return np.asarray(spsolve(normal, a.T @ z.ravel()[rows])).reshape(nt, ns)
+
+
+def _fit_once(
+    s_range: tuple[float, float], sb: list[float], h: HeightFn, n_theta: int, step: float
+) -> PeriodicFit:
+    ts = _knots(s_range[0], s_range[1], sb, [True] * (len(sb) + 1), step)
+    tt = np.unique(periodic_knots(n_theta)[DEGREE : n_theta + DEGREE + 1])
+    th = _samples(tt, SAMPLES_PER_SPAN)
+    ss = _samples(ts, SAMPLES_PER_SPAN)
+    z, ok, _ = h(*np.meshgrid(th, ss, indexing="ij"))
+    bt = periodic_design(th, n_theta)
+    bs = BSpline.design_matrix(ss, ts, DEGREE).tocsr()
+    fit = PeriodicFit(n_theta, ts, _solve(bt, bs, ok, z), 0.0)
+    thc, sc = _samples(tt, CHECK_PER_SPAN), _samples(ts, CHECK_PER_SPAN)
+    zc, okc, inside = h(*np.meshgrid(thc, sc, indexing="ij"))
+    if np.any(inside & ~okc):
+        error = float("inf")  # data missing inside the face
+    else:
+        error = float(np.abs(fit(thc, sc) - zc)[inside].max(initial=0.0))
+    return PeriodicFit(n_theta, ts, fit.coef, error)
+
+
+def fit_radial_height(
+    s_range: tuple[float, float],
+    s_breaks: Sequence[float],
+    h: HeightFn,
+    tol: float,
+    spacing: float,
+    radius: float,
+    levels: int = 5,
+) -> PeriodicFit | None:
+    """Fit the radial height ``h(theta, s)`` to ``tol`` (length unit) over the full turn and
+    ``s_range``, spans of at most ``spacing`` (length: in theta arc length at ``radius``),
+    halved at most ``levels - 1`` times while the error misses ``tol`` and keeps falling
+    (stops when two halvings did not divide it by 1 / STALL). The best fit with its
+    measured error (the caller decides), None when even the first level has more than
+    ``MAX_COEFFICIENTS``. ``s_breaks``: axial coordinates where the curvature may jump
+    (C1 knots there)."""
+    s0, s1 = s_range
+    sb = sorted(b for b in set(s_breaks) if s0 < b < s1)
+    best: PeriodicFit | None = None
+    errors: list[float] = []
+    step = spacing
+    for _ in range(levels):
+        n_theta = max(4, int(np.ceil(PERIOD * radius / step - 1e-9)))
+        ns = _knots(s0, s1, sb, [True] * (len(sb) + 1), step).size - DEGREE - 1
+        if n_theta * ns > MAX_COEFFICIENTS:
+            break
+        fit = _fit_once(s_range, sb, h, n_theta, step)
+        if best is None or fit.error < best.error:
+            best = fit
+        if fit.error <= tol or not np.isfinite(fit.error):
+            break
+        if len(errors) >= 2 and fit.error > STALL * errors[-2]:
+            break
+        errors.append(fit.error)
+        step /= 2
+    return best
