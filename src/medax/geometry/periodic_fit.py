@@ -16,25 +16,23 @@ Kronecker design matrix and SuperLU (the fits here are a few thousand unknowns).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.interpolate import BSpline
-from scipy.sparse.linalg import spsolve
 
 from medax.geometry._types import FloatArray
 from medax.geometry.tensor_fit import (
     CHECK_PER_SPAN,
     DEGREE,
     MAX_COEFFICIENTS,
-    PENALTY,
     SAMPLES_PER_SPAN,
     STALL,
     HeightFn,
     _knots,
     _samples,
-    _second_diff,
+    _solve_superlu,
 )
 
 PERIOD = 2.0 * np.pi
@@ -87,18 +85,7 @@ class PeriodicFit:
         """Radii at the points ``(theta[k], s[k])`` (scattered, not a grid)."""
         bt = periodic_design(theta, self.n_theta)
         bs = BSpline.design_matrix(np.asarray(s, dtype=float), self.ts, DEGREE).tocsr()
-        return np.asarray(((bt @ self.coef).T * bs.T.toarray()).sum(axis=0)).ravel()
-
-
-def _solve(bt: sp.csr_matrix, bs: sp.csr_matrix, ok: np.ndarray, z: FloatArray) -> FloatArray:
-    nt, ns = bt.shape[1], bs.shape[1]
-    rows = np.flatnonzero(ok.ravel())
-    a = sp.kron(bt, bs, format="csr")[rows]
-    d = sp.vstack(
-        [sp.kron(_periodic_second_diff(nt), sp.eye(ns)), sp.kron(sp.eye(nt), _second_diff(ns))]
-    )
-    normal = (a.T @ a + PENALTY * (d.T @ d)).tocsc()
-    return np.asarray(spsolve(normal, a.T @ z.ravel()[rows])).reshape(nt, ns)
+        return np.asarray(bs.multiply(bt @ self.coef).sum(axis=1)).ravel()
 
 
 def _fit_once(
@@ -111,14 +98,15 @@ def _fit_once(
     z, ok, _ = h(*np.meshgrid(th, ss, indexing="ij"))
     bt = periodic_design(th, n_theta)
     bs = BSpline.design_matrix(ss, ts, DEGREE).tocsr()
-    fit = PeriodicFit(n_theta, ts, _solve(bt, bs, ok, z), 0.0)
+    coef = _solve_superlu(bt, bs, ok, z, diff_x=_periodic_second_diff(n_theta))
+    fit = PeriodicFit(n_theta, ts, coef, 0.0)
     thc, sc = _samples(tt, CHECK_PER_SPAN), _samples(ts, CHECK_PER_SPAN)
     zc, okc, inside = h(*np.meshgrid(thc, sc, indexing="ij"))
     if np.any(inside & ~okc):
         error = float("inf")  # data missing inside the face
     else:
         error = float(np.abs(fit(thc, sc) - zc)[inside].max(initial=0.0))
-    return PeriodicFit(n_theta, ts, fit.coef, error)
+    return replace(fit, error=error)
 
 
 def fit_radial_height(

@@ -417,13 +417,20 @@ def _banded_normal(b_in: sp.csr_matrix, b_out: sp.csr_matrix, w: FloatArray) -> 
 
 
 def _solve_superlu(
-    bx: sp.csr_matrix, by: sp.csr_matrix, ok: np.ndarray, z: FloatArray
+    bx: sp.csr_matrix,
+    by: sp.csr_matrix,
+    ok: np.ndarray,
+    z: FloatArray,
+    diff_x: sp.spmatrix | None = None,
 ) -> FloatArray:
-    """:func:`solve_masked` by the Kronecker design matrix and SuperLU (the general route)."""
+    """:func:`solve_masked` by the Kronecker design matrix and SuperLU (the general route).
+    ``diff_x``: the penalty's difference operator in x (default :func:`_second_diff`; the
+    periodic fit passes cyclic differences)."""
     nx, ny = bx.shape[1], by.shape[1]
     rows = np.flatnonzero(ok.ravel())
     a = sp.kron(bx, by, format="csr")[rows]
-    d = sp.vstack([sp.kron(_second_diff(nx), sp.eye(ny)), sp.kron(sp.eye(nx), _second_diff(ny))])
+    dx = _second_diff(nx) if diff_x is None else diff_x
+    d = sp.vstack([sp.kron(dx, sp.eye(ny)), sp.kron(sp.eye(nx), _second_diff(ny))])
     normal = (a.T @ a + PENALTY * (d.T @ d)).tocsc()
     # SuperLU's default column ordering: MMD_AT_PLUS_A (symmetric) was 2.3x slower here
     return np.asarray(spsolve(normal, a.T @ z.ravel()[rows])).reshape(nx, ny)
