@@ -12,8 +12,10 @@ In one run, on every region of ``src/medax/data/regions.json`` and both pairs:
   its time is a lower bound of its time at equal accuracy); at each ``n`` both
   uniform samples and samples jittered along the curve are tried (uniform ones on straight or
   concentric sides are cocircular, which makes qhull quadratic; a sampling 4x slower than
-  the other at some ``n`` is dropped for larger ``n``), and the faster that reaches the
-  accuracy is timed;
+  the other at some ``n`` is dropped for larger ``n``); between the last two doublings ``n``
+  is then bisected (geometrically, ``BISECT_STEPS`` times) to the smallest count that
+  reaches the accuracy (a doubling alone overshoots by up to 4x in accuracy and 2x in
+  time), and the faster sampling that reaches it is timed;
 * OCCT ``BRepMAT2d_BisectingLocus`` (full medial axis of the planar face bounded by the
   region): its time, how far its nearest branch ends lie from medax's end points on
   ``B1``/``B2``, and how much of medax's axis lies on its bisector graph.
@@ -440,6 +442,8 @@ def bench_pair(
         if len(took) == 2 and max(took.values()) > max(0.05, 4.0 * min(took.values())):
             samplings = [min(took, key=lambda j: took[j])]
         n *= 2
+    if ok and n > 64:  # the doubling overshoots (up to 4x in accuracy): bisect n down
+        n, ok = _smallest_n(region, pair, dd, diag, goal, n // 2, n, samplings, ok)
     timed = []
     for acc_v, jitter, nv in ok or [min(tried)]:
         peer = partial(voronoi_axis, region, pair, n, jitter)
@@ -450,6 +454,42 @@ def bench_pair(
         note += f"; accuracy NOT reached (x{acc_v / goal:.3g} worse; cap or out of reach)"
     rows.append(Row(name, ps, "Voronoi peer", acc_v, t_v, t_v / t_def, note))
     return rows, t_def, ax
+
+
+#: geometric bisections of the peer's sample count between the last two doublings (the
+#: count is then within 2^(1/16) = 4 % of the smallest that reaches medax's accuracy)
+BISECT_STEPS = 4
+
+
+def _smallest_n(
+    region: Region,
+    pair: tuple[int, int],
+    dd: tuple[DenseDistance, DenseDistance],
+    diag: float,
+    goal: float,
+    lo: int,
+    hi: int,
+    samplings: list[bool],
+    ok: list[tuple[float, bool, int]],
+) -> tuple[int, list[tuple[float, bool, int]]]:
+    """The smallest sample count in ``(lo, hi]`` at which the peer reaches ``goal``, to
+    ``BISECT_STEPS`` geometric bisections (``lo`` fails, ``hi`` reaches it with the
+    samplings ``ok``): the peer timed at equal accuracy, not at up to 4x better."""
+    for _ in range(BISECT_STEPS):
+        mid = int(round(math.sqrt(lo * hi)))
+        if mid <= lo or mid >= hi:
+            break
+        tried = [
+            (accuracy(dd, polyline_dense(poly), diag), jitter, len(poly))
+            for jitter in samplings
+            for poly in [voronoi_axis(region, pair, mid, jitter)]
+        ]
+        reached = [tr for tr in tried if tr[0] <= goal]
+        if reached:
+            hi, ok = mid, reached
+        else:
+            lo = mid
+    return hi, ok
 
 
 def bench_occt(
