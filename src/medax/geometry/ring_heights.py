@@ -36,7 +36,7 @@ from medax.geometry.surfaces import NurbsSurface
 
 PERIOD = 2.0 * np.pi
 #: Newton iterations at most, start grid samples per direction.
-NEWTON_STEPS, START_SAMPLES = 40, 96
+NEWTON_STEPS, START_SAMPLES = 12, 96
 
 
 def _wrap(a: FloatArray) -> FloatArray:

@@ -28,7 +28,8 @@ MIN_SAMPLES, MAX_SAMPLES = 40, 240
 
 
 class GridProjection:
-    """Projection onto a non-periodic ``Geom_BSplineSurface`` over ``[u0, u1] x [v0, v1]``
+    """Projection onto a ``Geom_BSplineSurface`` over ``[u0, u1] x [v0, v1]`` (the grid of
+    a periodic one sampled on its non-periodic copy, the same geometry and parameters)
     with ``GeomAPI_ProjectPointOnSurf``'s calls (``Perform``, ``NbPoints``,
     ``LowerDistanceParameters``, ``LowerDistance``)."""
 
@@ -46,10 +47,10 @@ class GridProjection:
 
     @classmethod
     def of(cls, surf: Any, bounds: tuple[float, float, float, float]) -> GridProjection | None:
-        """The projection for a non-periodic B-spline surface, else None."""
+        """The projection for a B-spline surface, else None."""
         from OCP.Geom import Geom_BSplineSurface
 
-        if not isinstance(surf, Geom_BSplineSurface) or surf.IsUPeriodic() or surf.IsVPeriodic():
+        if not isinstance(surf, Geom_BSplineSurface):
             return None
         return cls(surf, bounds)
 

@@ -172,7 +172,16 @@ def ring_surface(
     nurbs = replace(emb, extrapolate=True)
     uv_box = uv_bounds(blend)
 
+    last: dict[bytes, tuple[Array, np.ndarray, np.ndarray]] = {}
+
     def h(th: Array, sg: Array) -> tuple[Array, np.ndarray, np.ndarray]:
+        key = th.tobytes() + sg.tobytes()
+        if key not in last:  # the last check grid is the volume's grid again
+            last.clear()
+            last[key] = points(th, sg)
+        return last[key]
+
+    def points(th: Array, sg: Array) -> tuple[Array, np.ndarray, np.ndarray]:
         t, s = th.ravel(), sg.ravel()
         sm = _at(sigma_m, t)
         inside = s >= sm
@@ -180,7 +189,7 @@ def ring_surface(
         pts = frame.point(t, s, 0.0)
         over = np.flatnonzero((s < 0) & ok)
         if over.size:
-            x, found = ray_points(nurbs, frame, t[over], s[over], uv_box, 1e-3 * fit_tol)
+            x, found = ray_points(nurbs, frame, t[over], s[over], uv_box, 1e-2 * fit_tol)
             pts[over] = x
             ok[over] = found
         shape = th.shape
