@@ -147,7 +147,12 @@ def test_periodic_surface_evaluates_as_the_fit():
     surf = periodic_surface(fit)
     th, s = rng.uniform(-1.0, 2 * PERIOD, 60), rng.uniform(0.0, 2.0, 60)
     p = fit.at(th, s)
-    q = np.array([[c.X(), c.Y(), c.Z()] for c in (surf.Value(float(a), float(b)) for a, b in zip(th, s, strict=True))])
+    q = np.array(
+        [
+            [c.X(), c.Y(), c.Z()]
+            for c in (surf.Value(float(a), float(b)) for a, b in zip(th, s, strict=True))
+        ]
+    )
     assert np.abs(p - q).max() <= 1e-12
 
 
@@ -158,10 +163,14 @@ def _frame(kind: str) -> RingFrame:
     if kind == "plane":
         rho = 3.0 + 0.4 * np.cos(th) + 0.1 * np.sin(2 * th)
         pts = np.column_stack([rho * np.cos(th), rho * np.sin(th), np.zeros_like(th)])
-        r = RingFrame.around("plane", np.zeros(3), np.array([1.0, 0, 0]), np.array([0, 0, 1.0]), pts, 1.0)
+        r = RingFrame.around(
+            "plane", np.zeros(3), np.array([1.0, 0, 0]), np.array([0, 0, 1.0]), pts, 1.0
+        )
     else:
         pts = np.column_stack([2 * np.cos(th), 2 * np.sin(th), 1.0 + 0.3 * np.cos(th)])
-        r = RingFrame.around("cylinder", np.zeros(3), np.array([1.0, 0, 0]), np.array([0, 0, 1.0]), pts, -1.0, 2.0)
+        r = RingFrame.around(
+            "cylinder", np.zeros(3), np.array([1.0, 0, 0]), np.array([0, 0, 1.0]), pts, -1.0, 2.0
+        )
     assert isinstance(r, RingFrame)
     return r
 
@@ -186,7 +195,9 @@ def test_star_shape_is_required():
     th = np.linspace(0, PERIOD, 200, endpoint=False)
     # a curve that does not go round the origin
     pts = np.column_stack([5 + np.cos(th), np.sin(th), np.zeros_like(th)])
-    r = RingFrame.around("plane", np.zeros(3), np.array([1.0, 0, 0]), np.array([0, 0, 1.0]), pts, 1.0)
+    r = RingFrame.around(
+        "plane", np.zeros(3), np.array([1.0, 0, 0]), np.array([0, 0, 1.0]), pts, 1.0
+    )
     assert isinstance(r, str)
 
 

@@ -108,7 +108,9 @@ class RingFrame:
         theta = np.asarray(theta, float).ravel()
         return np.outer(np.cos(theta), self.e1) + np.outer(np.sin(theta), self.e2)
 
-    def point(self, theta: FloatArray, sigma: FloatArray, h: FloatArray | float = 0.0) -> FloatArray:
+    def point(
+        self, theta: FloatArray, sigma: FloatArray, h: FloatArray | float = 0.0
+    ) -> FloatArray:
         """Points (m, 3) at ``(theta, sigma, h)`` (arrays of one shape, raveled)."""
         theta = np.asarray(theta, float).ravel()
         sigma = np.asarray(sigma, float).ravel()

@@ -57,8 +57,8 @@ RING_FIT_MISSED = "ring fit error"
 def _shared_edges(a: Any, b: Any) -> list[Any]:
     """Edges of face ``a`` that are also edges of face ``b`` (seams and degenerated
     edges left out)."""
-    eb = [e for e in edges_of(b)]
-    out = []
+    eb = list(edges_of(b))
+    out: list[Any] = []
     for e in edges_of(a):
         if BRep_Tool.Degenerated_s(e) or BRep_Tool.IsClosed_s(e, a):
             continue
@@ -281,4 +281,3 @@ def periodic_surface(fit: PeriodicFit) -> Any:
         vk.SetValue(k + 1, float(kv))
         vm.SetValue(k + 1, int(mv))
     return Geom_BSplineSurface(poles, uk, vk, um, vm, DEGREE, DEGREE, True, False)
-
