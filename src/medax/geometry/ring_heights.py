@@ -44,6 +44,18 @@ def _wrap(a: FloatArray) -> FloatArray:
     return np.asarray(np.mod(a + np.pi, PERIOD) - np.pi)
 
 
+def goes_round(theta: FloatArray) -> str:
+    """An empty string when the angles ``theta`` (k,) of consecutive samples of a closed
+    curve (the first not repeated) go once round the axis, strictly monotone (the curve is
+    star-shaped from the axis: one point per ray); else what is wrong."""
+    steps = _wrap(np.diff(np.append(theta, theta[0])))
+    if not (np.all(steps > 0) or np.all(steps < 0)):
+        return "is not star-shaped around the axis"
+    if abs(abs(float(steps.sum())) - PERIOD) > 1e-6:
+        return "does not go once round the axis"
+    return ""
+
+
 @dataclass(frozen=True)
 class RingFrame:
     """Ring coordinates over a plane (``kind == "plane"``: ``axis`` its normal ``n``) or a
@@ -82,11 +94,9 @@ class RingFrame:
         y = np.cross(a, x)
         w = np.asarray(contact_points, float) - origin
         th = np.arctan2(w @ y, w @ x)
-        steps = _wrap(np.diff(np.append(th, th[0])))
-        if not (np.all(steps > 0) or np.all(steps < 0)):
-            return "the contact curve is not star-shaped around the axis"
-        if abs(abs(steps.sum()) - PERIOD) > 1e-6:
-            return "the contact curve does not go once round the axis"
+        why = goes_round(th)
+        if why:
+            return f"the contact curve {why}"
         if kind == "plane":
             val = np.linalg.norm(w - np.outer(w @ a, a), axis=1)
         else:

@@ -39,7 +39,7 @@ from medax.cad.simplify.occ import (
     xyz,
 )
 from medax.geometry.periodic_fit import PERIOD, PeriodicFit, fit_radial_height, periodic_knots
-from medax.geometry.ring_heights import RingFrame, ray_points
+from medax.geometry.ring_heights import RingFrame, goes_round, ray_points
 from medax.geometry.surfaces import NurbsSurface
 from medax.geometry.tensor_fit import CHECK_PER_SPAN, DEGREE, _samples
 
@@ -157,6 +157,9 @@ def ring_surface(
     sign = 1.0 if frame.coords(inside_pt[None, :])[1][0] > 0 else -1.0
     frame = replace(frame, sign=sign)
     th_m, sg_m, _ = frame.coords(medial)
+    why = goes_round(th_m)
+    if why:
+        return f"the medial curve {why}"
     if np.any(sg_m >= 0):
         return "the medial curve is not on the blend side of the contact curve"
     sigma_m = _periodic_spline(th_m, sg_m)
@@ -214,7 +217,8 @@ def ring_surface(
         return f"{RING_FIT_MISSED} {fit.error:.2e} above {fit_tol:.2e}"
     surface = periodic_surface(fit)
     dv = _volume_change(fit, h, support, inside_pt, frame)
-    return FittedSurface(surface, fit.error, FIRST_SPACING * width, dv)
+    spacing = float(np.diff(np.unique(fit.ts)).min())  # the blend side's spans
+    return FittedSurface(surface, fit.error, spacing, dv)
 
 
 def _left_out(piece: Any, blend: Any, edge: Any) -> bool:
