@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
 from OCP.BRepCheck import BRepCheck_Analyzer
@@ -125,6 +126,39 @@ def test_slanted_boss_result_by_occt(slanted):
     tol = 1e-5 * r.diagonal
     assert _distance(old_pts, compound(merged)) <= tol
     assert _distance(new_pts, cls.shape) <= tol
+
+
+def _area(shape) -> float:
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(shape, props, 1e-10)
+    return float(props.Mass())
+
+
+def test_slanted_boss_area_and_pcurves_by_occt(slanted):
+    """The boundary's area is kept (a wrong trimming curve on a merged face shows here
+    even where the sampled distances do not: a bad pcurve once added a 0.16 mm2 sliver,
+    1.8e-5 of the area, with every sampled distance within 1e-5 x diagonal), and on each
+    new face every edge's pcurve follows its 3-D curve within the edge's tolerance at 2001
+    samples."""
+    cls, _, r = slanted
+    a0 = _area(cls.shape)
+    assert abs(_area(r.shape) - a0) <= 1e-7 * a0
+    for f in _faces(r.shape):
+        if BRepAdaptor_Surface(f).GetType().name != "GeomAbs_BSplineSurface":
+            continue
+        surf = BRep_Tool.Surface_s(f)
+        exp = TopExp_Explorer(f, TopAbs_EDGE)
+        while exp.More():
+            e = TopoDS.Edge(exp.Current())
+            exp.Next()
+            c2 = BRep_Tool.CurveOnSurface_s(e, f, 0.0, 0.0)
+            c3 = BRep_Tool.Curve_s(e, 0.0, 0.0)
+            a, b = BRep_Tool.Range_s(e)
+            worst = max(
+                surf.Value(c2.Value(t).X(), c2.Value(t).Y()).Distance(c3.Value(t))
+                for t in np.linspace(a, b, 2001).tolist()
+            )
+            assert worst <= BRep_Tool.Tolerance_s(e)
 
 
 def test_merged_surfaces_are_periodic_round_the_boss(slanted):

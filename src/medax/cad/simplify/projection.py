@@ -72,6 +72,20 @@ class GridProjection:
             dist[i] = self.sas.Gap()
         return uv, dist
 
+    def project_near(
+        self, p: Array, start: tuple[float, float], accept: float
+    ) -> tuple[tuple[float, float], float]:
+        """Foot parameters and distance of ``p`` (3,) from the grid's nearest sample; when
+        that foot is farther than ``accept``, also refined from ``start`` (a neighbour's
+        foot, when points follow a curve: the grid's nearest sample can lie on another part
+        of the surface near in space, and its foot there), the nearer kept."""
+        grid = self.project(p)
+        if grid[1] <= accept:
+            return grid
+        q = self.sas.NextValueOfUV(gp_Pnt2d(*start), gp_Pnt(*map(float, p)), 1e-12, -1.0)
+        near = (q.X(), q.Y()), float(self.sas.Gap())
+        return near if near[1] < grid[1] else grid
+
     def Perform(self, point: Any) -> None:  # noqa: N802 - GeomAPI's spelling
         self.uv, self.dist = self.project(np.array([point.X(), point.Y(), point.Z()]))
 

@@ -47,7 +47,7 @@ from medax.geometry.tensor_fit import CHECK_PER_SPAN, DEGREE, _samples
 CURVE_SAMPLES = 720
 #: The blend's data are taken this share of the half's width beyond the medial curve (the
 #: fit sees the blend continue there, so the medial curve is no edge of the data).
-BEYOND_MEDIAL = 0.25
+BEYOND_MEDIAL = 0.1
 #: Spacing of the first level, as a share of the half's smallest width; halvings at most.
 FIRST_SPACING, LEVELS = 0.5, 5
 #: How a refusal after the route applied begins (the fit missed its tolerance).
