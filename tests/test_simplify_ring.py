@@ -161,6 +161,35 @@ def test_slanted_boss_area_and_pcurves_by_occt(slanted):
             assert worst <= BRep_Tool.Tolerance_s(e)
 
 
+def test_plate_stays_exactly_plane_off_the_blend(slanted):
+    """Points of the new plate face farther than 0.1 from the old blend lie exactly on the
+    old plate's plane (the height off the plane is held at zero there, not fitted)."""
+    cls, specs, r = slanted
+    (spec,) = specs.fillets
+    old = _faces(cls.shape)
+    plate = next(
+        old[k]
+        for k in spec.supporting
+        if BRepAdaptor_Surface(old[k]).GetType().name == "GeomAbs_Plane"
+    )
+    pl = BRepAdaptor_Surface(plate).Plane()
+    o = np.array([pl.Location().X(), pl.Location().Y(), pl.Location().Z()])
+    d = pl.Axis().Direction()
+    n = np.array([d.X(), d.Y(), d.Z()])
+    new = next(
+        f
+        for f in _faces(r.shape)
+        if BRepAdaptor_Surface(f).GetType().name == "GeomAbs_BSplineSurface"
+        and _distance(_face_points(f, 1, np.random.default_rng(0)), plate) < 1.0
+        and abs((_face_points(f, 1, np.random.default_rng(0))[0] - o) @ n) < 1.0
+    )
+    pts = _face_points(new, 80, np.random.default_rng(7))
+    blend = old[spec.face]
+    far = [p for p in pts if _distance(p[None, :], blend) > 0.1]
+    assert len(far) > 40
+    assert max(abs((p - o) @ n) for p in far) <= 1e-12
+
+
 def test_merged_surfaces_are_periodic_round_the_boss(slanted):
     _, _, r = slanted
     for f in _faces(r.shape):
@@ -284,3 +313,21 @@ def test_vector_fit_with_a_linear_interval():
     th, s = rng.uniform(0, PERIOD, 5000), rng.uniform(-1, 3, 5000)
     worst = np.linalg.norm(fit.at(th, s) - pts(th, s)[0], axis=1).max()
     assert worst <= 1.5e-6
+
+
+def test_zero_last_component_is_exactly_zero_after_the_break():
+    """A component held at zero on the last interval is zero there to rounding, and the fit
+    of the others and of it before the break is as accurate as without the constraint."""
+
+    def pts(th, s):
+        hgt = 0.2 * np.minimum(s, 0.0) ** 2 * (1 + 0.3 * np.cos(th))
+        p = np.stack([np.cos(th) * (3 + s), np.sin(th) * (3 + s), hgt], axis=-1)
+        ok = np.ones(th.shape, bool)
+        return p, ok, ok
+
+    fit = fit_radial_height(
+        (-1.0, 3.0), [0.0], pts, 1e-6, 0.5, 3.0, levels=6, s_fine=[True, False], zero_last=2
+    )
+    assert fit is not None and fit.error <= 1e-6
+    th, s = np.linspace(0, PERIOD, 50), np.linspace(0.0, 3.0, 40)
+    assert np.abs(fit(th, s)[..., 2]).max() <= 1e-15

@@ -108,6 +108,7 @@ def _fit_once(
     h: HeightFn,
     n_theta: int,
     step: float,
+    zero_last: int | None = None,
 ) -> PeriodicFit:
     ts = _knots(s_range[0], s_range[1], sb, fine, step)
     tt = np.unique(periodic_knots(n_theta)[DEGREE : n_theta + DEGREE + 1])
@@ -116,7 +117,20 @@ def _fit_once(
     z, ok, _ = h(*np.meshgrid(th, ss, indexing="ij"))
     bt = periodic_design(th, n_theta)
     bs = BSpline.design_matrix(ss, ts, DEGREE).tocsr()
-    coef = _solve_superlu(bt, bs, ok, z, diff_x=_periodic_second_diff(n_theta))
+    cyclic = _periodic_second_diff(n_theta)
+    if zero_last is None:
+        coef = _solve_superlu(bt, bs, ok, z, diff_x=cyclic)
+    else:
+        # the component ``zero_last`` held at zero on the last interval: the s functions
+        # whose support meets it are not solved for (zero there, so exactly zero)
+        free = ts[DEGREE + 1 :] <= sb[-1] + 1e-12 * (s_range[1] - s_range[0])
+        k = z.shape[2]
+        rest = [c for c in range(k) if c != zero_last]
+        coef = np.zeros((n_theta, ts.size - DEGREE - 1, k))
+        coef[:, :, rest] = _solve_superlu(bt, bs, ok, z[..., rest], diff_x=cyclic)
+        coef[:, :, zero_last] = _solve_superlu(
+            bt, bs, ok, z[..., zero_last], diff_x=cyclic, free_y=free
+        )
     fit = PeriodicFit(n_theta, ts, coef, 0.0)
     thc, sc = _samples(tt, CHECK_PER_SPAN), _samples(ts, CHECK_PER_SPAN)
     zc, okc, inside = h(*np.meshgrid(thc, sc, indexing="ij"))
@@ -139,6 +153,7 @@ def fit_radial_height(
     radius: float,
     levels: int = 5,
     s_fine: Sequence[bool] | None = None,
+    zero_last: int | None = None,
 ) -> PeriodicFit | None:
     """Fit the radial height ``h(theta, s)`` to ``tol`` (length unit) over the full turn and
     ``s_range``, spans of at most ``spacing`` (length: in theta arc length at ``radius``),
@@ -150,18 +165,22 @@ def fit_radial_height(
     ``s_fine``: per interval between them, False where the values are linear in ``s`` (one
     span there; default: all fine). ``h`` may give values with components, (..., k) (the
     points of a surface: :mod:`medax.geometry.ring_heights`); they share the knots and the
-    factorisation, and the error is the largest distance."""
+    factorisation, and the error is the largest distance. ``zero_last``: a component that
+    is zero on the last interval between the breaks (a height off the support), fitted with
+    its coefficients there held at zero, so it is exactly zero there (it needs a break)."""
     s0, s1 = s_range
     sb = sorted(b for b in set(s_breaks) if s0 < b < s1)
     fine = [True] * (len(sb) + 1) if s_fine is None else list(s_fine)
     if len(fine) != len(sb) + 1:
         raise ValueError("s_fine needs one flag per interval between the breaks inside s_range")
+    if zero_last is not None and not sb:
+        raise ValueError("zero_last needs a break: the component is zero after the last one")
 
     def fit_at(step_theta: float, step_s: float) -> PeriodicFit | None:
         n_theta = max(4, int(np.ceil(PERIOD * radius / step_theta - 1e-9)))
         ns = _knots(s0, s1, sb, fine, step_s).size - DEGREE - 1
         if n_theta * ns > MAX_COEFFICIENTS:
             return None
-        return _fit_once(s_range, sb, fine, h, n_theta, step_s)
+        return _fit_once(s_range, sb, fine, h, n_theta, step_s, zero_last)
 
     return refine_both(fit_at, spacing, tol, levels)

@@ -464,19 +464,28 @@ def _solve_superlu(
     ok: np.ndarray,
     z: FloatArray,
     diff_x: sp.spmatrix | None = None,
+    free_y: np.ndarray | None = None,
 ) -> FloatArray:
     """:func:`solve_masked` by the Kronecker design matrix and SuperLU (the general route).
     ``diff_x``: the penalty's difference operator in x (default :func:`_second_diff`; the
     periodic fit passes cyclic differences). ``z`` may carry components, (sx, sy, k): the
-    coefficients are then (nx, ny, k)."""
+    coefficients are then (nx, ny, k). ``free_y`` (ny,) bool: only the coefficients of
+    these y functions are solved for, the others are held at zero."""
     nx, ny = bx.shape[1], by.shape[1]
     rows = np.flatnonzero(ok.ravel())
     a = sp.kron(bx, by, format="csr")[rows]
     dx = _second_diff(nx) if diff_x is None else diff_x
     d = sp.vstack([sp.kron(dx, sp.eye(ny)), sp.kron(sp.eye(nx), _second_diff(ny))])
+    cols = None if free_y is None else np.flatnonzero(np.tile(np.asarray(free_y, bool), nx))
+    if cols is not None:
+        a, d = a.tocsc()[:, cols], d.tocsc()[:, cols]
     normal = (a.T @ a + PENALTY * (d.T @ d)).tocsc()
     # SuperLU's default column ordering: MMD_AT_PLUS_A (symmetric) was 2.3x slower here;
     # values with components (sx, sy, k): one factorisation, k right-hand sides
     rhs = a.T @ z.reshape(ok.size, -1)[rows]
-    sol = spsolve(normal, rhs if rhs.shape[1] > 1 else rhs.ravel())
-    return np.asarray(sol).reshape((nx, ny, *z.shape[2:]))
+    sol = np.asarray(spsolve(normal, rhs if rhs.shape[1] > 1 else rhs.ravel()))
+    if cols is not None:
+        full = np.zeros((nx * ny, rhs.shape[1]))
+        full[cols] = sol.reshape(len(cols), -1)
+        sol = full
+    return sol.reshape((nx, ny, *z.shape[2:]))

@@ -198,16 +198,28 @@ def ring_surface(
         shape = th.shape
         return pts.reshape((*shape, 3)), ok.reshape(shape), inside.reshape(shape)
 
+    # on a plane the points in the frame (e1, e2, n): the height along n is then held at
+    # exactly zero over the support (the plane stays a plane); a cylinder's radial height
+    # is no coordinate, its points are fitted as they are
+    planar = frame.kind == "plane"
+    rot = np.vstack([frame.e1, frame.e2, frame.axis]) if planar else np.eye(3)
+    base = frame.origin if planar else np.zeros(3)
+
+    def local(th: Array, sg: Array) -> tuple[Array, np.ndarray, np.ndarray]:
+        pts, ok, inside = h(th, sg)
+        return (pts - base) @ rot.T, ok, inside
+
     radius = float(np.mean(np.linalg.norm(np.cross(contact - frame.origin, frame.axis), axis=1)))
     fit = fit_radial_height(
         (s_lo, s_hi),
         [0.0],
-        h,
+        local,
         fit_tol,
         FIRST_SPACING * width,
         radius,
         levels=1 if probe else LEVELS,
         s_fine=[True, False],
+        zero_last=2 if planar else None,
     )
     if fit is None:
         return "the ring fit would need too many coefficients"
@@ -215,6 +227,7 @@ def ring_surface(
         return "the blend half's points are not all found on their rays (ring route)"
     if fit.error > fit_tol and not probe:
         return f"{RING_FIT_MISSED} {fit.error:.2e} above {fit_tol:.2e}"
+    fit = replace(fit, coef=base + fit.coef @ rot)  # poles in space
     surface = periodic_surface(fit)
     dv = _volume_change(fit, h, support, inside_pt, frame)
     spacing = float(np.diff(np.unique(fit.ts)).min())  # the blend side's spans
