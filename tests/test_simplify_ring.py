@@ -331,3 +331,57 @@ def test_zero_last_component_is_exactly_zero_after_the_break():
     assert fit is not None and fit.error <= 1e-6
     th, s = np.linspace(0, PERIOD, 50), np.linspace(0.0, 3.0, 40)
     assert np.abs(fit(th, s)[..., 2]).max() <= 1e-15
+
+
+def _flat_top_boss():
+    """The slanted cylinder cut flat at z = 15, its top edge filleted (a B-spline blend
+    between the horizontal top and the slanted cylinder; the root not filleted)."""
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Common, BRepAlgoAPI_Fuse
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox, BRepPrimAPI_MakeCylinder
+    from OCP.gp import gp_Ax2, gp_Dir
+
+    from medax.cad.parts import _select, _solid, fillet
+
+    plate = BRepPrimAPI_MakeBox(60.0, 60.0, 5.0).Shape()
+    axis = gp_Ax2(gp_Pnt(30.0, 30.0, -5.0), gp_Dir(0.3, 0.0, 1.0))
+    cyl = BRepPrimAPI_MakeCylinder(axis, 8.0, 30.0).Shape()
+    keep = BRepPrimAPI_MakeBox(gp_Pnt(0, 0, -10), 80.0, 80.0, 25.0).Shape()
+    body = BRepAlgoAPI_Fuse(plate, BRepAlgoAPI_Common(cyl, keep).Shape()).Shape()
+    return fillet(_solid(body), _select(body, lambda m: abs(m[2] - 15.0) < 1e-6), 1.5, "top")
+
+
+def test_flat_top_boss_cylinder_half_by_ring_top_refused_cleanly():
+    """Over the cylinder the blend lies above the support (sigma runs down the axis): the
+    ring fit is within its tolerance; the top plane lies inside the contact curve (the
+    polar frame's pole would be on it), so the ring route refuses it, the planar height
+    field stalls, and the fillet is kept with the input returned valid."""
+    from medax.cad.simplify.groups import build_groups
+    from medax.cad.simplify.medial import medial_curve
+    from medax.cad.simplify.occ import diagonal
+    from medax.cad.simplify.ring import ring_surface
+    from medax.cad.simplify.split import split_along
+
+    cls = classify_solid(_flat_top_boss().shape)
+    specs = specs_from_classification(cls)
+    (spec,) = specs.fillets
+    faces = _faces(cls.shape)
+    emap = shape_map(cls.shape, TopAbs_EDGE)
+    m = medial_curve(
+        faces[spec.face], *[TopoDS.Edge(emap.FindKey(i + 1)) for i in spec.smooth_edges]
+    )
+    assert not isinstance(m, str)
+    split = split_along(cls.shape, [m.edge])
+    diag = diagonal(cls.shape)
+    results = {}
+    for g in build_groups(split, {spec.face: spec.supporting}, {}):
+        if g.support is not None:
+            members = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
+            results[g.support] = ring_surface(faces[g.support], members, 1e-6 * diag, 1e-7 * diag)
+    kinds = {k: BRepAdaptor_Surface(faces[k]).GetType().name for k in results}
+    (cyl,) = [k for k, v in kinds.items() if v == "GeomAbs_Cylinder"]
+    (top,) = [k for k, v in kinds.items() if v == "GeomAbs_Plane"]
+    assert not isinstance(results[cyl], str) and results[cyl].error <= 1e-6 * diag
+    assert isinstance(results[top], str) and "inside the contact curve" in results[top]
+    r = simplify(cls.shape, specs)
+    assert r.faces_after == r.faces_before and not r.blends_removed and r.valid
+    assert BRepCheck_Analyzer(r.shape).IsValid()

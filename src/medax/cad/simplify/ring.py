@@ -155,6 +155,9 @@ def ring_surface(
     if isinstance(frame, str):
         return frame
     sign = 1.0 if frame.coords(inside_pt[None, :])[1][0] > 0 else -1.0
+    if kind == GeomAbs_Plane and sign < 0:
+        # a plane inside the contact curve (a boss top) holds the polar frame's pole
+        return "the plane lies inside the contact curve (the ring's pole would be on it)"
     frame = replace(frame, sign=sign)
     th_m, sg_m, _ = frame.coords(medial)
     why = goes_round(th_m)
