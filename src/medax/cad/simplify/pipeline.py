@@ -29,7 +29,7 @@ from medax.cad.simplify.groups import Group, build_groups
 from medax.cad.simplify.medial import Medial, medial_curve
 from medax.cad.simplify.occ import count, diagonal, shape_map, small_list
 from medax.cad.simplify.rebuild import build_solid
-from medax.cad.simplify.ring import RING_FIT_MISSED, ring_surface
+from medax.cad.simplify.ring import NOT_A_RING, ring_surface
 from medax.cad.simplify.specs import BlendInput, CornerSpec, FilletSpec
 from medax.cad.simplify.split import split_along
 from medax.cad.simplify.surfaces import Half, MergedSurface, merged_surface
@@ -471,9 +471,10 @@ def _ring_kind(face: Any) -> bool:
 
 
 def _ring_applies(why: str) -> bool:
-    """Whether the ring route's refusal ``why`` came after it applied (a fit that missed,
-    not a group of another shape): worth naming next to the planar route's reason."""
-    return why.startswith(RING_FIT_MISSED)
+    """Whether the ring route's refusal ``why`` came after the group looked like a ring (a
+    fit that missed, a pole on the face; not a group of another shape): worth naming next
+    to the planar route's reason."""
+    return not why.startswith(NOT_A_RING)
 
 
 def _split(job: _Job, sel: dict[int, FilletSpec], csel: dict[int, CornerSpec]) -> Any:

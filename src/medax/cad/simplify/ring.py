@@ -50,8 +50,8 @@ CURVE_SAMPLES = 720
 BEYOND_MEDIAL = 0.1
 #: Spacing of the first level, as a share of the half's smallest width; halvings at most.
 FIRST_SPACING, LEVELS = 0.5, 5
-#: How a refusal after the route applied begins (the fit missed its tolerance).
-RING_FIT_MISSED = "ring fit error"
+#: How a refusal begins when the group is no ring at all (another route's business).
+NOT_A_RING = "not a ring: "
 
 
 def _shared_edges(a: Any, b: Any) -> list[Any]:
@@ -118,12 +118,12 @@ def ring_surface(
     ad = BRepAdaptor_Surface(support)
     kind = ad.GetType()
     if kind not in (GeomAbs_Plane, GeomAbs_Cylinder):
-        return "the ring route takes planes and cylinders only"
+        return f"{NOT_A_RING}the ring route takes planes and cylinders only"
     if len(members) != 2:
-        return "the ring route takes one support piece and one blend half"
+        return f"{NOT_A_RING}the ring route takes one support piece and one blend half"
     kinds = [BRepAdaptor_Surface(m).GetType() for m in members]
     if kinds.count(kind) != 1 or GeomAbs_BSplineSurface not in kinds:
-        return "the ring route takes one support piece and one B-spline blend half"
+        return f"{NOT_A_RING}the ring route takes one support piece and one B-spline blend half"
     piece = members[kinds.index(kind)]
     blend = members[kinds.index(GeomAbs_BSplineSurface)]
     contact = _loop_samples(_shared_edges(piece, blend), CURVE_SAMPLES)
@@ -131,7 +131,7 @@ def ring_surface(
         [e for e in edges_of(blend) if not _left_out(piece, blend, e)], CURVE_SAMPLES
     )
     if contact is None or medial is None:
-        return "the blend half's contact or medial edges are no closed loop"
+        return f"{NOT_A_RING}the blend half's contact or medial edges are no closed loop"
     if kind == GeomAbs_Plane:
         pl = ad.Plane()
         n, ex = xyz(pl.Axis().Direction()), xyz(pl.XAxis().Direction())
@@ -229,7 +229,7 @@ def ring_surface(
     if not np.isfinite(fit.error):
         return "the blend half's points are not all found on their rays (ring route)"
     if fit.error > fit_tol and not probe:
-        return f"{RING_FIT_MISSED} {fit.error:.2e} above {fit_tol:.2e}"
+        return f"ring fit error {fit.error:.2e} above {fit_tol:.2e}"
     fit = replace(fit, coef=base + fit.coef @ rot)  # poles in space
     surface = periodic_surface(fit)
     dv = _volume_change(fit, h, support, inside_pt, frame)
