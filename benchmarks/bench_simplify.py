@@ -126,7 +126,7 @@ def _ratio(a: float, b: float | str) -> str:
 
 
 #: The generated and catalogue parts, by the name ``--parts`` takes.
-GENERATED = ("box12", "rounded_chain", "variable", "boss_grid", "grid2", "grid8")
+GENERATED = ("box12", "rounded_chain", "variable", "slanted", "boss_grid", "grid2", "grid8")
 
 
 def _generated(name: str) -> tuple[str, Any]:
@@ -140,6 +140,8 @@ def _generated(name: str) -> tuple[str, Any]:
         return "rounded box + top chain (tori on fillets)", catalogue.rounded_box_chain().shape
     if name == "variable":
         return "box, variable-radius fillet (B-spline)", catalogue.variable_radius_box().shape
+    if name == "slanted":
+        return "plate, slanted boss (B-spline blend: ring faces)", catalogue.slanted_boss().shape
     if name == "boss_grid":
         return "plate, 8x8 bosses, top + root fillets", catalogue.boss_grid(8).shape
     n = int(name[4:])

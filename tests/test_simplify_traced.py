@@ -1,7 +1,7 @@
 """The traced medial curve of a B-spline blend whose mid iso-line is not equidistant (the
 catalogue's slanted boss: a rolling ball between a plate and a slanted cylinder), checked
-against OCCT's own distances, and the simplification of that part (the fillet is kept, with
-the reason naming what is missing: a fitted surface over the cylinder)."""
+against OCCT's own distances (the simplification of that part, which now removes the
+fillet by the ring route: tests/test_simplify_ring.py)."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from OCP.TopoDS import TopoDS
 
 from medax.cad import parts
 from medax.cad.classify import classify_solid
-from medax.cad.simplify import simplify, specs_from_classification
+from medax.cad.simplify import specs_from_classification
 from medax.cad.simplify.medial import TRACED, medial_curve
 from medax.cad.simplify.occ import shape_map
 from medax.cad.simplify.split import split_along
@@ -84,17 +84,6 @@ def test_traced_medial_edge_splits_the_fillet_in_two(slanted):
     split = split_along(cls.shape, [m.edge])
     assert len(split.pieces(spec.face)) == 2
     assert check(split.shape, with_volume=False).valid
-
-
-def test_slanted_boss_keeps_its_fillet_with_the_missing_route(slanted):
-    cls, spec, *_ = slanted
-    r = simplify(cls.shape, specs_from_classification(cls))
-    assert r.faces_after == r.faces_before == 11 and r.valid and not r.blends_removed
-    ((face, why),) = r.blends_kept
-    assert face == spec.face
-    assert "not equidistant" not in why  # the medial curve is there now
-    assert "cylinder" in why and "planar supporting faces only" in why
-    assert r.volume_rel_change == 0.0
 
 
 def test_degree_13_blend_evaluated_to_occt_precision(slanted):

@@ -28,11 +28,11 @@ from medax.geometry.tensor_fit import (
     DEGREE,
     MAX_COEFFICIENTS,
     SAMPLES_PER_SPAN,
-    STALL,
     HeightFn,
     _knots,
     _samples,
     _solve_superlu,
+    refine_both,
 )
 
 PERIOD = 2.0 * np.pi
@@ -67,8 +67,9 @@ def _periodic_second_diff(n: int) -> sp.spmatrix:
 class PeriodicFit:
     """``r(theta, s) = sum_ij c_ij T_i(theta) S_j(s)``: ``n_theta`` periodic uniform spans
     in theta, clamped cubic knot vector ``ts`` in s (with repeats), coefficients ``coef``
-    (n_theta, ns), measured ``error`` (max |r - h| on the check grid where ``inside``,
-    length unit)."""
+    (n_theta, ns), or (n_theta, ns, k) for values with ``k`` components (points: k = 3),
+    measured ``error`` (max |r - h| on the check grid where ``inside``, the Euclidean norm
+    for components; length unit)."""
 
     n_theta: int
     ts: FloatArray
@@ -76,36 +77,70 @@ class PeriodicFit:
     error: float
 
     def __call__(self, theta: FloatArray, s: FloatArray) -> FloatArray:
-        """Radii on the tensor grid ``theta`` (n,) by ``s`` (m,), shape (n, m)."""
-        bt = periodic_design(theta, self.n_theta)
-        bs = BSpline.design_matrix(np.asarray(s, dtype=float), self.ts, DEGREE)
-        return np.asarray(bt @ (bs @ self.coef.T).T)
-
-    def at(self, theta: FloatArray, s: FloatArray) -> FloatArray:
-        """Radii at the points ``(theta[k], s[k])`` (scattered, not a grid)."""
+        """Values on the tensor grid ``theta`` (n,) by ``s`` (m,), shape (n, m) (or
+        (n, m, k))."""
         bt = periodic_design(theta, self.n_theta)
         bs = BSpline.design_matrix(np.asarray(s, dtype=float), self.ts, DEGREE).tocsr()
-        return np.asarray(bs.multiply(bt @ self.coef).sum(axis=1)).ravel()
+        n, m = bt.shape[0], bs.shape[0]
+        nt, ns = self.coef.shape[:2]
+        along = np.asarray(bt @ self.coef.reshape(nt, -1)).reshape(n, ns, -1)  # (n, ns, k)
+        out = np.asarray(bs @ along.transpose(1, 0, 2).reshape(ns, -1))  # (m, n k)
+        return out.reshape(m, n, -1).transpose(1, 0, 2).reshape((n, m, *self.coef.shape[2:]))
+
+    def at(self, theta: FloatArray, s: FloatArray) -> FloatArray:
+        """Values at the points ``(theta[k], s[k])`` (scattered, not a grid)."""
+        bt = periodic_design(theta, self.n_theta)
+        bs = BSpline.design_matrix(np.asarray(s, dtype=float), self.ts, DEGREE).tocsr()
+        nt, ns = self.coef.shape[:2]
+        along = np.asarray(bt @ self.coef.reshape(nt, -1)).reshape(bt.shape[0], ns, -1)
+        # DEGREE + 1 entries per row of the s design matrix
+        idx = bs.indices.reshape(-1, DEGREE + 1)
+        val = bs.data.reshape(-1, DEGREE + 1)
+        rows = np.arange(bt.shape[0])[:, None]
+        out = np.einsum("pq,pqk->pk", val, along[rows, idx])
+        return out.reshape((bt.shape[0], *self.coef.shape[2:]))
 
 
 def _fit_once(
-    s_range: tuple[float, float], sb: list[float], h: HeightFn, n_theta: int, step: float
+    s_range: tuple[float, float],
+    sb: list[float],
+    fine: list[bool],
+    h: HeightFn,
+    n_theta: int,
+    step: float,
+    zero_last: int | None = None,
 ) -> PeriodicFit:
-    ts = _knots(s_range[0], s_range[1], sb, [True] * (len(sb) + 1), step)
+    ts = _knots(s_range[0], s_range[1], sb, fine, step)
     tt = np.unique(periodic_knots(n_theta)[DEGREE : n_theta + DEGREE + 1])
     th = _samples(tt, SAMPLES_PER_SPAN)
     ss = _samples(ts, SAMPLES_PER_SPAN)
     z, ok, _ = h(*np.meshgrid(th, ss, indexing="ij"))
     bt = periodic_design(th, n_theta)
     bs = BSpline.design_matrix(ss, ts, DEGREE).tocsr()
-    coef = _solve_superlu(bt, bs, ok, z, diff_x=_periodic_second_diff(n_theta))
+    cyclic = _periodic_second_diff(n_theta)
+    if zero_last is None:
+        coef = _solve_superlu(bt, bs, ok, z, diff_x=cyclic)
+    else:
+        # the component ``zero_last`` held at zero on the last interval: the s functions
+        # whose support meets it are not solved for (zero there, so exactly zero)
+        free = ts[DEGREE + 1 :] <= sb[-1] + 1e-12 * (s_range[1] - s_range[0])
+        k = z.shape[2]
+        rest = [c for c in range(k) if c != zero_last]
+        coef = np.zeros((n_theta, ts.size - DEGREE - 1, k))
+        coef[:, :, rest] = _solve_superlu(bt, bs, ok, z[..., rest], diff_x=cyclic)
+        coef[:, :, zero_last] = _solve_superlu(
+            bt, bs, ok, z[..., zero_last], diff_x=cyclic, free_y=free
+        )
     fit = PeriodicFit(n_theta, ts, coef, 0.0)
     thc, sc = _samples(tt, CHECK_PER_SPAN), _samples(ts, CHECK_PER_SPAN)
     zc, okc, inside = h(*np.meshgrid(thc, sc, indexing="ij"))
     if np.any(inside & ~okc):
         error = float("inf")  # data missing inside the face
     else:
-        error = float(np.abs(fit(thc, sc) - zc)[inside].max(initial=0.0))
+        diff = np.abs(fit(thc, sc) - zc)
+        if diff.ndim == 3:
+            diff = np.linalg.norm(diff, axis=2)
+        error = float(diff[inside].max(initial=0.0))
     return replace(fit, error=error)
 
 
@@ -117,31 +152,35 @@ def fit_radial_height(
     spacing: float,
     radius: float,
     levels: int = 5,
+    s_fine: Sequence[bool] | None = None,
+    zero_last: int | None = None,
 ) -> PeriodicFit | None:
     """Fit the radial height ``h(theta, s)`` to ``tol`` (length unit) over the full turn and
     ``s_range``, spans of at most ``spacing`` (length: in theta arc length at ``radius``),
     halved at most ``levels - 1`` times while the error misses ``tol`` and keeps falling
-    (stops when two halvings did not divide it by 1 / STALL). The best fit with its
-    measured error (the caller decides), None when even the first level has more than
-    ``MAX_COEFFICIENTS``. ``s_breaks``: axial coordinates where the curvature may jump
-    (C1 knots there)."""
+    (:func:`medax.geometry.tensor_fit.refine_both`: in one direction alone when the other hardly
+    matters). The best fit with its measured error (the
+    caller decides), None when even the first level has more than ``MAX_COEFFICIENTS``.
+    ``s_breaks``: axial coordinates where the curvature may jump (C1 knots there);
+    ``s_fine``: per interval between them, False where the values are linear in ``s`` (one
+    span there; default: all fine). ``h`` may give values with components, (..., k) (the
+    points of a surface: :mod:`medax.geometry.ring_heights`); they share the knots and the
+    factorisation, and the error is the largest distance. ``zero_last``: a component that
+    is zero on the last interval between the breaks (a height off the support), fitted with
+    its coefficients there held at zero, so it is exactly zero there (it needs a break)."""
     s0, s1 = s_range
     sb = sorted(b for b in set(s_breaks) if s0 < b < s1)
-    best: PeriodicFit | None = None
-    errors: list[float] = []
-    step = spacing
-    for _ in range(levels):
-        n_theta = max(4, int(np.ceil(PERIOD * radius / step - 1e-9)))
-        ns = _knots(s0, s1, sb, [True] * (len(sb) + 1), step).size - DEGREE - 1
+    fine = [True] * (len(sb) + 1) if s_fine is None else list(s_fine)
+    if len(fine) != len(sb) + 1:
+        raise ValueError("s_fine needs one flag per interval between the breaks inside s_range")
+    if zero_last is not None and not sb:
+        raise ValueError("zero_last needs a break: the component is zero after the last one")
+
+    def fit_at(step_theta: float, step_s: float) -> PeriodicFit | None:
+        n_theta = max(4, int(np.ceil(PERIOD * radius / step_theta - 1e-9)))
+        ns = _knots(s0, s1, sb, fine, step_s).size - DEGREE - 1
         if n_theta * ns > MAX_COEFFICIENTS:
-            break
-        fit = _fit_once(s_range, sb, h, n_theta, step)
-        if best is None or fit.error < best.error:
-            best = fit
-        if fit.error <= tol or not np.isfinite(fit.error):
-            break
-        if len(errors) >= 2 and fit.error > STALL * errors[-2]:
-            break
-        errors.append(fit.error)
-        step /= 2
-    return best
+            return None
+        return _fit_once(s_range, sb, fine, h, n_theta, step_s, zero_last)
+
+    return refine_both(fit_at, spacing, tol, levels)

@@ -26,6 +26,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import Protocol, TypeVar
 
 import numpy as np
 import scipy.sparse as sp
@@ -59,6 +60,14 @@ MAX_BAND_ENTRIES = 25_000_000
 #: ``h(X, Y) -> (Z, defined, inside)``: heights on a grid (arrays of one shape), where they
 #: are defined (data rows of the fit) and where the fit error counts (the face itself).
 HeightFn = Callable[[FloatArray, FloatArray], tuple[FloatArray, np.ndarray, np.ndarray]]
+
+
+class _Measured(Protocol):
+    @property
+    def error(self) -> float: ...
+
+
+F = TypeVar("F", bound=_Measured)
 
 
 @dataclass(frozen=True)
@@ -199,23 +208,56 @@ def fit_height(
             return None
         return _fit_once(x_range, y_range, xb, yb, fine_x, fine_y, h, sx, sy)
 
-    best: TensorFit | None = None
+    return refine_both(fit_at, spacing, tol, levels)
+
+
+def refine_both(
+    fit_at: Callable[[float, float], F | None], spacing: float, tol: float, levels: int
+) -> F | None:
+    """:func:`refine` of a fit with a spacing per direction, ``fit_at(sx, sy)``: both
+    halved together, or one alone once the first halvings show the other hardly matters
+    (:func:`_one_direction`, tried after the second level)."""
+
+    def shortcut(level: int, step: float, errors: list[float], fit: F) -> F | None:
+        if level != 1 or levels <= 2:
+            return None
+        return _one_direction(fit_at, errors[0], fit, step, spacing / 2 ** (levels - 1), tol)
+
+    return refine(lambda step: fit_at(step, step), spacing, tol, levels, shortcut)
+
+
+def refine(
+    fit_at: Callable[[float], F | None],
+    spacing: float,
+    tol: float,
+    levels: int,
+    shortcut: Callable[[int, float, list[float], F], F | None] | None = None,
+) -> F | None:
+    """The refinement loop shared by the fits here and in :mod:`.periodic_fit`: fits
+    ``fit_at(step)`` from ``step = spacing``, halved at most ``levels - 1`` times while the
+    measured ``error`` misses ``tol`` (stops when it is within, not finite (data missing
+    inside the face: no knots will mend that), or two halvings did not divide it by
+    ``1 / STALL``: a step or a kink in the data); the best fit, None when even the first is
+    too large to solve (``fit_at`` gave None). ``shortcut(level, step, errors, fit)`` may
+    end the loop with a fit of its own after a level that missed ``tol`` (``errors``: the
+    earlier levels' errors)."""
+    best: F | None = None
     step = spacing
     errors: list[float] = []
     for level in range(levels):
-        fit = fit_at(step, step)
+        fit = fit_at(step)
         if fit is None:
             break  # too large to solve: keep the best one (None when even the first is)
         if best is None or fit.error < best.error:
             best = fit
         if fit.error <= tol or not np.isfinite(fit.error):
-            break  # done, or data missing inside the face (no knots will mend that)
+            break
         if len(errors) >= 2 and fit.error > STALL * errors[-2]:
-            break  # not converging (a step or a kink in the data): more knots won't help
-        if level == 1 and levels > 2:
-            one = _one_direction(fit_at, errors[0], fit, step, spacing / 2 ** (levels - 1), tol)
-            if one is not None:
-                return one
+            break
+        if shortcut is not None:
+            done = shortcut(level, step, errors, fit)
+            if done is not None:
+                return done
         errors.append(fit.error)
         step /= 2
     return best
@@ -227,13 +269,13 @@ ONE_DIRECTION = 1.5
 
 
 def _one_direction(
-    fit_at: Callable[[float, float], TensorFit | None],
+    fit_at: Callable[[float, float], F | None],
     first: float,
-    both: TensorFit,
+    both: F,
     step: float,
     finest: float,
     tol: float,
-) -> TensorFit | None:
+) -> F | None:
     """Refinement along one direction only, tried once the first halving of both (``both``,
     spans ``step``; ``first`` the error at ``2 step``) missed ``tol``: a fit within ``tol``,
     or None (the caller goes on halving both directions, as without this).
@@ -422,15 +464,28 @@ def _solve_superlu(
     ok: np.ndarray,
     z: FloatArray,
     diff_x: sp.spmatrix | None = None,
+    free_y: np.ndarray | None = None,
 ) -> FloatArray:
     """:func:`solve_masked` by the Kronecker design matrix and SuperLU (the general route).
     ``diff_x``: the penalty's difference operator in x (default :func:`_second_diff`; the
-    periodic fit passes cyclic differences)."""
+    periodic fit passes cyclic differences). ``z`` may carry components, (sx, sy, k): the
+    coefficients are then (nx, ny, k). ``free_y`` (ny,) bool: only the coefficients of
+    these y functions are solved for, the others are held at zero."""
     nx, ny = bx.shape[1], by.shape[1]
     rows = np.flatnonzero(ok.ravel())
     a = sp.kron(bx, by, format="csr")[rows]
     dx = _second_diff(nx) if diff_x is None else diff_x
     d = sp.vstack([sp.kron(dx, sp.eye(ny)), sp.kron(sp.eye(nx), _second_diff(ny))])
+    cols = None if free_y is None else np.flatnonzero(np.tile(np.asarray(free_y, bool), nx))
+    if cols is not None:
+        a, d = a.tocsc()[:, cols], d.tocsc()[:, cols]
     normal = (a.T @ a + PENALTY * (d.T @ d)).tocsc()
-    # SuperLU's default column ordering: MMD_AT_PLUS_A (symmetric) was 2.3x slower here
-    return np.asarray(spsolve(normal, a.T @ z.ravel()[rows])).reshape(nx, ny)
+    # SuperLU's default column ordering: MMD_AT_PLUS_A (symmetric) was 2.3x slower here;
+    # values with components (sx, sy, k): one factorisation, k right-hand sides
+    rhs = a.T @ z.reshape(ok.size, -1)[rows]
+    sol = np.asarray(spsolve(normal, rhs if rhs.shape[1] > 1 else rhs.ravel()))
+    if cols is not None:
+        full = np.zeros((nx * ny, rhs.shape[1]))
+        full[cols] = sol.reshape(len(cols), -1)
+        sol = full
+    return sol.reshape((nx, ny, *z.shape[2:]))

@@ -18,7 +18,7 @@ from typing import Any
 
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
-from OCP.GeomAbs import GeomAbs_Plane
+from OCP.GeomAbs import GeomAbs_Cylinder, GeomAbs_Plane
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
 from OCP.TopoDS import TopoDS
 
@@ -29,6 +29,7 @@ from medax.cad.simplify.groups import Group, build_groups
 from medax.cad.simplify.medial import Medial, medial_curve
 from medax.cad.simplify.occ import count, diagonal, shape_map, small_list
 from medax.cad.simplify.rebuild import build_solid
+from medax.cad.simplify.ring import NOT_A_RING, ring_surface
 from medax.cad.simplify.specs import BlendInput, CornerSpec, FilletSpec
 from medax.cad.simplify.split import split_along
 from medax.cad.simplify.surfaces import Half, MergedSurface, merged_surface
@@ -418,13 +419,13 @@ def _refresh_surfaces(job: _Job) -> None:
                     ms = merged_surface(support, halves, job.btol)
                 except (ValueError, RuntimeError) as err:  # OCCT construction failures
                     ms = f"surface construction failed: {err}"
-                if isinstance(ms, str) and planar:
+                if isinstance(ms, str) and (planar or _ring_kind(support)):
                     ms = FITTED
                 elif isinstance(ms, str):
                     kind = str(BRepAdaptor_Surface(support).GetType()).split("_")[-1].lower()
                     ms = (
-                        f"{ms}; the fitted route takes planar supporting faces only (this one "
-                        f"is a {kind}: no height field over it yet)"
+                        f"{ms}; the fitted routes take planar and cylindrical supporting faces "
+                        f"only (this one is a {kind})"
                     )
             if isinstance(ms, str) and ms != FITTED:
                 for f, _ in hs:
@@ -446,13 +447,34 @@ def _fitted(job: _Job, split: Any, g: Group, probe: bool = False) -> FittedSurfa
     if key not in job.cache:
         members = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
         fit_tol = FIT_SHARE * job.tol * job.diag
+        support = job.face(g.support)
         try:
-            job.cache[key] = graph_surface(
-                job.face(g.support), members, fit_tol, job.btol, probe=probe
-            )
+            # the ring route first (one blend half all the way round a boss or a hole:
+            # planes and cylinders), else the height field over a plane
+            ring = ring_surface(support, members, fit_tol, job.btol, probe=probe)
+            if isinstance(ring, str) and not _ring_kind(support):
+                flat = graph_surface(support, members, fit_tol, job.btol, probe=probe)
+                if isinstance(flat, str) and _ring_applies(ring):
+                    flat = f"{flat}; ring route: {ring}"
+                job.cache[key] = flat
+            else:
+                job.cache[key] = ring
         except Exception as err:  # OCCT failures while sampling the pieces
             job.cache[key] = f"fitting failed ({type(err).__name__}: {err})"
     return job.cache[key]
+
+
+def _ring_kind(face: Any) -> bool:
+    """Whether a supporting face takes only the ring route (a cylinder: see
+    :mod:`.ring`)."""
+    return BRepAdaptor_Surface(face).GetType() == GeomAbs_Cylinder
+
+
+def _ring_applies(why: str) -> bool:
+    """Whether the ring route's refusal ``why`` came after the group looked like a ring (a
+    fit that missed, a pole on the face; not a group of another shape): worth naming next
+    to the planar route's reason."""
+    return not why.startswith(NOT_A_RING)
 
 
 def _split(job: _Job, sel: dict[int, FilletSpec], csel: dict[int, CornerSpec]) -> Any:

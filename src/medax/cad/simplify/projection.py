@@ -28,7 +28,8 @@ MIN_SAMPLES, MAX_SAMPLES = 40, 240
 
 
 class GridProjection:
-    """Projection onto a non-periodic ``Geom_BSplineSurface`` over ``[u0, u1] x [v0, v1]``
+    """Projection onto a ``Geom_BSplineSurface`` over ``[u0, u1] x [v0, v1]`` (the grid of
+    a periodic one sampled on its non-periodic copy, the same geometry and parameters)
     with ``GeomAPI_ProjectPointOnSurf``'s calls (``Perform``, ``NbPoints``,
     ``LowerDistanceParameters``, ``LowerDistance``)."""
 
@@ -46,10 +47,10 @@ class GridProjection:
 
     @classmethod
     def of(cls, surf: Any, bounds: tuple[float, float, float, float]) -> GridProjection | None:
-        """The projection for a non-periodic B-spline surface, else None."""
+        """The projection for a B-spline surface, else None."""
         from OCP.Geom import Geom_BSplineSurface
 
-        if not isinstance(surf, Geom_BSplineSurface) or surf.IsUPeriodic() or surf.IsVPeriodic():
+        if not isinstance(surf, Geom_BSplineSurface):
             return None
         return cls(surf, bounds)
 
@@ -70,6 +71,20 @@ class GridProjection:
             uv[i] = q.X(), q.Y()
             dist[i] = self.sas.Gap()
         return uv, dist
+
+    def project_near(
+        self, p: Array, start: tuple[float, float], accept: float
+    ) -> tuple[tuple[float, float], float]:
+        """Foot parameters and distance of ``p`` (3,) from the grid's nearest sample; when
+        that foot is farther than ``accept``, also refined from ``start`` (a neighbour's
+        foot, when points follow a curve: the grid's nearest sample can lie on another part
+        of the surface near in space, and its foot there), the nearer kept."""
+        grid = self.project(p)
+        if grid[1] <= accept:
+            return grid
+        q = self.sas.NextValueOfUV(gp_Pnt2d(*start), gp_Pnt(*map(float, p)), 1e-12, -1.0)
+        near = (q.X(), q.Y()), float(self.sas.Gap())
+        return near if near[1] < grid[1] else grid
 
     def Perform(self, point: Any) -> None:  # noqa: N802 - GeomAPI's spelling
         self.uv, self.dist = self.project(np.array([point.X(), point.Y(), point.Z()]))
