@@ -219,3 +219,36 @@ def test_nurbs_copy_keeps_the_volume(box4):
     exact = 40.0 * 30.0 * 20.0 - 4 * (1 - math.pi / 4) * 5.0**2 * 20.0
     gk, ad = volumes(res.shape, nurbs=True, eps=1e-10)
     assert abs(gk - exact) <= 1e-8 * exact and abs(ad - exact) <= 1e-8 * exact
+
+
+def test_box4_area_matches_closed_form(box4):
+    """The boundary area the area check measures (on the NURBS copy of the extruded faces)
+    against the closed form of the filleted box, which the simplified box keeps."""
+    from medax.cad.simplify.validate import area
+
+    _, r = box4
+    a, b, h, rad = 40.0, 30.0, 20.0, 5.0
+    exact = 2 * (a * b - (4 - math.pi) * rad**2) + 2 * (a + b - 4 * rad) * h + 2 * math.pi * rad * h
+    assert abs(area(r.shape) - exact) <= 1e-8 * exact
+    assert abs(r.area_rel_change) <= 1e-7
+    assert r.report()["area_rel_change"] == r.area_rel_change
+
+
+def test_area_change_keeps_the_fillets(monkeypatch):
+    """A rebuilt solid whose boundary area is off (as a pcurve bump between the sampled
+    deviations makes it) is not accepted: the fillets are kept, the input is returned."""
+    from medax.cad.simplify import validate
+
+    true_area = validate.area
+
+    def inflated(shape, nurbs=None):  # every measure of a rebuilt solid 1e-5 too large
+        return true_area(shape, nurbs) * (1.0 + 1e-5)
+
+    # (the input's area is measured through the pipeline's own name: unchanged)
+    monkeypatch.setattr(validate, "area", inflated)
+    part = P.box_vertical_fillets(40.0, 30.0, 20.0, 5.0)
+    r = _run(part)
+    assert (r.faces_before, r.faces_after) == (10, 10) and not r.blends_removed
+    assert len(r.blends_kept) == 4
+    assert all("boundary area changed by +1.00e-05" in why for _, why in r.blends_kept)
+    assert r.valid and r.volume_rel_change == 0.0 and r.area_rel_change == 0.0

@@ -95,11 +95,12 @@ def run(args: argparse.Namespace) -> int:
 
 def _combine(reports: list[dict[str, Any]]) -> dict[str, Any]:
     """One report: the solid's own for one solid; for several, totals (faces, time), the
-    worst values (validity, volume change, deviation) and each solid's report in
+    worst values (validity, volume and area change, deviation) and each solid's report in
     ``solids`` (face indices are per solid)."""
     if len(reports) == 1:
         return dict(reports[0])
     worst_dv = max((r["volume_rel_change"] for r in reports), key=abs)
+    worst_da = max((r["area_rel_change"] for r in reports), key=abs)
     worst_dev = max(reports, key=lambda r: r["max_deviation"]["relative_to_diagonal"])
     return {
         "faces_before": sum(r["faces_before"] for r in reports),
@@ -108,6 +109,7 @@ def _combine(reports: list[dict[str, Any]]) -> dict[str, Any]:
         "blends_kept": [dict(b, solid=k) for k, r in enumerate(reports) for b in r["blends_kept"]],
         "valid": all(r["valid"] for r in reports),
         "volume_rel_change": worst_dv,
+        "area_rel_change": worst_da,
         "max_deviation": worst_dev["max_deviation"],
         "face_groups": [dict(g, solid=k) for k, r in enumerate(reports) for g in r["face_groups"]],
         "time_s": sum(r["time_s"] for r in reports),
