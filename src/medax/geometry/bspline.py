@@ -228,6 +228,29 @@ class BSpline(Curve):
         d2 = (h2[:, :-1] - 2.0 * w1 * d1 - w2 * c) / w0
         return c, d1, d2
 
+    @cached_property
+    def _row_pieces(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """:attr:`_pieces` for :meth:`jet_rows`: the interior breaks, all breaks, and the
+        coefficients (degree+1, 3 * dim, m) by power (highest first), then order and
+        coordinate, spans last (one gather per power fetches a contiguous row block)."""
+        x, coefs = self._pieces
+        m, k1, _, dim = coefs.shape
+        rows = np.ascontiguousarray(coefs.transpose(1, 2, 3, 0).reshape(k1, 3 * dim, m))
+        return np.ascontiguousarray(x[1:-1]), x, rows
+
+    def jet_rows(self, t: FloatArray) -> FloatArray | None:
+        if self.weights is not None or self.degree > POWER_BASIS_MAX_DEGREE:
+            return None
+        inner, x, rows = self._row_pieces
+        t = np.minimum(np.maximum(np.asarray(t, dtype=np.float64), 0.0), 1.0)
+        i = np.searchsorted(inner, t, side="right")
+        s = t - x[i]
+        w = rows[0].take(i, axis=1)
+        for p in range(1, rows.shape[0]):
+            w *= s
+            w += rows[p].take(i, axis=1)
+        return w
+
     def evaluate(self, t: FloatArray) -> FloatArray:
         h = self._raw(t, 0)
         if self.weights is None:

@@ -60,6 +60,12 @@ class Curve(ABC):
         work between them override this."""
         return self.evaluate(t), self.derivative(t), self.derivative(t, 2)
 
+    def jet_rows(self, t: FloatArray) -> FloatArray | None:
+        """The :meth:`jet` as component rows (3 * dim, n): ``C``, ``C'``, ``C''``, each
+        coordinate a contiguous row (cheaper arithmetic on them than on (n, dim) columns);
+        None where a kind has no such fast path (callers then use :meth:`jet`)."""
+        return None
+
     def transformed(self, offset: FloatArray, scale: float) -> Curve:
         """The image under ``x -> (x - offset) / scale`` (a similarity; planar curves)."""
         raise NotImplementedError(f"{type(self).__name__} cannot be transformed")
@@ -213,6 +219,8 @@ def _track_block(
     curve: Curve, x: FloatArray, t: FloatArray, step_tol: float, iters: int
 ) -> tuple[FloatArray, FloatArray]:
     """:func:`track_closest` on one block: feet (n,) and foot points (n, dim)."""
+    if curve.jet_rows(t[:1]) is not None:
+        return _track_rows(curve, x, t, step_tol, iters)
     t = t.copy()
     foot = np.empty_like(x)
     rows: np.ndarray | None = None  # rows still moving (None: all)
@@ -256,6 +264,64 @@ def _track_block(
         foot[idx] = c2[done]
         rows = np.flatnonzero(~done) if rows is None else rows[~done]
     return t, foot
+
+
+def _track_rows(
+    curve: Curve, x: FloatArray, t: FloatArray, step_tol: float, iters: int
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`_track_block` on the curve's component rows (:meth:`Curve.jet_rows`): the same
+    steps and stopping rule, coordinates as contiguous rows."""
+    dim = x.shape[1]
+    xs = np.ascontiguousarray(x.T)
+    t = t.copy()
+    foot = np.empty((dim, t.size))
+    rows: np.ndarray | None = None  # rows still moving (None: all)
+    for it in range(iters):
+        tr = t if rows is None else t[rows]
+        xr = xs if rows is None else xs[:, rows]
+        w = curve.jet_rows(tr)
+        assert w is not None
+        c0, c1, c2 = w[:dim], w[dim : 2 * dim], w[2 * dim :]
+        c = c0 - xr
+        g = c[0] * c1[0]
+        speed2 = c1[0] * c1[0]
+        dg = c[0] * c2[0]
+        for k in range(1, dim):
+            g += c[k] * c1[k]
+            speed2 += c1[k] * c1[k]
+            dg += c[k] * c2[k]
+        dg += speed2
+        # away from a local minimum (dg <= 0) a gradient step scaled by the speed
+        den = np.where(dg > 0.0, dg, speed2)
+        np.maximum(den, 1e-300, out=den)
+        ds = np.divide(g, den, out=g)
+        ds = np.subtract(tr, ds, out=ds)
+        np.minimum(np.maximum(ds, 0.0, out=ds), 1.0, out=ds)
+        new = ds.copy()
+        ds -= tr  # the step taken
+        if rows is None:
+            t = new
+        else:
+            t[rows] = new
+        if it == iters - 1:
+            done = np.ones(tr.size, dtype=bool)
+        else:  # a short Newton step, or a foot held at an end of the curve
+            done = (np.abs(ds) <= step_tol) & ((dg > 0.0) | (ds == 0.0))
+        half = 0.5 * ds
+        c2 *= half
+        c2 += c1
+        c2 *= ds
+        c2 += c0  # C(t) + C'(t) ds + C''(t) ds^2 / 2
+        if done.all():
+            if rows is None:
+                foot = c2
+            else:
+                foot[:, rows] = c2
+            break
+        idx = np.flatnonzero(done) if rows is None else rows[done]
+        foot[:, idx] = c2[:, done]
+        rows = np.flatnonzero(~done) if rows is None else rows[~done]
+    return t, foot.T
 
 
 def certify_closest(
