@@ -378,7 +378,8 @@ def test_planar_solve_gives_the_general_nodes(name, monkeypatch):
 def test_certify_closest_is_the_documented_rule(monkeypatch):
     """The blocked certification equals the rule written out on the whole table: no local
     minimum of the sample distances beyond 1.5 spacings of the foot is nearer than the
-    foot's distance minus the slack, allowing 0.55 sample spacings between samples."""
+    foot's distance minus the slack, allowing the larger of 0.55 sample spacings between
+    samples and the chord bound ``sqrt(s^2 - l^2 / 4) - e``."""
     import medax.geometry.curve as gc
 
     r = REGIONS["wavy"]
@@ -395,12 +396,51 @@ def test_certify_closest_is_the_documented_rule(monkeypatch):
         is_min[:, :-1] &= d[:, :-1] <= d[:, 1:]
         is_min &= np.abs(ts[None] - loc.t[:, None]) > 1.5 * (ts[1] - ts[0])
         other = np.where(is_min, d, np.inf).min(axis=1)
-        half = 0.55 * np.linalg.norm(np.diff(pts, axis=0), axis=1).max()
-        want = other - half >= loc.distance - 1e-12
+        chord = np.linalg.norm(np.diff(pts, axis=0), axis=1).max()
+        dt = ts[1] - ts[0]
+        mid = np.concatenate((ts, 0.5 * (ts[1:] + ts[:-1])))
+        sag = 1.5 * np.linalg.norm(c.derivative(mid, 2), axis=1).max() * dt * dt / 8
+        bound = np.maximum(
+            other - 0.55 * chord, np.sqrt(np.maximum(other**2 - chord**2 / 4, 0)) - sag
+        )
+        assert np.all(bound[np.isfinite(other)] >= other[np.isfinite(other)] - 0.55 * chord)
+        want = bound >= loc.distance - 1e-12
         got = certify_closest(c, x, loc.t, loc.distance, 1e-12)
         assert 0 < want.sum() < len(x)
         assert np.count_nonzero(got != want) <= 2  # (round-off at the margin only)
-        assert not np.any(got & ~want & (other - half < loc.distance - 1e-9))
+        assert not np.any(got & ~want & (bound < loc.distance - 1e-9))
+
+
+def test_certify_closest_near_equidistant_parts():
+    """Points near where the nearest point of a wavy side jumps (two local feet at nearly
+    the same distance): the farther foot is never certified, even when it is farther by
+    less than a sample spacing (the chord bound's regime), and the nearer one mostly is."""
+    r = REGIONS["wavy"]
+    c = r.sides[0]
+    lo, hi = r.corners.min(axis=0), r.corners.max(axis=0)
+    x = np.random.default_rng(12).uniform(lo, hi, (20000, 2))
+    dense = np.linspace(0.0, 1.0, 4001)
+    d = np.linalg.norm(x[:, None] - c.evaluate(dense)[None], axis=2)
+    is_min = np.ones(d.shape, dtype=bool)
+    is_min[:, 1:] &= d[:, 1:] < d[:, :-1]
+    is_min[:, :-1] &= d[:, :-1] < d[:, 1:]
+    two = np.flatnonzero(is_min.sum(axis=1) >= 2)
+    score = np.where(is_min[two], d[two], np.inf)
+    order = np.argsort(score, axis=1)[:, :2]
+    first = closest_from(c, x[two], dense[order[:, 0]], iters=60)
+    second = closest_from(c, x[two], dense[order[:, 1]], iters=60)
+    gap = second.distance - first.distance
+    sep = np.abs(second.t - first.t) > 0.01
+    near = (
+        sep
+        & (gap > 1e-9)
+        & (gap < 0.55 * np.linalg.norm(np.diff(c._search[1], axis=0), axis=1).max())
+    )
+    assert near.sum() > 20
+    slack = 1e-12 * r.diagonal
+    wrong = sep & (gap > 1e-9)
+    assert not np.any(certify_closest(c, x[two], second.t, second.distance, slack)[wrong])
+    assert certify_closest(c, x[two], first.t, first.distance, slack)[near].mean() > 0.5
 
 
 def test_targets_blend_and_separable_rows():

@@ -125,6 +125,19 @@ class Curve(ABC):
         return self.derivative(self._search[0])
 
     @cached_property
+    def _gaps(self) -> tuple[float, float, float]:
+        """Bounds between the search samples (:func:`certify_closest`): 0.55 of the longest
+        chord, a quarter of its square, and how far the curve may leave its chords: the
+        parameter step squared over 8 times 1.5 x the largest ``|C''|`` at the samples and
+        half-way between them."""
+        ts, pts = self._search
+        chord = float(np.max(np.linalg.norm(np.diff(pts, axis=0), axis=1)))
+        dt = float(ts[1] - ts[0])
+        both = np.concatenate((ts, 0.5 * (ts[1:] + ts[:-1])))
+        acc = float(np.max(np.linalg.norm(self.derivative(both, 2), axis=1)))
+        return 0.55 * chord, 0.25 * (1.0 + 1e-9) * chord * chord, 1.5 * acc * dt * dt / 8.0
+
+    @cached_property
     def _table(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The search samples centred on their mean (|x|^2 - 2 x.p + |p|^2 loses digits far
         from the origin): centre (dim,), centred samples (m, dim), their squared norms (m,)."""
@@ -331,17 +344,21 @@ def certify_closest(
     global: no other part of the curve is nearer than ``distance - slack``.
 
     Each other part of the curve is represented by a local minimum of the distance over the
-    dense samples (outside one sample spacing of ``t``); the curve between samples is at
-    most half a spacing ``h`` from one, so a part whose best sample is at ``s`` has no point
-    nearer than ``s - h / 2``. Cheaper than :meth:`Curve.closest` (no refinement); rows not
-    certified need the full query.
+    dense samples (outside one sample spacing of ``t``); a part whose best sample is at
+    ``s`` has no point nearer than the larger of two bounds (:attr:`Curve._gaps`): ``s - h / 2``
+    (the curve between samples is at most half a spacing ``h`` from one), and
+    ``sqrt(s^2 - l^2 / 4) - e`` (a point of a chord of length ``l`` is at least that from a
+    point whose distance to both its ends is at least ``s``; the curve is within ``e`` of
+    its chords, the parameter step squared times a bound of ``|C''|`` over 8): far from
+    the curve the second is the tighter by orders of magnitude. Cheaper than
+    :meth:`Curve.closest` (no refinement); rows not certified need the full query.
     """
     ts = curve._search[0]
     centre, pts, pp = curve._table  # centred on the samples
     x = np.asarray(points, dtype=np.float64) - centre
     t = np.asarray(t, dtype=np.float64)
     n, m = x.shape[0], pts.shape[0]
-    half = 0.55 * float(np.max(np.linalg.norm(np.diff(pts, axis=0), axis=1)))
+    half, quarter, sag = curve._gaps
     dt = ts[1] - ts[0]
     pt2 = -2.0 * pts.T
     ok = np.empty(n, dtype=bool)
@@ -364,8 +381,11 @@ def certify_closest(
         ex = excluded[s : s + rows]
         im[rr, near[s : s + rows]] &= ~ex
         other = np.minimum.reduce(d2, axis=1, where=im, initial=np.inf)
-        nearest = np.sqrt(np.maximum(other + np.einsum("ij,ij->i", xs, xs), 0.0))
-        ok[s : s + rows] = nearest - half >= distance[s : s + rows] - slack
+        other += np.einsum("ij,ij->i", xs, xs)
+        np.maximum(other, 0.0, out=other)  # the nearest other sample, squared
+        bound = np.sqrt(other) - half
+        np.maximum(bound, np.sqrt(np.maximum(other - quarter, 0.0)) - sag, out=bound)
+        ok[s : s + rows] = bound >= distance[s : s + rows] - slack
     return ok
 
 
