@@ -32,7 +32,7 @@ import numpy as np
 from medax import tolerances
 from medax.errors import MeshError
 from medax.geometry._types import FloatArray
-from medax.geometry.certify import PointGroups, certify_many
+from medax.geometry.certify import PointGroups, certify_many, group_cells
 from medax.geometry.region import Region
 from medax.mesh.boundary_nodes import RULES, side_params
 from medax.mesh.coarse_start import (
@@ -542,7 +542,7 @@ def _wrong_feet(sides: SideDistances, p: FloatArray, tol: float, rows: np.ndarra
             continue
         curve, tk, dk = sides.curves[k], sides.t[k][rows], sides.d[k][rows]
         if groups is None and rows.size >= 2048:
-            groups = PointGroups.build(x)
+            groups = PointGroups.build(x, group_cells(rows.size))
         doubt = np.flatnonzero(~certify_many(curve, x, tk, dk, tol, groups))
         if doubt.size == 0:
             continue
