@@ -363,6 +363,27 @@ def test_planar_field_only_for_closed_form_sides():
     assert not rf.PlanarField.supports(cyl, ("distance", "distance"))
 
 
+@pytest.mark.parametrize(("name", "tol"), [("wavy", 0.0), ("wavy", 1e-6), ("bulge", 0.0)])
+def test_free_field_solve_gives_the_general_nodes(name, tol, monkeypatch):
+    """The coordinate-row solve of free-form regions (:mod:`medax.mesh.free_field`, several
+    blocks) finds the nodes of the general solve, with the same counts of iterations and
+    global re-solves; regions it does not take go the general way."""
+    import medax.mesh.free_field as ff
+
+    r = REGIONS[name] if name in REGIONS else _free_form_region(name)
+    assert ff.FreeField.supports(r, ("distance", "distance"))
+    assert not ff.FreeField.supports(r, ("angle", "distance"))
+    assert not ff.FreeField.supports(REGIONS["arcs"], ("distance", "distance"))  # (planar)
+    assert not ff.FreeField.supports(_free_form_region("mixed"), ("distance", "distance"))
+    monkeypatch.setattr(ff, "_BLOCK", 1000)
+    fast = mesh_region(r, (120, 97), tol=tol)
+    monkeypatch.setattr(ff.FreeField, "supports", staticmethod(lambda region, kinds: False))
+    slow = mesh_region(r, (120, 97), tol=tol)
+    assert np.abs(fast.params - slow.params).max() <= 1e-11 * r.diagonal
+    for key in ("interpolated", "copied", "global_resolved", "coarse_global_resolved"):
+        assert fast.info[key] == slow.info[key]
+
+
 @pytest.mark.parametrize("name", ["trapezoid", "arcs", "annulus_sector"])
 def test_planar_solve_gives_the_general_nodes(name, monkeypatch):
     """The closed-form, blocked solve finds the nodes of the general solve (coarse start,

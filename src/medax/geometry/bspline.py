@@ -229,6 +229,24 @@ class BSpline(Curve):
         return c, d1, d2
 
     @cached_property
+    def third_bound(self) -> float | None:
+        """A bound of ``|C'''|`` over the curve (None for rational curves): per span, the
+        sum over powers ``p >= 3`` of ``p (p - 1) (p - 2) |a_p| h^(p - 3)`` (``a_p`` the
+        power-basis coefficients, ``h`` the span's width)."""
+        if self.weights is not None or self.degree > POWER_BASIS_MAX_DEGREE:
+            return None
+        x, coefs = self._pieces  # (m, k + 1, 3, dim), highest power first
+        k = self.degree
+        h = np.diff(x)
+        total = np.zeros(h.size)
+        for j in range(k + 1):
+            p = k - j
+            if p >= 3:
+                a = np.linalg.norm(coefs[:, j, 0, :], axis=1)
+                total += p * (p - 1) * (p - 2) * a * h ** (p - 3)
+        return float(total.max(initial=0.0))
+
+    @cached_property
     def _row_pieces(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """:attr:`_pieces` for :meth:`jet_rows`: the interior breaks, all breaks, and the
         coefficients (degree+1, 3 * dim, m) by power (highest first), then order and

@@ -233,7 +233,8 @@ def _track_block(
 ) -> tuple[FloatArray, FloatArray]:
     """:func:`track_closest` on one block: feet (n,) and foot points (n, dim)."""
     if curve.jet_rows(t[:1]) is not None:
-        return _track_rows(curve, x, t, step_tol, iters)
+        t, foot_rows = _track_rows(curve, np.ascontiguousarray(x.T), t, step_tol, iters)
+        return t, foot_rows.T
     t = t.copy()
     foot = np.empty_like(x)
     rows: np.ndarray | None = None  # rows still moving (None: all)
@@ -279,13 +280,28 @@ def _track_block(
     return t, foot
 
 
-def _track_rows(
-    curve: Curve, x: FloatArray, t: FloatArray, step_tol: float, iters: int
+def track_rows(
+    curve: Curve, xs: FloatArray, t0: FloatArray, step_tol: float = 1e-6, iters: int = 8
 ) -> tuple[FloatArray, FloatArray]:
-    """:func:`_track_block` on the curve's component rows (:meth:`Curve.jet_rows`): the same
-    steps and stopping rule, coordinates as contiguous rows."""
-    dim = x.shape[1]
-    xs = np.ascontiguousarray(x.T)
+    """:func:`track_closest` for points given as component rows ``xs`` (dim, n), on a
+    curve with :meth:`Curve.jet_rows`: feet (n,) and foot points as rows (dim, n)."""
+    t = np.minimum(np.maximum(np.asarray(t0, dtype=np.float64), 0.0), 1.0)
+    if t.size <= _TRACK_BLOCK:
+        return _track_rows(curve, xs, t, step_tol, iters)
+    foot = np.empty(xs.shape)
+    for s in range(0, t.size, _TRACK_BLOCK):
+        e = min(t.size, s + _TRACK_BLOCK)
+        t[s:e], foot[:, s:e] = _track_rows(curve, xs[:, s:e], t[s:e], step_tol, iters)
+    return t, foot
+
+
+def _track_rows(
+    curve: Curve, xs: FloatArray, t: FloatArray, step_tol: float, iters: int
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`_track_block` on the curve's component rows (:meth:`Curve.jet_rows`, points
+    ``xs`` (dim, n)): the same steps and stopping rule, coordinates as contiguous rows;
+    feet (n,) and foot points (dim, n)."""
+    dim = xs.shape[0]
     t = t.copy()
     foot = np.empty((dim, t.size))
     rows: np.ndarray | None = None  # rows still moving (None: all)
@@ -334,7 +350,7 @@ def _track_rows(
         idx = np.flatnonzero(done) if rows is None else rows[done]
         foot[:, idx] = c2[:, done]
         rows = np.flatnonzero(~done) if rows is None else rows[~done]
-    return t, foot.T
+    return t, foot
 
 
 def certify_closest(

@@ -43,6 +43,7 @@ from medax.mesh.coarse_start import (
     refine_guess,
     start_feet,
 )
+from medax.mesh.free_field import FreeField, newton_free
 from medax.mesh.grid import boundary_indices
 from medax.mesh.ratio_field import (
     WEIGHTINGS,
@@ -344,6 +345,7 @@ def _solve(
         _check_residual(region, res, ra, rb, tol, counts)
         return p, [np.empty(0)] * 4, counts
     sides = SideDistances(region, n, kinds)
+    sides.set_tolerance(tol)
     if n == 0:
         return p, sides.t, counts
     if feet0 is not None:
@@ -355,8 +357,14 @@ def _solve(
     p = p.copy()
     res = np.zeros(n)
     rows = np.arange(n)
+    free = FreeField.supports(region, kinds)
     for round_ in range(_GLOBAL_ROUNDS + 1):
-        p[rows], it, res[rows] = _newton(sides, p[rows], ra, rb, rows, tol, kinds)
+        if free:
+            p[rows], it, res[rows] = newton_free(
+                sides, p[rows], ra, rb, rows, tol, _NEWTON_ITERS, _TRACK_STEP
+            )
+        else:
+            p[rows], it, res[rows] = _newton(sides, p[rows], ra, rb, rows, tol, kinds)
         counts["newton_iterations"] += it
         # not converged: the tracked feet may have stalled it (a foot passing to another
         # part of its side between trial points): solved again from global feet

@@ -1,0 +1,301 @@
+"""Both equations of the ratio grid on planar regions with free-form sides, solved on
+coordinate rows.
+
+The general path (:func:`medax.mesh.ratio_grid._newton` with
+:func:`~medax.mesh.ratio_field.evaluate_field`) handles every region: surfaces, angle
+weights, feet on curves of any kind. On the common free-form case (planar, both pairs
+weighted by distance, every side a segment, an arc or a curve with
+:meth:`~medax.geometry.curve.Curve.jet_rows`) this module runs the same damped Newton (same
+steps, cap, backtracking, acceptance and tolerance, feet tracked for small moves and found
+by a global query for long ones, two starts where the coarse feet jump) with the points held
+as two contiguous coordinate rows, the closed-form sides through the terms of
+:class:`~medax.mesh.ratio_field.PlanarField` and the tracked ones through
+:func:`~medax.geometry.curve.track_rows`: no ``(n, 2)`` columns, no per-evaluation
+bookkeeping of foot tuples, only the rows still unconverged evaluated. Its feet and
+distances go back to the :class:`~medax.mesh.ratio_field.SideDistances` for the global
+check that follows.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from medax.geometry._types import FloatArray
+from medax.geometry.arc import Arc
+from medax.geometry.curve import Curve, has_closed_form_closest, track_rows
+from medax.geometry.line import Line
+from medax.geometry.region import Region
+from medax.mesh.ratio_field import (
+    SideDistances,
+    _arc_consts,
+    _arc_term,
+    _segment_consts,
+    _segment_term,
+)
+
+_TINY = np.finfo(float).tiny
+_BLOCK = 16384  # nodes solved together (the temporaries stay in cache)
+_BACKTRACKS = 12
+
+
+def _tracked_curve(c: Curve) -> bool:
+    return not has_closed_form_closest(c) and c.jet_rows(np.zeros(1)) is not None
+
+
+class FreeField:
+    """The distance-weighted field of both pairs on coordinate rows: per side ``w d`` and
+    ``w u`` (``u`` the unit vector from the foot) in closed form for segments and arcs,
+    from tracked feet for the others."""
+
+    def __init__(self, sides: SideDistances) -> None:
+        region = sides.region
+        self.curves = [region.sides[k] for k in range(4)]
+        self.tracked = [_tracked_curve(c) and type(c) not in (Line, Arc) for c in self.curves]
+        self.consts = [
+            _segment_consts(c) if type(c) is Line else _arc_consts(c) if type(c) is Arc else ()  # type: ignore[arg-type]
+            for c in self.curves
+        ]
+        self.step_tol = list(getattr(sides, "step_tol", [1e-6] * 4))
+
+    @staticmethod
+    def supports(region: Region, kinds: tuple[str, str]) -> bool:
+        """Planar, both pairs weighted by distance, every side a segment, an arc or a curve
+        with component-row jets, at least one of the last (else
+        :class:`~medax.mesh.ratio_field.PlanarField` is the path)."""
+        if kinds != ("distance", "distance"):
+            return False
+        if not region.embedding.is_identity or region.space_sides is not None:
+            return False
+        free = False
+        for c in region.sides:
+            if c.dim != 2:
+                return False
+            if type(c) in (Line, Arc):
+                continue
+            if not _tracked_curve(c):
+                return False
+            free = True
+        return free
+
+    def term(
+        self,
+        k: int,
+        xs: FloatArray,
+        w: FloatArray,
+        t0: FloatArray | None,
+        cold: np.ndarray | None = None,
+        t1: FloatArray | None = None,
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray | None, FloatArray | None]:
+        """``w d``, ``w ux``, ``w uy`` (each (n,)) of side ``k`` at points ``xs`` (2, n), and
+        on a tracked side its feet and distances (None elsewhere): tracked from ``t0``
+        except on rows ``cold`` (bool, or None: none) and rows where ``t0`` is NaN, found
+        by a global query there; rows with a second start in ``t1`` (NaN: none) track it
+        too and keep the nearer foot."""
+        x, y = xs[0], xs[1]
+        if not self.tracked[k]:
+            if type(self.curves[k]) is Line:
+                wd, gx, gy = _segment_term(self.consts[k], x, y, w, True)
+            else:
+                wd, gx, gy = _arc_term(self.consts[k], x, y, w, True)
+            return wd, gx, gy, None, None
+        assert t0 is not None
+        curve, tol = self.curves[k], self.step_tol[k]
+        nan = np.isnan(t0)
+        if nan.any():
+            cold = nan if cold is None else (cold | nan)
+        if cold is None or not cold.any():
+            t, foot = track_rows(curve, xs, t0, tol)
+        else:
+            t, foot = np.empty(x.size), np.empty((2, x.size))
+            iw, ic = np.flatnonzero(~cold), np.flatnonzero(cold)
+            if iw.size:
+                t[iw], foot[:, iw] = track_rows(curve, xs[:, iw], t0[iw], tol)
+            c = curve.closest(xs[:, ic].T)
+            t[ic], foot[:, ic] = c.t, c.foot.T
+        rx, ry = x - foot[0], y - foot[1]
+        d = rx * rx
+        d += ry * ry
+        np.sqrt(d, out=d)
+        if t1 is not None:
+            two = np.flatnonzero(~np.isnan(t1) & ~nan)
+            if two.size:
+                ta, fa = track_rows(curve, xs[:, two], t1[two], tol)
+                ax, ay = x[two] - fa[0], y[two] - fa[1]
+                da = np.sqrt(ax * ax + ay * ay)
+                better = da < d[two]
+                sel = two[better]
+                t[sel], d[sel], rx[sel], ry[sel] = ta[better], da[better], ax[better], ay[better]
+        f = w / np.maximum(d, _TINY)
+        rx *= f
+        ry *= f
+        return w * d, rx, ry, t, d
+
+    def evaluate(
+        self,
+        xs: FloatArray,
+        w: list[FloatArray],
+        t0: list[FloatArray | None],
+        cold: np.ndarray | None = None,
+        t1: list[FloatArray | None] | None = None,
+    ) -> tuple[list[FloatArray], list[FloatArray | None], list[FloatArray | None]]:
+        """Both equations at ``xs`` (2, n) with side weights ``w`` (per side (n,): ``1 - r``
+        on sides 0 and 1, ``r`` on 2 and 3): ``[g_a, gax, gay, g_b, gbx, gby]``, the feet
+        and the distances per side (None on closed-form sides)."""
+        parts = [
+            self.term(k, xs, w[k], t0[k], cold, None if t1 is None else t1[k]) for k in range(4)
+        ]
+        g: list[FloatArray] = []
+        for a, b in ((0, 2), (1, 3)):
+            pa, pb = parts[a], parts[b]
+            for v, u in ((pa[0], pb[0]), (pa[1], pb[1]), (pa[2], pb[2])):
+                v -= u
+                g.append(v)
+        return g, [p[3] for p in parts], [p[4] for p in parts]
+
+
+def newton_free(
+    sides: SideDistances,
+    p: FloatArray,
+    ra_all: FloatArray,
+    rb_all: FloatArray,
+    rows: np.ndarray,
+    tol: float,
+    iters: int,
+    track_step: float,
+) -> tuple[FloatArray, int, FloatArray]:
+    """:func:`medax.mesh.ratio_grid._newton` on :class:`FreeField` (the same arguments and
+    results; the feet start from and end in ``sides``), in blocks of ``_BLOCK`` nodes."""
+    field = FreeField(sides)
+    n = rows.size
+    ra, rb = ra_all[rows], rb_all[rows]
+    w = [1.0 - ra, 1.0 - rb, ra, rb]
+    xs = np.ascontiguousarray(p.T, dtype=np.float64)
+    t0 = [sides.t[k][rows] if field.tracked[k] else None for k in range(4)]
+    t1 = [sides.t_alt[k][rows] if field.tracked[k] else None for k in range(4)]
+    res = np.empty(n)
+    t_out: list[FloatArray | None] = [None if f is None else np.empty(n) for f in t0]
+    d_out: list[FloatArray | None] = [None if f is None else np.empty(n) for f in t0]
+    diag = sides.region.diagonal
+    it = 0
+    for s in range(0, n, _BLOCK):
+        e = min(n, s + _BLOCK)
+        sl = slice(s, e)
+        bx, br, bt, bd, bit = _newton_block(
+            field,
+            xs[:, sl],
+            [v[sl] for v in w],
+            [None if f is None else f[sl] for f in t0],
+            [None if f is None else f[sl] for f in t1],
+            tol,
+            diag,
+            iters,
+            track_step,
+        )
+        xs[:, sl], res[sl] = bx, br
+        for k in range(4):
+            to, do, tb, db = t_out[k], d_out[k], bt[k], bd[k]
+            if to is not None and do is not None and tb is not None and db is not None:
+                to[sl], do[sl] = tb, db
+        it = max(it, bit)
+    for k in range(4):
+        to, do = t_out[k], d_out[k]
+        if to is not None and do is not None:
+            sides.t[k][rows], sides.d[k][rows] = to, do
+            sides.t_alt[k][rows] = np.nan
+    return np.ascontiguousarray(xs.T), it, res
+
+
+def _newton_block(
+    field: FreeField,
+    xs0: FloatArray,
+    w: list[FloatArray],
+    t0: list[FloatArray | None],
+    t1: list[FloatArray | None],
+    tol: float,
+    diag: float,
+    iters: int,
+    track_step: float,
+) -> tuple[FloatArray, FloatArray, list[FloatArray | None], list[FloatArray | None], int]:
+    """One block of :func:`newton_free`: nodes (2, n), residuals, feet and distances per
+    side, iterations. Converged rows leave the working arrays once they are half of them."""
+    n = xs0.shape[1]
+    out_x, out_res = xs0.copy(), np.empty(n)
+    g, t, d = field.evaluate(xs0, w, t0, None, t1)
+    out_t: list[FloatArray | None] = [None if f is None else f.copy() for f in t]
+    out_d: list[FloatArray | None] = [None if f is None else f.copy() for f in d]
+    xs = out_x.copy()
+    res = np.sqrt(g[0] * g[0] + g[3] * g[3])
+    rows = np.arange(n)  # block rows held in the working arrays
+    max_step = 0.1 * diag
+    it = 0
+
+    def store(sel: np.ndarray | slice, at: np.ndarray) -> None:
+        out_x[:, at], out_res[at] = xs[:, sel], res[sel]
+        for k in range(4):
+            to, tk, do, dk = out_t[k], t[k], out_d[k], d[k]
+            if to is not None and tk is not None and do is not None and dk is not None:
+                to[at], do[at] = tk[sel], dk[sel]
+
+    while True:
+        hot = res > tol
+        count = int(np.count_nonzero(hot))
+        if count == 0 or it == iters:
+            break
+        if 2 * count <= rows.size:  # compact: keep the unconverged rows only
+            done = np.flatnonzero(~hot)
+            store(done, rows[done])
+            keep = np.flatnonzero(hot)
+            rows, xs, res = rows[keep], xs[:, keep], res[keep]
+            g = [v[keep] for v in g]
+            w = [v[keep] for v in w]
+            t = [None if f is None else f[keep] for f in t]
+            d = [None if f is None else f[keep] for f in d]
+            hot = np.ones(rows.size, dtype=bool)
+        it += 1
+        ga, gax, gay, gb, gbx, gby = g
+        det = gax * gby - gay * gbx
+        safe = np.where(np.abs(det) > 1e-300, det, 1e-300)
+        sx = (gay * gb - gby * ga) / safe
+        sy = (gbx * ga - gax * gb) / safe
+        norm = np.sqrt(sx * sx + sy * sy)
+        cap = np.minimum(1.0, max_step / np.maximum(norm, 1e-300))
+        sx *= cap
+        sy *= cap
+        todo = np.flatnonzero(hot)
+        lam = 1.0
+        for _ in range(_BACKTRACKS):  # backtracking on the residual
+            whole = todo.size == rows.size
+            q = np.empty((2, todo.size))
+            if whole:
+                np.multiply(sx, lam, out=q[0])
+                np.multiply(sy, lam, out=q[1])
+                q += xs
+            else:
+                q[0] = xs[0, todo] + lam * sx[todo]
+                q[1] = xs[1, todo] + lam * sy[todo]
+            # feet are tracked for small moves only: a long step may cross the place where a
+            # foot jumps to another part of its side, which only a global query sees
+            long = lam * (norm if whole else norm[todo]) > track_step * diag
+            wt = w if whole else [v[todo] for v in w]
+            tt = t if whole else [None if f is None else f[todo] for f in t]
+            ng, nt, nd = field.evaluate(q, wt, tt, long if long.any() else None)
+            nres = np.sqrt(ng[0] * ng[0] + ng[3] * ng[3])
+            ok = nres < (res if whole else res[todo]) * (1.0 - 1e-4 * lam) + tol
+            if whole and ok.all():
+                xs, res, g, t, d = q, nres, ng, nt, nd
+                todo = todo[:0]
+                break
+            acc = todo[ok]
+            xs[:, acc], res[acc] = q[:, ok], nres[ok]
+            for v, nv in zip(g, ng, strict=True):
+                v[acc] = nv[ok]
+            for k in range(4):
+                tk, ntk, dk, ndk = t[k], nt[k], d[k], nd[k]
+                if tk is not None and ntk is not None and dk is not None and ndk is not None:
+                    tk[acc], dk[acc] = ntk[ok], ndk[ok]
+            todo = todo[~ok]
+            if todo.size == 0:
+                break
+            lam *= 0.5
+    store(slice(None), rows)
+    return out_x, out_res, out_t, out_d, it
