@@ -7,6 +7,7 @@ Methods are vectorised: ``t`` has shape ``(n,)``, points ``(n, dim)``.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -233,7 +234,7 @@ def _track_block(
 ) -> tuple[FloatArray, FloatArray]:
     """:func:`track_closest` on one block: feet (n,) and foot points (n, dim)."""
     if curve.jet_rows(t[:1]) is not None:
-        t, foot_rows = _track_rows(curve, np.ascontiguousarray(x.T), t, step_tol, iters)
+        t, foot_rows = track_rows(curve, np.ascontiguousarray(x.T), t, step_tol, iters)
         return t, foot_rows.T
     t = t.copy()
     foot = np.empty_like(x)
@@ -280,35 +281,58 @@ def _track_block(
     return t, foot
 
 
+#: component-row jets of the points ``rows`` (indices or a slice; None: all) of a tracking
+#: at parameters ``t``
+RowJet = Callable[[FloatArray, "np.ndarray | slice | None"], "FloatArray | None"]
+
+
 def track_rows(
-    curve: Curve, xs: FloatArray, t0: FloatArray, step_tol: float = 1e-6, iters: int = 8
+    curve: Curve | RowJet,
+    xs: FloatArray,
+    t0: FloatArray,
+    step_tol: float | FloatArray = 1e-6,
+    iters: int = 8,
 ) -> tuple[FloatArray, FloatArray]:
     """:func:`track_closest` for points given as component rows ``xs`` (dim, n), on a
-    curve with :meth:`Curve.jet_rows`: feet (n,) and foot points as rows (dim, n)."""
+    curve with :meth:`Curve.jet_rows` (or, for several curves at once, a :data:`RowJet`
+    that evaluates each point's own curve, with ``step_tol`` then per point): feet (n,) and
+    foot points as rows (dim, n)."""
     t = np.minimum(np.maximum(np.asarray(t0, dtype=np.float64), 0.0), 1.0)
+    if isinstance(curve, Curve):
+        single = curve
+        jet: RowJet = lambda tr, rows: single.jet_rows(tr)  # noqa: E731
+    else:
+        jet = curve
     if t.size <= _TRACK_BLOCK:
-        return _track_rows(curve, xs, t, step_tol, iters)
+        return _track_rows(jet, xs, t, step_tol, iters)
     foot = np.empty(xs.shape)
-    for s in range(0, t.size, _TRACK_BLOCK):
+    per_row = np.ndim(step_tol) > 0
+    for s in range(0, t.size, _TRACK_BLOCK):  # blocks: the temporaries stay in cache
         e = min(t.size, s + _TRACK_BLOCK)
-        t[s:e], foot[:, s:e] = _track_rows(curve, xs[:, s:e], t[s:e], step_tol, iters)
+
+        def block(tr: FloatArray, rows: np.ndarray | slice | None, s: int = s, e: int = e):
+            return jet(tr, slice(s, e) if rows is None else np.asarray(rows) + s)
+
+        tol = step_tol[s:e] if per_row else step_tol  # type: ignore[index]
+        t[s:e], foot[:, s:e] = _track_rows(block, xs[:, s:e], t[s:e], tol, iters)
     return t, foot
 
 
 def _track_rows(
-    curve: Curve, xs: FloatArray, t: FloatArray, step_tol: float, iters: int
+    jet: RowJet, xs: FloatArray, t: FloatArray, step_tol: float | FloatArray, iters: int
 ) -> tuple[FloatArray, FloatArray]:
-    """:func:`_track_block` on the curve's component rows (:meth:`Curve.jet_rows`, points
-    ``xs`` (dim, n)): the same steps and stopping rule, coordinates as contiguous rows;
-    feet (n,) and foot points (dim, n)."""
+    """:func:`_track_block` on component rows (``jet``: :meth:`Curve.jet_rows` of the rows'
+    curve; points ``xs`` (dim, n)): the same steps and stopping rule, coordinates as
+    contiguous rows; feet (n,) and foot points (dim, n)."""
     dim = xs.shape[0]
     t = t.copy()
     foot = np.empty((dim, t.size))
+    per_row = np.ndim(step_tol) > 0
     rows: np.ndarray | None = None  # rows still moving (None: all)
     for it in range(iters):
         tr = t if rows is None else t[rows]
         xr = xs if rows is None else xs[:, rows]
-        w = curve.jet_rows(tr)
+        w = jet(tr, rows)
         assert w is not None
         c0, c1, c2 = w[:dim], w[dim : 2 * dim], w[2 * dim :]
         c = c0 - xr
@@ -335,7 +359,8 @@ def _track_rows(
         if it == iters - 1:
             done = np.ones(tr.size, dtype=bool)
         else:  # a short Newton step, or a foot held at an end of the curve
-            done = (np.abs(ds) <= step_tol) & ((dg > 0.0) | (ds == 0.0))
+            tol = step_tol if not per_row or rows is None else step_tol[rows]  # type: ignore[index]
+            done = (np.abs(ds) <= tol) & ((dg > 0.0) | (ds == 0.0))
         half = 0.5 * ds
         c2 *= half
         c2 += c1

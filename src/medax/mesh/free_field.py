@@ -22,6 +22,7 @@ import numpy as np
 
 from medax.geometry._types import FloatArray
 from medax.geometry.arc import Arc
+from medax.geometry.bspline import BSpline, stacked_jet
 from medax.geometry.curve import Curve, has_closed_form_closest, track_rows
 from medax.geometry.line import Line
 from medax.geometry.region import Region
@@ -56,6 +57,13 @@ class FreeField:
             for c in self.curves
         ]
         self.step_tol = list(getattr(sides, "step_tol", [1e-6] * 4))
+        # the tracked sides in one table (curve j of them on parameters 2 j + t)
+        free = [c for c, tr in zip(self.curves, self.tracked, strict=True) if tr]
+        self.table = None
+        if free and all(type(c) is BSpline for c in free):
+            self.table = BSpline.stacked_rows(free)  # type: ignore[arg-type]
+        order = np.cumsum(self.tracked) - 1
+        self.offset = [2.0 * float(order[k]) for k in range(4)]
 
     @staticmethod
     def supports(region: Region, kinds: tuple[str, str]) -> bool:
@@ -77,58 +85,94 @@ class FreeField:
             free = True
         return free
 
-    def term(
+    def _feet(
         self,
-        k: int,
         xs: FloatArray,
-        w: FloatArray,
-        t0: FloatArray | None,
-        cold: np.ndarray | None = None,
-        t1: FloatArray | None = None,
-    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray | None, FloatArray | None]:
-        """``w d``, ``w ux``, ``w uy`` (each (n,)) of side ``k`` at points ``xs`` (2, n), and
-        on a tracked side its feet and distances (None elsewhere): tracked from ``t0``
-        except on rows ``cold`` (bool, or None: none) and rows where ``t0`` is NaN, found
-        by a global query there; rows with a second start in ``t1`` (NaN: none) track it
-        too and keep the nearer foot."""
-        x, y = xs[0], xs[1]
-        if not self.tracked[k]:
-            if type(self.curves[k]) is Line:
-                wd, gx, gy = _segment_term(self.consts[k], x, y, w, True)
+        t0: list[FloatArray | None],
+        cold: np.ndarray | None,
+        t1: list[FloatArray | None] | None,
+    ) -> tuple[list[FloatArray | None], list[FloatArray | None]]:
+        """Feet (n,) and foot points (2, n) on every tracked side (None on the others) of
+        points ``xs`` (2, n): tracked from ``t0`` except on rows ``cold`` (bool, or None:
+        none) and rows where ``t0`` is NaN, found by a global query there; rows with a
+        second start in ``t1`` (NaN: none) track it too and keep the nearer foot. The
+        tracked sides' Newton runs once for all of them (:func:`stacked_jet`)."""
+        n = xs.shape[1]
+        t_out: list[FloatArray | None] = [None] * 4
+        f_out: list[FloatArray | None] = [None] * 4
+        # (side, rows or None for all, starts) of the tracking, in order
+        runs: list[tuple[int, np.ndarray | None, FloatArray]] = []
+        alts: list[tuple[int, np.ndarray, FloatArray]] = []
+        colds: list[tuple[int, np.ndarray]] = []
+        for k in range(4):
+            tk = t0[k]
+            if not self.tracked[k] or tk is None:
+                continue
+            nan = np.isnan(tk)
+            ck = nan if cold is None else (cold | nan)
+            if ck.any():
+                iw = np.flatnonzero(~ck)
+                runs.append((k, iw, tk[iw]))
+                colds.append((k, np.flatnonzero(ck)))
             else:
-                wd, gx, gy = _arc_term(self.consts[k], x, y, w, True)
-            return wd, gx, gy, None, None
-        assert t0 is not None
-        curve, tol = self.curves[k], self.step_tol[k]
-        nan = np.isnan(t0)
-        if nan.any():
-            cold = nan if cold is None else (cold | nan)
-        if cold is None or not cold.any():
-            t, foot = track_rows(curve, xs, t0, tol)
-        else:
-            t, foot = np.empty(x.size), np.empty((2, x.size))
-            iw, ic = np.flatnonzero(~cold), np.flatnonzero(cold)
-            if iw.size:
-                t[iw], foot[:, iw] = track_rows(curve, xs[:, iw], t0[iw], tol)
-            c = curve.closest(xs[:, ic].T)
-            t[ic], foot[:, ic] = c.t, c.foot.T
-        rx, ry = x - foot[0], y - foot[1]
-        d = rx * rx
-        d += ry * ry
-        np.sqrt(d, out=d)
-        if t1 is not None:
-            two = np.flatnonzero(~np.isnan(t1) & ~nan)
-            if two.size:
-                ta, fa = track_rows(curve, xs[:, two], t1[two], tol)
-                ax, ay = x[two] - fa[0], y[two] - fa[1]
-                da = np.sqrt(ax * ax + ay * ay)
-                better = da < d[two]
-                sel = two[better]
-                t[sel], d[sel], rx[sel], ry[sel] = ta[better], da[better], ax[better], ay[better]
-        f = w / np.maximum(d, _TINY)
-        rx *= f
-        ry *= f
-        return w * d, rx, ry, t, d
+                runs.append((k, None, tk))
+            alt = None if t1 is None else t1[k]
+            if alt is not None:
+                two = np.flatnonzero(~np.isnan(alt) & ~nan)
+                if two.size:
+                    alts.append((k, two, alt[two]))
+        every = runs + alts
+        starts = np.concatenate([r[2] for r in every])
+        pts = np.concatenate([xs if r[1] is None else xs[:, r[1]] for r in every], axis=1)
+        sizes = [r[2].size for r in every]
+        if self.table is not None:
+            table = self.table
+            offset = np.concatenate(
+                [np.full(m, self.offset[r[0]]) for r, m in zip(every, sizes, strict=True)]
+            )
+            tol = np.concatenate(
+                [np.full(m, self.step_tol[r[0]]) for r, m in zip(every, sizes, strict=True)]
+            )
+
+            def jet(tr: FloatArray, rows: np.ndarray | slice | None) -> FloatArray:
+                return stacked_jet(table, tr, offset if rows is None else offset[rows])
+
+            t_all, f_all = track_rows(jet, pts, starts, tol)
+        else:  # (curves that do not stack: one tracking per run)
+            res = [
+                track_rows(self.curves[r[0]], pts[:, a : a + m], starts[a : a + m],
+                           self.step_tol[r[0]])
+                for r, a, m in zip(every, np.cumsum([0, *sizes[:-1]]), sizes, strict=True)
+            ]  # fmt: skip
+            t_all = np.concatenate([q[0] for q in res])
+            f_all = np.concatenate([q[1] for q in res], axis=1)
+        a = 0
+        for k, rows, tk in runs:
+            m = tk.size
+            if rows is None:  # (views: the runs and the alternatives do not overlap)
+                t_out[k], f_out[k] = t_all[a : a + m], f_all[:, a : a + m]
+            else:
+                tn, fn = np.empty(n), np.empty((2, n))
+                tn[rows], fn[:, rows] = t_all[a : a + m], f_all[:, a : a + m]
+                t_out[k], f_out[k] = tn, fn
+            a += m
+        for k, rows in colds:
+            c = self.curves[k].closest(xs[:, rows].T)
+            tt, ff = t_out[k], f_out[k]
+            assert tt is not None and ff is not None
+            tt[rows], ff[:, rows] = c.t, c.foot.T
+        for k, rows, tk in alts:
+            m = tk.size
+            ta, fa = t_all[a : a + m], f_all[:, a : a + m]
+            a += m
+            tt, ff = t_out[k], f_out[k]
+            assert tt is not None and ff is not None
+            p = xs[:, rows]
+            ra, rb = p - fa, p - ff[:, rows]
+            better = np.flatnonzero(ra[0] * ra[0] + ra[1] * ra[1] < rb[0] * rb[0] + rb[1] * rb[1])
+            sel = rows[better]
+            tt[sel], ff[:, sel] = ta[better], fa[:, better]
+        return t_out, f_out
 
     def evaluate(
         self,
@@ -140,17 +184,38 @@ class FreeField:
     ) -> tuple[list[FloatArray], list[FloatArray | None], list[FloatArray | None]]:
         """Both equations at ``xs`` (2, n) with side weights ``w`` (per side (n,): ``1 - r``
         on sides 0 and 1, ``r`` on 2 and 3): ``[g_a, gax, gay, g_b, gbx, gby]``, the feet
-        and the distances per side (None on closed-form sides)."""
-        parts = [
-            self.term(k, xs, w[k], t0[k], cold, None if t1 is None else t1[k]) for k in range(4)
-        ]
+        and the distances per side (None on closed-form sides); feet as :meth:`_feet`."""
+        x, y = xs[0], xs[1]
+        feet: list[FloatArray | None] = [None] * 4
+        foot: list[FloatArray | None] = [None] * 4
+        if any(self.tracked):
+            feet, foot = self._feet(xs, t0, cold, t1)
+        parts: list[tuple[FloatArray, FloatArray, FloatArray]] = []
+        dist: list[FloatArray | None] = [None] * 4
+        for k in range(4):
+            fk = foot[k]
+            if fk is None:
+                if type(self.curves[k]) is Line:
+                    parts.append(_segment_term(self.consts[k], x, y, w[k], True))
+                else:
+                    parts.append(_arc_term(self.consts[k], x, y, w[k], True))
+                continue
+            rx, ry = x - fk[0], y - fk[1]
+            d = rx * rx
+            d += ry * ry
+            np.sqrt(d, out=d)
+            f = w[k] / np.maximum(d, _TINY)
+            rx *= f
+            ry *= f
+            parts.append((w[k] * d, rx, ry))
+            dist[k] = d
         g: list[FloatArray] = []
         for a, b in ((0, 2), (1, 3)):
             pa, pb = parts[a], parts[b]
             for v, u in ((pa[0], pb[0]), (pa[1], pb[1]), (pa[2], pb[2])):
                 v -= u
                 g.append(v)
-        return g, [p[3] for p in parts], [p[4] for p in parts]
+        return g, feet, dist
 
 
 def newton_free(
