@@ -366,8 +366,10 @@ def test_planar_field_only_for_closed_form_sides():
 @pytest.mark.parametrize(("name", "tol"), [("wavy", 0.0), ("wavy", 1e-6), ("bulge", 0.0)])
 def test_free_field_solve_gives_the_general_nodes(name, tol, monkeypatch):
     """The coordinate-row solve of free-form regions (:mod:`medax.mesh.free_field`, several
-    blocks) finds the nodes of the general solve, with the same counts of iterations and
-    global re-solves; regions it does not take go the general way."""
+    blocks) finds the nodes of the general solve, with the same counts of interpolated and
+    copied nodes (its feet after long steps are tracked and certified instead of queried,
+    so the global re-solves may differ by a few); regions it does not take go the general
+    way."""
     import medax.mesh.free_field as ff
 
     r = REGIONS[name] if name in REGIONS else _free_form_region(name)
@@ -380,8 +382,10 @@ def test_free_field_solve_gives_the_general_nodes(name, tol, monkeypatch):
     monkeypatch.setattr(ff.FreeField, "supports", staticmethod(lambda region, kinds: False))
     slow = mesh_region(r, (120, 97), tol=tol)
     assert np.abs(fast.params - slow.params).max() <= 1e-11 * r.diagonal
-    for key in ("interpolated", "copied", "global_resolved", "coarse_global_resolved"):
+    for key in ("interpolated", "copied", "coarse_interpolated", "coarse_copied"):
         assert fast.info[key] == slow.info[key]
+    for key in ("global_resolved", "coarse_global_resolved"):
+        assert abs(fast.info[key] - slow.info[key]) <= 3
 
 
 @pytest.mark.parametrize("name", ["trapezoid", "arcs", "annulus_sector"])

@@ -23,7 +23,7 @@ import numpy as np
 from medax.geometry._types import FloatArray
 from medax.geometry.arc import Arc
 from medax.geometry.bspline import BSpline, stacked_jet
-from medax.geometry.curve import Curve, has_closed_form_closest, track_rows
+from medax.geometry.curve import Curve, certify_closest, has_closed_form_closest, track_rows
 from medax.geometry.line import Line
 from medax.geometry.region import Region
 from medax.mesh.ratio_field import (
@@ -48,7 +48,8 @@ class FreeField:
     ``w u`` (``u`` the unit vector from the foot) in closed form for segments and arcs,
     from tracked feet for the others."""
 
-    def __init__(self, sides: SideDistances) -> None:
+    def __init__(self, sides: SideDistances, slack: float = 0.0) -> None:
+        self.slack = slack  # of the certification of feet tracked over long moves
         region = sides.region
         self.curves = [region.sides[k] for k in range(4)]
         self.tracked = [_tracked_curve(c) and type(c) not in (Line, Arc) for c in self.curves]
@@ -93,10 +94,13 @@ class FreeField:
         t1: list[FloatArray | None] | None,
     ) -> tuple[list[FloatArray | None], list[FloatArray | None]]:
         """Feet (n,) and foot points (2, n) on every tracked side (None on the others) of
-        points ``xs`` (2, n): tracked from ``t0`` except on rows ``cold`` (bool, or None:
-        none) and rows where ``t0`` is NaN, found by a global query there; rows with a
-        second start in ``t1`` (NaN: none) track it too and keep the nearer foot. The
-        tracked sides' Newton runs once for all of them (:func:`stacked_jet`)."""
+        points ``xs`` (2, n): tracked from ``t0``, found by a global query where ``t0`` is
+        NaN; on rows ``cold`` (bool, or None: none; points that moved far, past where a
+        foot may jump) tracked too, then certified global
+        (:func:`~medax.geometry.curve.certify_closest`, slack ``self.slack``) and queried
+        globally where that is not shown; rows with a second start in ``t1`` (NaN: none)
+        track it too and keep the nearer foot. The tracked sides' Newton runs once for all
+        of them (:func:`stacked_jet`)."""
         n = xs.shape[1]
         t_out: list[FloatArray | None] = [None] * 4
         f_out: list[FloatArray | None] = [None] * 4
@@ -104,18 +108,22 @@ class FreeField:
         runs: list[tuple[int, np.ndarray | None, FloatArray]] = []
         alts: list[tuple[int, np.ndarray, FloatArray]] = []
         colds: list[tuple[int, np.ndarray]] = []
+        checks: list[tuple[int, np.ndarray]] = []
         for k in range(4):
             tk = t0[k]
             if not self.tracked[k] or tk is None:
                 continue
             nan = np.isnan(tk)
-            ck = nan if cold is None else (cold | nan)
-            if ck.any():
-                iw = np.flatnonzero(~ck)
+            if nan.any():
+                iw = np.flatnonzero(~nan)
                 runs.append((k, iw, tk[iw]))
-                colds.append((k, np.flatnonzero(ck)))
+                colds.append((k, np.flatnonzero(nan)))
             else:
                 runs.append((k, None, tk))
+            if cold is not None:
+                far = np.flatnonzero(cold & ~nan)
+                if far.size:
+                    checks.append((k, far))
             alt = None if t1 is None else t1[k]
             if alt is not None:
                 two = np.flatnonzero(~np.isnan(alt) & ~nan)
@@ -156,6 +164,15 @@ class FreeField:
                 tn[rows], fn[:, rows] = t_all[a : a + m], f_all[:, a : a + m]
                 t_out[k], f_out[k] = tn, fn
             a += m
+        for k, rows in checks:  # (before the alternatives: those rows have none)
+            tt, ff = t_out[k], f_out[k]
+            assert tt is not None and ff is not None
+            p = xs[:, rows]
+            r = p - ff[:, rows]
+            d = np.sqrt(r[0] * r[0] + r[1] * r[1])
+            ok = certify_closest(self.curves[k], p.T, tt[rows], d, self.slack)
+            if not ok.all():
+                colds.append((k, rows[~ok]))
         for k, rows in colds:
             c = self.curves[k].closest(xs[:, rows].T)
             tt, ff = t_out[k], f_out[k]
@@ -230,7 +247,7 @@ def newton_free(
 ) -> tuple[FloatArray, int, FloatArray]:
     """:func:`medax.mesh.ratio_grid._newton` on :class:`FreeField` (the same arguments and
     results; the feet start from and end in ``sides``), in blocks of ``_BLOCK`` nodes."""
-    field = FreeField(sides)
+    field = FreeField(sides, tol)
     n = rows.size
     ra, rb = ra_all[rows], rb_all[rows]
     w = [1.0 - ra, 1.0 - rb, ra, rb]

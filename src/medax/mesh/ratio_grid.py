@@ -215,7 +215,8 @@ def _grid(
     counts["interpolated"] = float(m - rows.size - fine.size)
     for key in ("newton_iterations", "global_resolved", "interpolated", "copied"):
         counts[f"coarse_{key}"] = coarse_counts.get(key, 0) + coarse_counts.get(f"coarse_{key}", 0)
-    out_feet = _level_feet(region, grid, feet0, feet, rows, kinds) if with_feet else []
+    own = [(idx[k], side_t[0][k][0]) for k in range(4)]
+    out_feet = _level_feet(region, grid, feet0, feet, rows, kinds, own) if with_feet else []
     return _Level(grid, out_feet, error, moved, counts)
 
 
@@ -226,19 +227,22 @@ def _level_feet(
     solved: list[FloatArray],
     rows: np.ndarray,
     kinds: tuple[str, str],
+    own: list[tuple[np.ndarray, FloatArray]],
 ) -> list[FloatArray]:
     """Feet (n2 + 1, n1 + 1) of every node of ``grid`` on each tracked side: those the
     solve found at the interior nodes ``rows``, the interpolated ``start`` (2, m) at the
-    others (all interior nodes solved if None), a global query on the boundary."""
+    others (all interior nodes solved if None), on the boundary a global query, or the
+    node's own parameter on its own side (``own``: per side, node indices and
+    parameters)."""
     if start is None:
-        return _full_feet(region, grid, solved, kinds)
+        return _full_feet(region, grid, solved, kinds, own)
     inner = []
     for k in range(4):
         f = start[k][0].copy() if start[k].size else start[k]
         if f.size:
             f[rows] = solved[k]
         inner.append(f)
-    return _full_feet(region, grid, inner, kinds)
+    return _full_feet(region, grid, inner, kinds, own)
 
 
 def _coincident(n1: int, n2: int, coarse: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
@@ -285,23 +289,34 @@ def _targets(
 
 
 def _full_feet(
-    region: Region, grid: FloatArray, inner: list[FloatArray], kinds: tuple[str, str]
+    region: Region,
+    grid: FloatArray,
+    inner: list[FloatArray],
+    kinds: tuple[str, str],
+    own: list[tuple[np.ndarray, FloatArray]],
 ) -> list[FloatArray]:
     """Feet (n2 + 1, n1 + 1) on each tracked side: interior ones from the solve, boundary
-    ones by a global query (few points); empty arrays for untracked sides."""
+    ones by a global query (few points), except on the side's own boundary nodes (``own``:
+    per side, node indices and parameters), which lie on it; empty arrays for untracked
+    sides."""
     n2, n1 = grid.shape[0] - 1, grid.shape[1] - 1
     sides = SideDistances(region, 0, kinds)
     out: list[FloatArray] = []
     ring = np.ones((n2 + 1, n1 + 1), dtype=bool)
     ring[1:-1, 1:-1] = False
-    x = region.embedding.evaluate(grid[ring])
+    flat = grid.reshape(-1, 2)
     for k in range(4):
         if not sides.tracked[k]:
             out.append(np.empty(0))
             continue
         t = np.empty((n2 + 1, n1 + 1))
         t[1:-1, 1:-1] = inner[k].reshape(n2 - 1, n1 - 1)
-        t[ring] = sides.curves[k].closest(x).t
+        tf = t.reshape(-1)
+        others = ring.copy().reshape(-1)
+        others[own[k][0]] = False
+        at = np.flatnonzero(others)
+        tf[at] = sides.curves[k].closest(region.embedding.evaluate(flat[at])).t
+        tf[own[k][0]] = own[k][1]
         out.append(t)
     return out
 
