@@ -505,9 +505,10 @@ _THREE = np.arange(-1, 2)
 #: a Newton step on the foot parameter at most this long ends a row: Newton converging
 #: quadratically, the foot parameter is then off by about ``K s^2`` (``K = g'' / 2 g'``),
 #: ~1e-16. Far from the curve the distance is stationary at the foot and would allow far
-#: longer steps (``track_closest`` stops at 1e-6); near it (the deviation check's points on
-#: the surfaces) the distance is off by ``|C'| K s^2``: 1e-6 left 3e-12 on a merged face's
-#: profile, 1e-8 leaves round-off, at no measurable cost on the wavy axis (27 - 29 ms both)
+#: longer steps (``track_closest`` stops at 1e-6 by default, the mesher's at up to 1e-4);
+#: near it (the deviation check's points on the surfaces) the distance is off by
+#: ``|C'| K s^2``: 1e-6 left 3e-12 on a merged face's profile, 1e-8 leaves round-off, at
+#: no measurable cost on the wavy axis (27 - 29 ms both)
 _STEP_TOL = 1e-8
 
 
