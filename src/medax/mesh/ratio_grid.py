@@ -33,6 +33,7 @@ from medax import tolerances
 from medax.errors import MeshError
 from medax.geometry._types import FloatArray
 from medax.geometry.certify import PointGroups, certify_many, group_cells
+from medax.geometry.curve import Curve, certify_closest, track_closest
 from medax.geometry.region import Region
 from medax.mesh.boundary_nodes import RULES, side_params
 from medax.mesh.coarse_start import (
@@ -216,7 +217,7 @@ def _grid(
     for key in ("newton_iterations", "global_resolved", "interpolated", "copied"):
         counts[f"coarse_{key}"] = coarse_counts.get(key, 0) + coarse_counts.get(f"coarse_{key}", 0)
     own = [(idx[k], side_t[0][k][0]) for k in range(4)]
-    out_feet = _level_feet(region, grid, feet0, feet, rows, kinds, own) if with_feet else []
+    out_feet = _level_feet(region, grid, feet0, feet, rows, kinds, own, tol) if with_feet else []
     return _Level(grid, out_feet, error, moved, counts)
 
 
@@ -228,6 +229,7 @@ def _level_feet(
     rows: np.ndarray,
     kinds: tuple[str, str],
     own: list[tuple[np.ndarray, FloatArray]],
+    tol: float,
 ) -> list[FloatArray]:
     """Feet (n2 + 1, n1 + 1) of every node of ``grid`` on each tracked side: those the
     solve found at the interior nodes ``rows``, the interpolated ``start`` (2, m) at the
@@ -235,14 +237,14 @@ def _level_feet(
     node's own parameter on its own side (``own``: per side, node indices and
     parameters)."""
     if start is None:
-        return _full_feet(region, grid, solved, kinds, own)
+        return _full_feet(region, grid, solved, kinds, own, tol)
     inner = []
     for k in range(4):
         f = start[k][0].copy() if start[k].size else start[k]
         if f.size:
             f[rows] = solved[k]
         inner.append(f)
-    return _full_feet(region, grid, inner, kinds, own)
+    return _full_feet(region, grid, inner, kinds, own, tol)
 
 
 def _coincident(n1: int, n2: int, coarse: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
@@ -288,12 +290,31 @@ def _targets(
     return ra.ravel(), rb.ravel(), (rows, cols)
 
 
+def _ring_feet(
+    curve: Curve, x: FloatArray, t: FloatArray, at: np.ndarray, tol: float
+) -> FloatArray:
+    """Global feet (len(at),) on ``curve`` of the boundary nodes ``at`` (flat indices into
+    the grid's feet ``t`` (n2 + 1, n1 + 1), interior ones known) at points ``x``: tracked
+    from the nearest interior node's foot, certified global
+    (:func:`~medax.geometry.curve.certify_closest`, slack ``tol``), a global query where
+    that is not shown."""
+    n2, n1 = t.shape[0] - 1, t.shape[1] - 1
+    j, i = np.divmod(at, n1 + 1)
+    start = t[np.clip(j, 1, n2 - 1), np.clip(i, 1, n1 - 1)]
+    c = track_closest(curve, x, start)
+    ok = certify_closest(curve, x, c.t, c.distance, tol)
+    if not ok.all():
+        c.t[~ok] = curve.closest(x[~ok]).t
+    return c.t
+
+
 def _full_feet(
     region: Region,
     grid: FloatArray,
     inner: list[FloatArray],
     kinds: tuple[str, str],
     own: list[tuple[np.ndarray, FloatArray]],
+    tol: float = 0.0,
 ) -> list[FloatArray]:
     """Feet (n2 + 1, n1 + 1) on each tracked side: interior ones from the solve, boundary
     ones by a global query (few points), except on the side's own boundary nodes (``own``:
@@ -315,7 +336,7 @@ def _full_feet(
         others = ring.copy().reshape(-1)
         others[own[k][0]] = False
         at = np.flatnonzero(others)
-        tf[at] = sides.curves[k].closest(region.embedding.evaluate(flat[at])).t
+        tf[at] = _ring_feet(sides.curves[k], region.embedding.evaluate(flat[at]), t, at, tol)
         tf[own[k][0]] = own[k][1]
         out.append(t)
     return out
