@@ -503,3 +503,32 @@ def test_stacked_jets_equal_each_curves_own():
         assert np.array_equal(got, c.jet_rows(t))
         c0, c1, c2 = c.jet(t)
         np.testing.assert_allclose(got, np.vstack((c0.T, c1.T, c2.T)), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("name", "divisions", "tol"), [("wavy", (512, 512), 1e-6), ("wavy", (300, 200), 0.0),
+                                   ("bulge", (256, 256), 1e-6)],
+)  # fmt: skip
+def test_solved_nodes_meet_the_residual_with_global_distances(name, divisions, tol, monkeypatch):
+    """Every node the solve returns (at every level), including those whose last Newton step
+    was taken on its Taylor bound without an evaluation at its end
+    (:func:`medax.mesh.free_field._newton_block`), meets both equations to the residual
+    tolerance with distances to the sides measured by global queries."""
+    r = REGIONS[name] if name in REGIONS else _free_form_region(name)
+    seen = []
+    solve = rg._solve
+
+    def spy(region, p, ra, rb, ntol, kinds, *a, **k):
+        out = solve(region, p, ra, rb, ntol, kinds, *a, **k)
+        seen.append((region, out[0], ra, rb, ntol))
+        return out
+
+    monkeypatch.setattr(rg, "_solve", spy)
+    mesh_region(r, divisions, tol=tol)
+    assert len(seen) >= 3
+    for region, p, ra, rb, ntol in seen:
+        if p.shape[0] == 0:
+            continue
+        d = [region.sides[k].closest(p).distance for k in range(4)]
+        res = np.hypot((1 - ra) * d[0] - ra * d[2], (1 - rb) * d[1] - rb * d[3])
+        assert res.max() <= ntol * (1 + 1e-6)

@@ -234,7 +234,7 @@ def _track_block(
 ) -> tuple[FloatArray, FloatArray]:
     """:func:`track_closest` on one block: feet (n,) and foot points (n, dim)."""
     if curve.jet_rows(t[:1]) is not None:
-        t, foot_rows = track_rows(curve, np.ascontiguousarray(x.T), t, step_tol, iters)
+        t, foot_rows, _ = track_rows(curve, np.ascontiguousarray(x.T), t, step_tol, iters)
         return t, foot_rows.T
     t = t.copy()
     foot = np.empty_like(x)
@@ -292,11 +292,14 @@ def track_rows(
     t0: FloatArray,
     step_tol: float | FloatArray = 1e-6,
     iters: int = 8,
-) -> tuple[FloatArray, FloatArray]:
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     """:func:`track_closest` for points given as component rows ``xs`` (dim, n), on a
     curve with :meth:`Curve.jet_rows` (or, for several curves at once, a :data:`RowJet`
     that evaluates each point's own curve, with ``step_tol`` then per point): feet (n,) and
-    foot points as rows (dim, n)."""
+    foot points as rows (dim, n), and ``|(C - x) . C''| / g'`` at the last step (n,; the
+    curvature term of the distance's Hessian times the distance, see
+    :mod:`medax.mesh.free_field`; 0 for a foot held at an end, inf away from a local
+    minimum or where the steps ran out before one was short enough)."""
     t = np.minimum(np.maximum(np.asarray(t0, dtype=np.float64), 0.0), 1.0)
     if isinstance(curve, Curve):
         single = curve
@@ -305,7 +308,7 @@ def track_rows(
         jet = curve
     if t.size <= _TRACK_BLOCK:
         return _track_rows(jet, xs, t, step_tol, iters)
-    foot = np.empty(xs.shape)
+    foot, curv = np.empty(xs.shape), np.empty(t.size)
     per_row = np.ndim(step_tol) > 0
     for s in range(0, t.size, _TRACK_BLOCK):  # blocks: the temporaries stay in cache
         e = min(t.size, s + _TRACK_BLOCK)
@@ -314,19 +317,20 @@ def track_rows(
             return jet(tr, slice(s, e) if rows is None else np.asarray(rows) + s)
 
         tol = step_tol[s:e] if per_row else step_tol  # type: ignore[index]
-        t[s:e], foot[:, s:e] = _track_rows(block, xs[:, s:e], t[s:e], tol, iters)
-    return t, foot
+        t[s:e], foot[:, s:e], curv[s:e] = _track_rows(block, xs[:, s:e], t[s:e], tol, iters)
+    return t, foot, curv
 
 
 def _track_rows(
     jet: RowJet, xs: FloatArray, t: FloatArray, step_tol: float | FloatArray, iters: int
-) -> tuple[FloatArray, FloatArray]:
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     """:func:`_track_block` on component rows (``jet``: :meth:`Curve.jet_rows` of the rows'
     curve; points ``xs`` (dim, n)): the same steps and stopping rule, coordinates as
-    contiguous rows; feet (n,) and foot points (dim, n)."""
+    contiguous rows; feet (n,), foot points (dim, n) and the curvature terms of
+    :func:`track_rows`."""
     dim = xs.shape[0]
     t = t.copy()
-    foot = np.empty((dim, t.size))
+    foot, curv = np.empty((dim, t.size)), np.empty(t.size)
     per_row = np.ndim(step_tol) > 0
     rows: np.ndarray | None = None  # rows still moving (None: all)
     for it in range(iters):
@@ -356,11 +360,16 @@ def _track_rows(
             t = new
         else:
             t[rows] = new
-        if it == iters - 1:
-            done = np.ones(tr.size, dtype=bool)
-        else:  # a short Newton step, or a foot held at an end of the curve
-            tol = step_tol if not per_row or rows is None else step_tol[rows]  # type: ignore[index]
-            done = (np.abs(ds) <= tol) & ((dg > 0.0) | (ds == 0.0))
+        # a short Newton step, or a foot held at an end of the curve
+        tol = step_tol if not per_row or rows is None else step_tol[rows]  # type: ignore[index]
+        settled = (np.abs(ds) <= tol) & ((dg > 0.0) | (ds == 0.0))
+        done = settled if it < iters - 1 else np.ones(tr.size, dtype=bool)
+        # |(C - x) . C''| / g'; 0 for a foot held at an end where g' <= 0 (the distance is to
+        # the end point there); inf away from a local minimum or where the steps ran out
+        # unsettled (the foot, and its Taylor point, may then be off)
+        kap = np.where(dg > 0.0, np.abs(dg - speed2) / den, np.inf)
+        kap[(dg <= 0.0) & (ds == 0.0) & ((new == 0.0) | (new == 1.0))] = 0.0
+        kap[~settled] = np.inf
         half = 0.5 * ds
         c2 *= half
         c2 += c1
@@ -368,14 +377,14 @@ def _track_rows(
         c2 += c0  # C(t) + C'(t) ds + C''(t) ds^2 / 2
         if done.all():
             if rows is None:
-                foot = c2
+                foot, curv = c2, kap
             else:
-                foot[:, rows] = c2
+                foot[:, rows], curv[rows] = c2, kap
             break
         idx = np.flatnonzero(done) if rows is None else rows[done]
-        foot[:, idx] = c2[:, done]
+        foot[:, idx], curv[idx] = c2[:, done], kap[done]
         rows = np.flatnonzero(~done) if rows is None else rows[~done]
-    return t, foot
+    return t, foot, curv
 
 
 def certify_closest(

@@ -37,6 +37,7 @@ from medax.mesh.ratio_field import (
 _TINY = np.finfo(float).tiny
 _BLOCK = 16384  # nodes solved together (the temporaries stay in cache)
 _BACKTRACKS = 12
+_LOCAL = 0.05  # a step unevaluated only if at most this times each distance's curvature radius
 
 
 def _tracked_curve(c: Curve) -> bool:
@@ -92,8 +93,9 @@ class FreeField:
         t0: list[FloatArray | None],
         cold: np.ndarray | None,
         t1: list[FloatArray | None] | None,
-    ) -> tuple[list[FloatArray | None], list[FloatArray | None]]:
-        """Feet (n,) and foot points (2, n) on every tracked side (None on the others) of
+    ) -> tuple[list[FloatArray | None], list[FloatArray | None], list[FloatArray | None]]:
+        """Feet (n,), foot points (2, n) and curvature terms (n,; :func:`track_rows`, inf
+        where not known) on every tracked side (None on the others) of
         points ``xs`` (2, n): tracked from ``t0``, found by a global query where ``t0`` is
         NaN; on rows ``cold`` (bool, or None: none; points that moved far, past where a
         foot may jump) tracked too, then certified global
@@ -145,7 +147,7 @@ class FreeField:
             def jet(tr: FloatArray, rows: np.ndarray | slice | None) -> FloatArray:
                 return stacked_jet(table, tr, offset if rows is None else offset[rows])
 
-            t_all, f_all = track_rows(jet, pts, starts, tol)
+            t_all, f_all, h_all = track_rows(jet, pts, starts, tol)
         else:  # (curves that do not stack: one tracking per run)
             res = [
                 track_rows(self.curves[r[0]], pts[:, a : a + m], starts[a : a + m],
@@ -154,15 +156,19 @@ class FreeField:
             ]  # fmt: skip
             t_all = np.concatenate([q[0] for q in res])
             f_all = np.concatenate([q[1] for q in res], axis=1)
+            h_all = np.concatenate([q[2] for q in res])
+        h_out: list[FloatArray | None] = [None] * 4
         a = 0
         for k, rows, tk in runs:
             m = tk.size
             if rows is None:  # (views: the runs and the alternatives do not overlap)
                 t_out[k], f_out[k] = t_all[a : a + m], f_all[:, a : a + m]
+                h_out[k] = h_all[a : a + m]
             else:
-                tn, fn = np.empty(n), np.empty((2, n))
+                tn, fn, hn = np.empty(n), np.empty((2, n)), np.full(n, np.inf)
                 tn[rows], fn[:, rows] = t_all[a : a + m], f_all[:, a : a + m]
-                t_out[k], f_out[k] = tn, fn
+                hn[rows] = h_all[a : a + m]
+                t_out[k], f_out[k], h_out[k] = tn, fn, hn
             a += m
         for k, rows in checks:  # (before the alternatives: those rows have none)
             tt, ff = t_out[k], f_out[k]
@@ -175,9 +181,9 @@ class FreeField:
                 colds.append((k, rows[~ok]))
         for k, rows in colds:
             c = self.curves[k].closest(xs[:, rows].T)
-            tt, ff = t_out[k], f_out[k]
-            assert tt is not None and ff is not None
-            tt[rows], ff[:, rows] = c.t, c.foot.T
+            tt, ff, hh = t_out[k], f_out[k], h_out[k]
+            assert tt is not None and ff is not None and hh is not None
+            tt[rows], ff[:, rows], hh[rows] = c.t, c.foot.T, np.inf
         for k, rows, tk in alts:
             m = tk.size
             ta, fa = t_all[a : a + m], f_all[:, a : a + m]
@@ -189,7 +195,10 @@ class FreeField:
             better = np.flatnonzero(ra[0] * ra[0] + ra[1] * ra[1] < rb[0] * rb[0] + rb[1] * rb[1])
             sel = rows[better]
             tt[sel], ff[:, sel] = ta[better], fa[:, better]
-        return t_out, f_out
+            hh = h_out[k]
+            assert hh is not None
+            hh[sel] = h_all[a - m : a][better]
+        return t_out, f_out, h_out
 
     def evaluate(
         self,
@@ -198,30 +207,46 @@ class FreeField:
         t0: list[FloatArray | None],
         cold: np.ndarray | None = None,
         t1: list[FloatArray | None] | None = None,
-    ) -> tuple[list[FloatArray], list[FloatArray | None], list[FloatArray | None]]:
+    ) -> tuple[
+        list[FloatArray], list[FloatArray | None], list[FloatArray | None],
+        list[FloatArray | None], list[FloatArray],
+    ]:  # fmt: skip
         """Both equations at ``xs`` (2, n) with side weights ``w`` (per side (n,): ``1 - r``
-        on sides 0 and 1, ``r`` on 2 and 3): ``[g_a, gax, gay, g_b, gbx, gby]``, the feet
-        and the distances per side (None on closed-form sides); feet as :meth:`_feet`."""
+        on sides 0 and 1, ``r`` on 2 and 3): ``[g_a, gax, gay, g_b, gbx, gby]``; the feet,
+        distances and foot points (2, n) per side (None on closed-form sides), feet as
+        :meth:`_feet`; and per side a bound (n,) of the norm of the distance's Hessian at
+        the points: ``(|C'' . u| / g' + 1 / d)`` on a tracked side (the curvature of the
+        parallel curve through the point, ``1 / d`` where the foot is an end), ``1 / d`` on a
+        segment, ``1 / d + 1 / rho`` on an arc (``rho`` the distance to its centre)."""
         x, y = xs[0], xs[1]
         feet: list[FloatArray | None] = [None] * 4
         foot: list[FloatArray | None] = [None] * 4
+        curv: list[FloatArray | None] = [None] * 4
         if any(self.tracked):
-            feet, foot = self._feet(xs, t0, cold, t1)
+            feet, foot, curv = self._feet(xs, t0, cold, t1)
         parts: list[tuple[FloatArray, FloatArray, FloatArray]] = []
         dist: list[FloatArray | None] = [None] * 4
+        hess: list[FloatArray] = []
         for k in range(4):
-            fk = foot[k]
-            if fk is None:
+            fk, ck = foot[k], curv[k]
+            if fk is None or ck is None:
                 if type(self.curves[k]) is Line:
-                    parts.append(_segment_term(self.consts[k], x, y, w[k], True))
+                    part = _segment_term(self.consts[k], x, y, w[k], True)
+                    hess.append(w[k] / np.maximum(part[0], _TINY))
                 else:
-                    parts.append(_arc_term(self.consts[k], x, y, w[k], True))
+                    part = _arc_term(self.consts[k], x, y, w[k], True)
+                    cx, cy = self.consts[k][0], self.consts[k][1]
+                    rho = np.hypot(x - cx, y - cy)
+                    hess.append(w[k] / np.maximum(part[0], _TINY) + 1.0 / np.maximum(rho, _TINY))
+                parts.append(part)
                 continue
             rx, ry = x - fk[0], y - fk[1]
             d = rx * rx
             d += ry * ry
             np.sqrt(d, out=d)
-            f = w[k] / np.maximum(d, _TINY)
+            inv = 1.0 / np.maximum(d, _TINY)
+            hess.append((ck + 1.0) * inv)
+            f = w[k] * inv
             rx *= f
             ry *= f
             parts.append((w[k] * d, rx, ry))
@@ -232,7 +257,7 @@ class FreeField:
             for v, u in ((pa[0], pb[0]), (pa[1], pb[1]), (pa[2], pb[2])):
                 v -= u
                 g.append(v)
-        return g, feet, dist
+        return g, feet, dist, foot, hess
 
 
 def newton_free(
@@ -299,12 +324,21 @@ def _newton_block(
     track_step: float,
 ) -> tuple[FloatArray, FloatArray, list[FloatArray | None], list[FloatArray | None], int]:
     """One block of :func:`newton_free`: nodes (2, n), residuals, feet and distances per
-    side, iterations. Converged rows leave the working arrays once they are half of them."""
+    side, iterations. Converged rows leave the working arrays once they are half of them.
+
+    A full Newton step ``s`` whose remainder is bounded below ``tol / 2`` is taken without
+    evaluating the equations at its end: by Taylor's theorem each ``g`` there is at most
+    ``|s|^2 / 2`` times the largest norm of its Hessian along the step, bounded by twice the
+    weighted sum of the distances' Hessian bounds at its start (:meth:`FreeField.evaluate`;
+    only where ``|s|`` times each of those is at most ``_LOCAL``, so that they change by a
+    few per cent along it). The row's residual is then that bound, its feet stay (their
+    points lie on the sides: the distances to them, stored for the global check, are upper
+    bounds of the true ones, off by less than the bound)."""
     n = xs0.shape[1]
     out_x, out_res = xs0.copy(), np.empty(n)
-    g, t, d = field.evaluate(xs0, w, t0, None, t1)
-    out_t: list[FloatArray | None] = [None if f is None else f.copy() for f in t]
-    out_d: list[FloatArray | None] = [None if f is None else f.copy() for f in d]
+    g, t, d, f, h = field.evaluate(xs0, w, t0, None, t1)
+    out_t: list[FloatArray | None] = [None if v is None else v.copy() for v in t]
+    out_d: list[FloatArray | None] = [None if v is None else v.copy() for v in d]
     xs = out_x.copy()
     res = np.sqrt(g[0] * g[0] + g[3] * g[3])
     rows = np.arange(n)  # block rows held in the working arrays
@@ -330,8 +364,10 @@ def _newton_block(
             rows, xs, res = rows[keep], xs[:, keep], res[keep]
             g = [v[keep] for v in g]
             w = [v[keep] for v in w]
-            t = [None if f is None else f[keep] for f in t]
-            d = [None if f is None else f[keep] for f in d]
+            h = [v[keep] for v in h]
+            t = [None if v is None else v[keep] for v in t]
+            d = [None if v is None else v[keep] for v in d]
+            f = [None if v is None else v[:, keep] for v in f]
             hot = np.ones(rows.size, dtype=bool)
         it += 1
         ga, gax, gay, gb, gbx, gby = g
@@ -343,9 +379,27 @@ def _newton_block(
         cap = np.minimum(1.0, max_step / np.maximum(norm, 1e-300))
         sx *= cap
         sy *= cap
+        # full steps with a small enough remainder: taken unevaluated
+        top = np.maximum(np.maximum(h[0], h[1]), np.maximum(h[2], h[3]))
+        half = 0.5 * norm * norm
+        bound = 2.0 * np.hypot(
+            half * (w[0] * h[0] + w[2] * h[2]), half * (w[1] * h[1] + w[3] * h[3])
+        )
+        sure = hot & (cap == 1.0) & (norm * top <= _LOCAL) & (bound <= 0.5 * tol)
+        if sure.any():
+            jump = np.flatnonzero(sure)
+            xs[0, jump] += sx[jump]
+            xs[1, jump] += sy[jump]
+            res[jump] = bound[jump]
+            for k in range(4):
+                dk, fk = d[k], f[k]
+                if dk is not None and fk is not None:
+                    rx, ry = xs[0, jump] - fk[0, jump], xs[1, jump] - fk[1, jump]
+                    dk[jump] = np.sqrt(rx * rx + ry * ry)
+            hot &= ~sure
         todo = np.flatnonzero(hot)
         lam = 1.0
-        for _ in range(_BACKTRACKS):  # backtracking on the residual
+        for _ in range(_BACKTRACKS if todo.size else 0):  # backtracking on the residual
             whole = todo.size == rows.size
             q = np.empty((2, todo.size))
             if whole:
@@ -359,22 +413,26 @@ def _newton_block(
             # foot jumps to another part of its side, which only a global query sees
             long = lam * (norm if whole else norm[todo]) > track_step * diag
             wt = w if whole else [v[todo] for v in w]
-            tt = t if whole else [None if f is None else f[todo] for f in t]
-            ng, nt, nd = field.evaluate(q, wt, tt, long if long.any() else None)
+            tt = t if whole else [None if v is None else v[todo] for v in t]
+            ng, nt, nd, nf, nh = field.evaluate(q, wt, tt, long if long.any() else None)
             nres = np.sqrt(ng[0] * ng[0] + ng[3] * ng[3])
             ok = nres < (res if whole else res[todo]) * (1.0 - 1e-4 * lam) + tol
             if whole and ok.all():
-                xs, res, g, t, d = q, nres, ng, nt, nd
+                xs, res, g, t, d, f, h = q, nres, ng, nt, nd, nf, nh
                 todo = todo[:0]
                 break
             acc = todo[ok]
             xs[:, acc], res[acc] = q[:, ok], nres[ok]
             for v, nv in zip(g, ng, strict=True):
                 v[acc] = nv[ok]
+            for v, nv in zip(h, nh, strict=True):
+                v[acc] = nv[ok]
             for k in range(4):
-                tk, ntk, dk, ndk = t[k], nt[k], d[k], nd[k]
+                tk, ntk, dk, ndk, fk, nfk = t[k], nt[k], d[k], nd[k], f[k], nf[k]
                 if tk is not None and ntk is not None and dk is not None and ndk is not None:
                     tk[acc], dk[acc] = ntk[ok], ndk[ok]
+                if fk is not None and nfk is not None:
+                    fk[:, acc] = nfk[:, ok]
             todo = todo[~ok]
             if todo.size == 0:
                 break
