@@ -532,3 +532,19 @@ def test_solved_nodes_meet_the_residual_with_global_distances(name, divisions, t
         d = [region.sides[k].closest(p).distance for k in range(4)]
         res = np.hypot((1 - ra) * d[0] - ra * d[2], (1 - rb) * d[1] - rb * d[3])
         assert res.max() <= ntol * (1 + 1e-6)
+
+
+def test_chord_bound_only_on_smooth_curves():
+    """The chord bound of the per-point certification needs a C1 curve: a B-spline with a
+    kink (a knot of full multiplicity) and curves that do not say keep ``s - h / 2`` alone;
+    a sub-curve of a smooth B-spline keeps it."""
+    from medax.geometry.bspline import BSpline
+    from medax.geometry.curve import SubCurve
+
+    ctrl = np.array([[0, 0], [1, 1.5], [2, -1], [3, 0.5], [4, 2], [5, -0.5], [6, 0.0]], float)
+    kink = BSpline(ctrl, 3, np.array([0, 0, 0, 0, 0.5, 0.5, 0.5, 1, 1, 1, 1.0]))
+    smooth = REGIONS["wavy"].sides[0]
+    assert not kink.chord_smooth() and np.isinf(kink._gaps[2])
+    assert smooth.chord_smooth() and np.isfinite(smooth._gaps[2])
+    assert SubCurve(smooth, 0.2, 0.7).chord_smooth()
+    assert not SubCurve(kink, 0.2, 0.7).chord_smooth()

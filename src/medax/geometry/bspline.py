@@ -256,6 +256,12 @@ class BSpline(Curve):
         rows = np.ascontiguousarray(coefs.transpose(1, 2, 3, 0).reshape(k1, 3 * dim, m))
         return np.ascontiguousarray(x[1:-1]), x, rows
 
+    def chord_smooth(self) -> bool:
+        """C1 with a piecewise polynomial ``C''``: no interior knot of multiplicity above
+        ``degree - 1`` (and degree at least 2)."""
+        _, mult = np.unique(self.knots, return_counts=True)
+        return self.degree >= 2 and bool(np.all(mult[1:-1] <= self.degree - 1))
+
     @staticmethod
     def stacked_rows(
         curves: list[BSpline],

@@ -61,6 +61,12 @@ class Curve(ABC):
         work between them override this."""
         return self.evaluate(t), self.derivative(t), self.derivative(t, 2)
 
+    def chord_smooth(self) -> bool:
+        """Whether the curve is C1 with a piecewise continuous second derivative, so that
+        between two parameters it stays within ``step^2 / 8 x max|C''|`` of its chord
+        (:func:`certify_closest`'s chord bound); kinds that know it override this."""
+        return False
+
     def jet_rows(self, t: FloatArray) -> FloatArray | None:
         """The :meth:`jet` as component rows (3 * dim, n): ``C``, ``C'``, ``C''``, each
         coordinate a contiguous row (cheaper arithmetic on them than on (n, dim) columns);
@@ -130,13 +136,18 @@ class Curve(ABC):
         """Bounds between the search samples (:func:`certify_closest`): 0.55 of the longest
         chord, a quarter of its square, and how far the curve may leave its chords: the
         parameter step squared over 8 times 1.5 x the largest ``|C''|`` at the samples and
-        half-way between them."""
+        half-way between them; infinite (no chord bound) unless the curve says it is
+        continuously differentiable with a piecewise continuous ``C''``
+        (:meth:`chord_smooth`: a kink between samples would take it off its chords by more)."""
         ts, pts = self._search
         chord = float(np.max(np.linalg.norm(np.diff(pts, axis=0), axis=1)))
         dt = float(ts[1] - ts[0])
-        both = np.concatenate((ts, 0.5 * (ts[1:] + ts[:-1])))
-        acc = float(np.max(np.linalg.norm(self.derivative(both, 2), axis=1)))
-        return 0.55 * chord, 0.25 * (1.0 + 1e-9) * chord * chord, 1.5 * acc * dt * dt / 8.0
+        sag = np.inf
+        if self.chord_smooth():
+            both = np.concatenate((ts, 0.5 * (ts[1:] + ts[:-1])))
+            acc = float(np.max(np.linalg.norm(self.derivative(both, 2), axis=1)))
+            sag = 1.5 * acc * dt * dt / 8.0
+        return 0.55 * chord, 0.25 * (1.0 + 1e-9) * chord * chord, sag
 
     @cached_property
     def _table(self) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -434,7 +445,8 @@ def certify_closest(
         other += np.einsum("ij,ij->i", xs, xs)
         np.maximum(other, 0.0, out=other)  # the nearest other sample, squared
         bound = np.sqrt(other) - half
-        np.maximum(bound, np.sqrt(np.maximum(other - quarter, 0.0)) - sag, out=bound)
+        with np.errstate(invalid="ignore"):  # (inf - inf: no other part, or no chord bound)
+            np.fmax(bound, np.sqrt(np.maximum(other - quarter, 0.0)) - sag, out=bound)
         ok[s : s + rows] = bound >= distance[s : s + rows] - slack
     return ok
 
@@ -680,6 +692,9 @@ class SubCurve(Curve):
 
     def complexity(self) -> int:
         return max(1, int(np.ceil(self.base.complexity() * abs(self.t1 - self.t0))))
+
+    def chord_smooth(self) -> bool:
+        return self.base.chord_smooth()
 
     def breaks(self) -> FloatArray:
         b = (self.base.breaks() - self.t0) / (self.t1 - self.t0)
