@@ -363,6 +363,31 @@ def test_planar_field_only_for_closed_form_sides():
     assert not rf.PlanarField.supports(cyl, ("distance", "distance"))
 
 
+@pytest.mark.parametrize(("name", "tol"), [("wavy", 0.0), ("wavy", 1e-6), ("bulge", 0.0)])
+def test_free_field_solve_gives_the_general_nodes(name, tol, monkeypatch):
+    """The coordinate-row solve of free-form regions (:mod:`medax.mesh.free_field`, several
+    blocks) finds the nodes of the general solve, with the same counts of interpolated and
+    copied nodes (its feet after long steps are tracked and certified instead of queried,
+    so the global re-solves may differ by a few); regions it does not take go the general
+    way."""
+    import medax.mesh.free_field as ff
+
+    r = REGIONS[name] if name in REGIONS else _free_form_region(name)
+    assert ff.FreeField.supports(r, ("distance", "distance"))
+    assert not ff.FreeField.supports(r, ("angle", "distance"))
+    assert not ff.FreeField.supports(REGIONS["arcs"], ("distance", "distance"))  # (planar)
+    assert not ff.FreeField.supports(_free_form_region("mixed"), ("distance", "distance"))
+    monkeypatch.setattr(ff, "_BLOCK", 1000)
+    fast = mesh_region(r, (120, 97), tol=tol)
+    monkeypatch.setattr(ff.FreeField, "supports", staticmethod(lambda region, kinds: False))
+    slow = mesh_region(r, (120, 97), tol=tol)
+    assert np.abs(fast.params - slow.params).max() <= 1e-11 * r.diagonal
+    for key in ("interpolated", "copied", "coarse_interpolated", "coarse_copied"):
+        assert fast.info[key] == slow.info[key]
+    for key in ("global_resolved", "coarse_global_resolved"):
+        assert abs(fast.info[key] - slow.info[key]) <= 3
+
+
 @pytest.mark.parametrize("name", ["trapezoid", "arcs", "annulus_sector"])
 def test_planar_solve_gives_the_general_nodes(name, monkeypatch):
     """The closed-form, blocked solve finds the nodes of the general solve (coarse start,
@@ -378,7 +403,8 @@ def test_planar_solve_gives_the_general_nodes(name, monkeypatch):
 def test_certify_closest_is_the_documented_rule(monkeypatch):
     """The blocked certification equals the rule written out on the whole table: no local
     minimum of the sample distances beyond 1.5 spacings of the foot is nearer than the
-    foot's distance minus the slack, allowing 0.55 sample spacings between samples."""
+    foot's distance minus the slack, allowing the larger of 0.55 sample spacings between
+    samples and the chord bound ``sqrt(s^2 - l^2 / 4) - e``."""
     import medax.geometry.curve as gc
 
     r = REGIONS["wavy"]
@@ -395,12 +421,51 @@ def test_certify_closest_is_the_documented_rule(monkeypatch):
         is_min[:, :-1] &= d[:, :-1] <= d[:, 1:]
         is_min &= np.abs(ts[None] - loc.t[:, None]) > 1.5 * (ts[1] - ts[0])
         other = np.where(is_min, d, np.inf).min(axis=1)
-        half = 0.55 * np.linalg.norm(np.diff(pts, axis=0), axis=1).max()
-        want = other - half >= loc.distance - 1e-12
+        chord = np.linalg.norm(np.diff(pts, axis=0), axis=1).max()
+        dt = ts[1] - ts[0]
+        mid = np.concatenate((ts, 0.5 * (ts[1:] + ts[:-1])))
+        sag = 1.5 * np.linalg.norm(c.derivative(mid, 2), axis=1).max() * dt * dt / 8
+        bound = np.maximum(
+            other - 0.55 * chord, np.sqrt(np.maximum(other**2 - chord**2 / 4, 0)) - sag
+        )
+        assert np.all(bound[np.isfinite(other)] >= other[np.isfinite(other)] - 0.55 * chord)
+        want = bound >= loc.distance - 1e-12
         got = certify_closest(c, x, loc.t, loc.distance, 1e-12)
         assert 0 < want.sum() < len(x)
         assert np.count_nonzero(got != want) <= 2  # (round-off at the margin only)
-        assert not np.any(got & ~want & (other - half < loc.distance - 1e-9))
+        assert not np.any(got & ~want & (bound < loc.distance - 1e-9))
+
+
+def test_certify_closest_near_equidistant_parts():
+    """Points near where the nearest point of a wavy side jumps (two local feet at nearly
+    the same distance): the farther foot is never certified, even when it is farther by
+    less than a sample spacing (the chord bound's regime), and the nearer one mostly is."""
+    r = REGIONS["wavy"]
+    c = r.sides[0]
+    lo, hi = r.corners.min(axis=0), r.corners.max(axis=0)
+    x = np.random.default_rng(12).uniform(lo, hi, (20000, 2))
+    dense = np.linspace(0.0, 1.0, 4001)
+    d = np.linalg.norm(x[:, None] - c.evaluate(dense)[None], axis=2)
+    is_min = np.ones(d.shape, dtype=bool)
+    is_min[:, 1:] &= d[:, 1:] < d[:, :-1]
+    is_min[:, :-1] &= d[:, :-1] < d[:, 1:]
+    two = np.flatnonzero(is_min.sum(axis=1) >= 2)
+    score = np.where(is_min[two], d[two], np.inf)
+    order = np.argsort(score, axis=1)[:, :2]
+    first = closest_from(c, x[two], dense[order[:, 0]], iters=60)
+    second = closest_from(c, x[two], dense[order[:, 1]], iters=60)
+    gap = second.distance - first.distance
+    sep = np.abs(second.t - first.t) > 0.01
+    near = (
+        sep
+        & (gap > 1e-9)
+        & (gap < 0.55 * np.linalg.norm(np.diff(c._search[1], axis=0), axis=1).max())
+    )
+    assert near.sum() > 20
+    slack = 1e-12 * r.diagonal
+    wrong = sep & (gap > 1e-9)
+    assert not np.any(certify_closest(c, x[two], second.t, second.distance, slack)[wrong])
+    assert certify_closest(c, x[two], first.t, first.distance, slack)[near].mean() > 0.5
 
 
 def test_targets_blend_and_separable_rows():
@@ -420,3 +485,66 @@ def test_targets_blend_and_separable_rows():
     assert ur2 is not None and vc2 is None
     v = (np.arange(1, n2) / n2)[:, None]
     np.testing.assert_allclose(rb2.reshape(n2 - 1, n1 - 1), cols[None, 1:-1] + 0.01 * v)
+
+
+def test_stacked_jets_equal_each_curves_own():
+    """Several B-splines in one table (cubics and a quintic): each point's jet is its own
+    curve's, bit for bit, at the ends, at knots and inside; row jets equal the column jets."""
+    from medax.geometry.bspline import BSpline, stacked_jet
+
+    curves = [*REGIONS["wavy"].sides, _free_form_region("mixed").sides[0]]
+    table = BSpline.stacked_rows(curves)
+    assert table is not None
+    t = np.concatenate(
+        (np.random.default_rng(3).uniform(0, 1, 500), [0.0, 1.0, 0.5, 1 / 3, 2 / 3, 0.25])
+    )
+    for j, c in enumerate(curves):
+        got = stacked_jet(table, t, np.full(t.size, 2.0 * j))
+        assert np.array_equal(got, c.jet_rows(t))
+        c0, c1, c2 = c.jet(t)
+        np.testing.assert_allclose(got, np.vstack((c0.T, c1.T, c2.T)), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("name", "divisions", "tol"), [("wavy", (512, 512), 1e-6), ("wavy", (300, 200), 0.0),
+                                   ("bulge", (256, 256), 1e-6)],
+)  # fmt: skip
+def test_solved_nodes_meet_the_residual_with_global_distances(name, divisions, tol, monkeypatch):
+    """Every node the solve returns (at every level), including those whose last Newton step
+    was taken on its Taylor bound without an evaluation at its end
+    (:func:`medax.mesh.free_field._newton_block`), meets both equations to the residual
+    tolerance with distances to the sides measured by global queries."""
+    r = REGIONS[name] if name in REGIONS else _free_form_region(name)
+    seen = []
+    solve = rg._solve
+
+    def spy(region, p, ra, rb, ntol, kinds, *a, **k):
+        out = solve(region, p, ra, rb, ntol, kinds, *a, **k)
+        seen.append((region, out[0], ra, rb, ntol))
+        return out
+
+    monkeypatch.setattr(rg, "_solve", spy)
+    mesh_region(r, divisions, tol=tol)
+    assert len(seen) >= 3
+    for region, p, ra, rb, ntol in seen:
+        if p.shape[0] == 0:
+            continue
+        d = [region.sides[k].closest(p).distance for k in range(4)]
+        res = np.hypot((1 - ra) * d[0] - ra * d[2], (1 - rb) * d[1] - rb * d[3])
+        assert res.max() <= ntol * (1 + 1e-6)
+
+
+def test_chord_bound_only_on_smooth_curves():
+    """The chord bound of the per-point certification needs a C1 curve: a B-spline with a
+    kink (a knot of full multiplicity) and curves that do not say keep ``s - h / 2`` alone;
+    a sub-curve of a smooth B-spline keeps it."""
+    from medax.geometry.bspline import BSpline
+    from medax.geometry.curve import SubCurve
+
+    ctrl = np.array([[0, 0], [1, 1.5], [2, -1], [3, 0.5], [4, 2], [5, -0.5], [6, 0.0]], float)
+    kink = BSpline(ctrl, 3, np.array([0, 0, 0, 0, 0.5, 0.5, 0.5, 1, 1, 1, 1.0]))
+    smooth = REGIONS["wavy"].sides[0]
+    assert not kink.chord_smooth() and np.isinf(kink._gaps[2])
+    assert smooth.chord_smooth() and np.isfinite(smooth._gaps[2])
+    assert SubCurve(smooth, 0.2, 0.7).chord_smooth()
+    assert not SubCurve(kink, 0.2, 0.7).chord_smooth()

@@ -228,6 +228,76 @@ class BSpline(Curve):
         d2 = (h2[:, :-1] - 2.0 * w1 * d1 - w2 * c) / w0
         return c, d1, d2
 
+    @cached_property
+    def third_bound(self) -> float | None:
+        """A bound of ``|C'''|`` over the curve (None for rational curves): per span, the
+        sum over powers ``p >= 3`` of ``p (p - 1) (p - 2) |a_p| h^(p - 3)`` (``a_p`` the
+        power-basis coefficients, ``h`` the span's width)."""
+        if self.weights is not None or self.degree > POWER_BASIS_MAX_DEGREE:
+            return None
+        x, coefs = self._pieces  # (m, k + 1, 3, dim), highest power first
+        k = self.degree
+        h = np.diff(x)
+        total = np.zeros(h.size)
+        for j in range(k + 1):
+            p = k - j
+            if p >= 3:
+                a = np.linalg.norm(coefs[:, j, 0, :], axis=1)
+                total += p * (p - 1) * (p - 2) * a * h ** (p - 3)
+        return float(total.max(initial=0.0))
+
+    @cached_property
+    def _row_pieces(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """:attr:`_pieces` for :meth:`jet_rows`: the interior breaks, all breaks, and the
+        coefficients (degree+1, 3 * dim, m) by power (highest first), then order and
+        coordinate, spans last (one gather per power fetches a contiguous row block)."""
+        x, coefs = self._pieces
+        m, k1, _, dim = coefs.shape
+        rows = np.ascontiguousarray(coefs.transpose(1, 2, 3, 0).reshape(k1, 3 * dim, m))
+        return np.ascontiguousarray(x[1:-1]), x, rows
+
+    def chord_smooth(self) -> bool:
+        """C1 with a piecewise polynomial ``C''``: no interior knot of multiplicity above
+        ``degree - 1`` (and degree at least 2)."""
+        _, mult = np.unique(self.knots, return_counts=True)
+        return self.degree >= 2 and bool(np.all(mult[1:-1] <= self.degree - 1))
+
+    @staticmethod
+    def stacked_rows(
+        curves: list[BSpline],
+    ) -> tuple[FloatArray, FloatArray, FloatArray] | None:
+        """The :attr:`_row_pieces` of several non-rational curves in one table (None if one
+        is rational or of a high degree): curve ``j`` on parameters ``2 j + t``, the spans of
+        all curves in order (a break ``2 j + 1.5`` between curves ``j`` and ``j + 1`` in the
+        searched breaks), lower degrees padded with zero top powers; see
+        :func:`stacked_jet`."""
+        if any(c.weights is not None or c.degree > POWER_BASIS_MAX_DEGREE for c in curves):
+            return None
+        top = max(c.degree for c in curves) + 1
+        inner, starts, rows = [], [], []
+        for j, c in enumerate(curves):
+            ci, cx, cr = c._row_pieces
+            if j:
+                inner.append(np.array([2.0 * j - 0.5]))
+            inner.append(ci + 2.0 * j)
+            starts.append(cx[:-1])  # (local: s = t - start keeps every digit of t)
+            pad = np.zeros((top - cr.shape[0], *cr.shape[1:]))
+            rows.append(np.concatenate((pad, cr)))
+        return np.concatenate(inner), np.concatenate(starts), np.concatenate(rows, axis=2)
+
+    def jet_rows(self, t: FloatArray) -> FloatArray | None:
+        if self.weights is not None or self.degree > POWER_BASIS_MAX_DEGREE:
+            return None
+        inner, x, rows = self._row_pieces
+        t = np.minimum(np.maximum(np.asarray(t, dtype=np.float64), 0.0), 1.0)
+        i = np.searchsorted(inner, t, side="right")
+        s = t - x[i]
+        w = rows[0].take(i, axis=1)
+        for p in range(1, rows.shape[0]):
+            w *= s
+            w += rows[p].take(i, axis=1)
+        return w
+
     def evaluate(self, t: FloatArray) -> FloatArray:
         h = self._raw(t, 0)
         if self.weights is None:
@@ -262,3 +332,19 @@ class BSpline(Curve):
             moved[:, -1, 0] -= np.asarray(offset, dtype=np.float64) / scale
             out.__dict__["_pieces"] = (x, moved)
         return out
+
+
+def stacked_jet(
+    table: tuple[FloatArray, FloatArray, FloatArray], t: FloatArray, offset: FloatArray
+) -> FloatArray:
+    """:meth:`BSpline.jet_rows` of points on several curves at once (``table``:
+    :meth:`BSpline.stacked_rows`; ``offset`` (n,) ``2 j`` for a point on curve ``j``)."""
+    inner, starts, rows = table
+    t = np.minimum(np.maximum(np.asarray(t, dtype=np.float64), 0.0), 1.0)
+    i = np.searchsorted(inner, t + offset, side="right")
+    s = t - starts[i]
+    w = rows[0].take(i, axis=1)
+    for p in range(1, rows.shape[0]):
+        w *= s
+        w += rows[p].take(i, axis=1)
+    return w

@@ -7,6 +7,7 @@ Methods are vectorised: ``t`` has shape ``(n,)``, points ``(n, dim)``.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -59,6 +60,18 @@ class Curve(ABC):
         """``C(t)``, ``C'(t)``, ``C''(t)`` together (each (n, dim)); kinds that can share
         work between them override this."""
         return self.evaluate(t), self.derivative(t), self.derivative(t, 2)
+
+    def chord_smooth(self) -> bool:
+        """Whether the curve is C1 with a piecewise continuous second derivative, so that
+        between two parameters it stays within ``step^2 / 8 x max|C''|`` of its chord
+        (:func:`certify_closest`'s chord bound); kinds that know it override this."""
+        return False
+
+    def jet_rows(self, t: FloatArray) -> FloatArray | None:
+        """The :meth:`jet` as component rows (3 * dim, n): ``C``, ``C'``, ``C''``, each
+        coordinate a contiguous row (cheaper arithmetic on them than on (n, dim) columns);
+        None where a kind has no such fast path (callers then use :meth:`jet`)."""
+        return None
 
     def transformed(self, offset: FloatArray, scale: float) -> Curve:
         """The image under ``x -> (x - offset) / scale`` (a similarity; planar curves)."""
@@ -117,6 +130,24 @@ class Curve(ABC):
     def _slopes(self) -> FloatArray:
         """``C'`` at the search samples, (m, dim)."""
         return self.derivative(self._search[0])
+
+    @cached_property
+    def _gaps(self) -> tuple[float, float, float]:
+        """Bounds between the search samples (:func:`certify_closest`): 0.55 of the longest
+        chord, a quarter of its square, and how far the curve may leave its chords: the
+        parameter step squared over 8 times 1.5 x the largest ``|C''|`` at the samples and
+        half-way between them; infinite (no chord bound) unless the curve says it is
+        continuously differentiable with a piecewise continuous ``C''``
+        (:meth:`chord_smooth`: a kink between samples would take it off its chords by more)."""
+        ts, pts = self._search
+        chord = float(np.max(np.linalg.norm(np.diff(pts, axis=0), axis=1)))
+        dt = float(ts[1] - ts[0])
+        sag = np.inf
+        if self.chord_smooth():
+            both = np.concatenate((ts, 0.5 * (ts[1:] + ts[:-1])))
+            acc = float(np.max(np.linalg.norm(self.derivative(both, 2), axis=1)))
+            sag = 1.5 * acc * dt * dt / 8.0
+        return 0.55 * chord, 0.25 * (1.0 + 1e-9) * chord * chord, sag
 
     @cached_property
     def _table(self) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -213,6 +244,9 @@ def _track_block(
     curve: Curve, x: FloatArray, t: FloatArray, step_tol: float, iters: int
 ) -> tuple[FloatArray, FloatArray]:
     """:func:`track_closest` on one block: feet (n,) and foot points (n, dim)."""
+    if curve.jet_rows(t[:1]) is not None:
+        t, foot_rows, _ = track_rows(curve, np.ascontiguousarray(x.T), t, step_tol, iters)
+        return t, foot_rows.T
     t = t.copy()
     foot = np.empty_like(x)
     rows: np.ndarray | None = None  # rows still moving (None: all)
@@ -258,6 +292,112 @@ def _track_block(
     return t, foot
 
 
+#: component-row jets of the points ``rows`` (indices or a slice; None: all) of a tracking
+#: at parameters ``t``
+RowJet = Callable[[FloatArray, "np.ndarray | slice | None"], "FloatArray | None"]
+
+
+def track_rows(
+    curve: Curve | RowJet,
+    xs: FloatArray,
+    t0: FloatArray,
+    step_tol: float | FloatArray = 1e-6,
+    iters: int = 8,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """:func:`track_closest` for points given as component rows ``xs`` (dim, n), on a
+    curve with :meth:`Curve.jet_rows` (or, for several curves at once, a :data:`RowJet`
+    that evaluates each point's own curve, with ``step_tol`` then per point): feet (n,) and
+    foot points as rows (dim, n), and ``|(C - x) . C''| / g'`` at the last step (n,; the
+    curvature term of the distance's Hessian times the distance, see
+    :mod:`medax.mesh.free_field`; 0 for a foot held at an end, inf away from a local
+    minimum or where the steps ran out before one was short enough)."""
+    t = np.minimum(np.maximum(np.asarray(t0, dtype=np.float64), 0.0), 1.0)
+    if isinstance(curve, Curve):
+        single = curve
+        jet: RowJet = lambda tr, rows: single.jet_rows(tr)  # noqa: E731
+    else:
+        jet = curve
+    if t.size <= _TRACK_BLOCK:
+        return _track_rows(jet, xs, t, step_tol, iters)
+    foot, curv = np.empty(xs.shape), np.empty(t.size)
+    per_row = np.ndim(step_tol) > 0
+    for s in range(0, t.size, _TRACK_BLOCK):  # blocks: the temporaries stay in cache
+        e = min(t.size, s + _TRACK_BLOCK)
+
+        def block(tr: FloatArray, rows: np.ndarray | slice | None, s: int = s, e: int = e):
+            return jet(tr, slice(s, e) if rows is None else np.asarray(rows) + s)
+
+        tol = step_tol[s:e] if per_row else step_tol  # type: ignore[index]
+        t[s:e], foot[:, s:e], curv[s:e] = _track_rows(block, xs[:, s:e], t[s:e], tol, iters)
+    return t, foot, curv
+
+
+def _track_rows(
+    jet: RowJet, xs: FloatArray, t: FloatArray, step_tol: float | FloatArray, iters: int
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """:func:`_track_block` on component rows (``jet``: :meth:`Curve.jet_rows` of the rows'
+    curve; points ``xs`` (dim, n)): the same steps and stopping rule, coordinates as
+    contiguous rows; feet (n,), foot points (dim, n) and the curvature terms of
+    :func:`track_rows`."""
+    dim = xs.shape[0]
+    t = t.copy()
+    foot, curv = np.empty((dim, t.size)), np.empty(t.size)
+    per_row = np.ndim(step_tol) > 0
+    rows: np.ndarray | None = None  # rows still moving (None: all)
+    for it in range(iters):
+        tr = t if rows is None else t[rows]
+        xr = xs if rows is None else xs[:, rows]
+        w = jet(tr, rows)
+        assert w is not None
+        c0, c1, c2 = w[:dim], w[dim : 2 * dim], w[2 * dim :]
+        c = c0 - xr
+        g = c[0] * c1[0]
+        speed2 = c1[0] * c1[0]
+        dg = c[0] * c2[0]
+        for k in range(1, dim):
+            g += c[k] * c1[k]
+            speed2 += c1[k] * c1[k]
+            dg += c[k] * c2[k]
+        dg += speed2
+        # away from a local minimum (dg <= 0) a gradient step scaled by the speed
+        den = np.where(dg > 0.0, dg, speed2)
+        np.maximum(den, 1e-300, out=den)
+        ds = np.divide(g, den, out=g)
+        ds = np.subtract(tr, ds, out=ds)
+        np.minimum(np.maximum(ds, 0.0, out=ds), 1.0, out=ds)
+        new = ds.copy()
+        ds -= tr  # the step taken
+        if rows is None:
+            t = new
+        else:
+            t[rows] = new
+        # a short Newton step, or a foot held at an end of the curve
+        tol = step_tol if not per_row or rows is None else step_tol[rows]  # type: ignore[index]
+        settled = (np.abs(ds) <= tol) & ((dg > 0.0) | (ds == 0.0))
+        done = settled if it < iters - 1 else np.ones(tr.size, dtype=bool)
+        # |(C - x) . C''| / g'; 0 for a foot held at an end where g' <= 0 (the distance is to
+        # the end point there); inf away from a local minimum or where the steps ran out
+        # unsettled (the foot, and its Taylor point, may then be off)
+        kap = np.where(dg > 0.0, np.abs(dg - speed2) / den, np.inf)
+        kap[(dg <= 0.0) & (ds == 0.0) & ((new == 0.0) | (new == 1.0))] = 0.0
+        kap[~settled] = np.inf
+        half = 0.5 * ds
+        c2 *= half
+        c2 += c1
+        c2 *= ds
+        c2 += c0  # C(t) + C'(t) ds + C''(t) ds^2 / 2
+        if done.all():
+            if rows is None:
+                foot, curv = c2, kap
+            else:
+                foot[:, rows], curv[rows] = c2, kap
+            break
+        idx = np.flatnonzero(done) if rows is None else rows[done]
+        foot[:, idx], curv[idx] = c2[:, done], kap[done]
+        rows = np.flatnonzero(~done) if rows is None else rows[~done]
+    return t, foot, curv
+
+
 def certify_closest(
     curve: Curve, points: FloatArray, t: FloatArray, distance: FloatArray, slack: float
 ) -> np.ndarray:
@@ -265,17 +405,21 @@ def certify_closest(
     global: no other part of the curve is nearer than ``distance - slack``.
 
     Each other part of the curve is represented by a local minimum of the distance over the
-    dense samples (outside one sample spacing of ``t``); the curve between samples is at
-    most half a spacing ``h`` from one, so a part whose best sample is at ``s`` has no point
-    nearer than ``s - h / 2``. Cheaper than :meth:`Curve.closest` (no refinement); rows not
-    certified need the full query.
+    dense samples (outside one sample spacing of ``t``); a part whose best sample is at
+    ``s`` has no point nearer than the larger of two bounds (:attr:`Curve._gaps`): ``s - h / 2``
+    (the curve between samples is at most half a spacing ``h`` from one), and
+    ``sqrt(s^2 - l^2 / 4) - e`` (a point of a chord of length ``l`` is at least that from a
+    point whose distance to both its ends is at least ``s``; the curve is within ``e`` of
+    its chords, the parameter step squared times a bound of ``|C''|`` over 8): far from
+    the curve the second is the tighter by orders of magnitude. Cheaper than
+    :meth:`Curve.closest` (no refinement); rows not certified need the full query.
     """
     ts = curve._search[0]
     centre, pts, pp = curve._table  # centred on the samples
     x = np.asarray(points, dtype=np.float64) - centre
     t = np.asarray(t, dtype=np.float64)
     n, m = x.shape[0], pts.shape[0]
-    half = 0.55 * float(np.max(np.linalg.norm(np.diff(pts, axis=0), axis=1)))
+    half, quarter, sag = curve._gaps
     dt = ts[1] - ts[0]
     pt2 = -2.0 * pts.T
     ok = np.empty(n, dtype=bool)
@@ -298,8 +442,12 @@ def certify_closest(
         ex = excluded[s : s + rows]
         im[rr, near[s : s + rows]] &= ~ex
         other = np.minimum.reduce(d2, axis=1, where=im, initial=np.inf)
-        nearest = np.sqrt(np.maximum(other + np.einsum("ij,ij->i", xs, xs), 0.0))
-        ok[s : s + rows] = nearest - half >= distance[s : s + rows] - slack
+        other += np.einsum("ij,ij->i", xs, xs)
+        np.maximum(other, 0.0, out=other)  # the nearest other sample, squared
+        bound = np.sqrt(other) - half
+        with np.errstate(invalid="ignore"):  # (inf - inf: no other part, or no chord bound)
+            np.fmax(bound, np.sqrt(np.maximum(other - quarter, 0.0)) - sag, out=bound)
+        ok[s : s + rows] = bound >= distance[s : s + rows] - slack
     return ok
 
 
@@ -378,9 +526,10 @@ _THREE = np.arange(-1, 2)
 #: a Newton step on the foot parameter at most this long ends a row: Newton converging
 #: quadratically, the foot parameter is then off by about ``K s^2`` (``K = g'' / 2 g'``),
 #: ~1e-16. Far from the curve the distance is stationary at the foot and would allow far
-#: longer steps (``track_closest`` stops at 1e-6); near it (the deviation check's points on
-#: the surfaces) the distance is off by ``|C'| K s^2``: 1e-6 left 3e-12 on a merged face's
-#: profile, 1e-8 leaves round-off, at no measurable cost on the wavy axis (27 - 29 ms both)
+#: longer steps (``track_closest`` stops at 1e-6 by default, the mesher's at up to 1e-4);
+#: near it (the deviation check's points on the surfaces) the distance is off by
+#: ``|C'| K s^2``: 1e-6 left 3e-12 on a merged face's profile, 1e-8 leaves round-off, at
+#: no measurable cost on the wavy axis (27 - 29 ms both)
 _STEP_TOL = 1e-8
 
 
@@ -543,6 +692,9 @@ class SubCurve(Curve):
 
     def complexity(self) -> int:
         return max(1, int(np.ceil(self.base.complexity() * abs(self.t1 - self.t0))))
+
+    def chord_smooth(self) -> bool:
+        return self.base.chord_smooth()
 
     def breaks(self) -> FloatArray:
         b = (self.base.breaks() - self.t0) / (self.t1 - self.t0)

@@ -19,8 +19,18 @@ def _length_between(curve: Curve, a: FloatArray, b: FloatArray) -> FloatArray:
     x, w = _GAUSS
     half = 0.5 * (b - a)
     t = (half[:, None] * x[None, :] + 0.5 * (a + b)[:, None]).ravel()
-    speed = np.linalg.norm(curve.derivative(t), axis=1).reshape(a.size, x.size)
+    speed = _speed(curve, t).reshape(a.size, x.size)
     return np.asarray(half * (speed @ w))
+
+
+def _speed(curve: Curve, t: FloatArray) -> FloatArray:
+    """``|C'(t)|`` (n,): from the component-row jets where the curve has them."""
+    rows = curve.jet_rows(t)
+    if rows is None:
+        return np.asarray(np.linalg.norm(curve.derivative(t), axis=1))
+    dim = rows.shape[0] // 3
+    d = rows[dim : 2 * dim]
+    return np.asarray(np.sqrt(np.einsum("ij,ij->j", d, d)))
 
 
 def arclength_params(curve: Curve, fractions: FloatArray) -> FloatArray:
@@ -46,7 +56,7 @@ def arclength_params(curve: Curve, fractions: FloatArray) -> FloatArray:
         if rows.size == 0:
             break
         s = _length_between(curve, lo[rows], t[rows])
-        speed = np.linalg.norm(curve.derivative(t[rows]), axis=1)
+        speed = _speed(curve, t[rows])
         step = (s - rest[rows]) / np.maximum(speed, np.finfo(float).tiny)
         t[rows] = np.clip(t[rows] - step, lo[rows], hi[rows])
         inner[rows] = np.abs(step) > 1e-15

@@ -31,6 +31,8 @@ from medax.geometry.line import Line
 from medax.geometry.region import Region
 
 WEIGHTINGS = ("auto", "angle", "distance")
+TRACK_STEP = 1e-6  # tracking Newton steps (in the foot parameter) that end a row, at least
+TRACK_STEP_MAX = 1e-4  # ... and at most (SideDistances.set_tolerance)
 _TINY = np.finfo(float).tiny
 _EMPTY = np.empty(0)
 
@@ -182,6 +184,21 @@ class SideDistances:
         self.t = [np.full(n, np.nan) for _ in range(4)]  # accepted feet (tracked sides)
         self.t_alt = [np.full(n, np.nan) for _ in range(4)]  # second starts (NaN: none)
         self.d = [np.full(n, np.nan) for _ in range(4)]  # accepted distances
+        self.step_tol = [TRACK_STEP] * 4  # of the tracking Newton (see :meth:`set_tolerance`)
+
+    def set_tolerance(self, tol: float) -> None:
+        """Let the tracked feet stop at longer steps where the distances stay within
+        ``1e-3 * tol`` (region units) of the exact ones: the foot point of a step ``s`` is
+        the jet's Taylor expansion, off by at most ``max|C'''| s^3 / 6`` (the curve's
+        ``third_bound``), the foot parameter by about ``K s^2`` (whose effect on the
+        stationary distance is of 4th order); kept between ``TRACK_STEP`` and
+        ``TRACK_STEP_MAX``."""
+        for k, c in enumerate(self.curves):
+            bound = getattr(c, "third_bound", None)
+            if not self.tracked[k] or bound is None:
+                continue
+            s = (6e-3 * tol / max(float(bound), 1e-300)) ** (1.0 / 3.0)
+            self.step_tol[k] = min(TRACK_STEP_MAX, max(TRACK_STEP, s))
 
     def dist(
         self, k: int, x: FloatArray, rows: np.ndarray | None
@@ -198,20 +215,26 @@ class SideDistances:
         elif rows is None or not self.tracked[k]:
             c = curve.closest(x)
         else:
-            c = _tracked(curve, x, self.t[k][rows], self.t_alt[k][rows])
+            c = _tracked(curve, x, self.t[k][rows], self.t_alt[k][rows], self.step_tol[k])
         u = (x - c.foot) / np.maximum(c.distance, _TINY)[:, None]
         return c.distance, u, c.t
 
 
-def _tracked(curve: Curve, x: FloatArray, t0: FloatArray, t1: FloatArray | None = None) -> Closest:
-    """Feet from the accepted ones ``t0`` (n,) by :func:`track_closest`; a global query
-    for rows without one (NaN). Rows with a second start in ``t1`` (n,) (NaN: none) track
-    it too and keep the nearer foot."""
+def _tracked(
+    curve: Curve,
+    x: FloatArray,
+    t0: FloatArray,
+    t1: FloatArray | None = None,
+    step_tol: float = TRACK_STEP,
+) -> Closest:
+    """Feet from the accepted ones ``t0`` (n,) by :func:`track_closest` (``step_tol``); a
+    global query for rows without one (NaN). Rows with a second start in ``t1`` (n,) (NaN:
+    none) track it too and keep the nearer foot."""
     if t1 is not None:
         two = np.flatnonzero(~np.isnan(t1) & ~np.isnan(t0))
-        out = _tracked(curve, x, t0)
+        out = _tracked(curve, x, t0, None, step_tol)
         if two.size:
-            alt = track_closest(curve, x[two], t1[two])
+            alt = track_closest(curve, x[two], t1[two], step_tol)
             better = alt.distance < out.distance[two]
             sel = two[better]
             out.t[sel], out.foot[sel] = alt.t[better], alt.foot[better]
@@ -219,10 +242,10 @@ def _tracked(curve: Curve, x: FloatArray, t0: FloatArray, t1: FloatArray | None 
         return out
     cold = np.isnan(t0)
     if not cold.any():
-        return track_closest(curve, x, t0)
+        return track_closest(curve, x, t0, step_tol)
     if cold.all():
         return curve.closest(x)
-    warm = track_closest(curve, x[~cold], t0[~cold])
+    warm = track_closest(curve, x[~cold], t0[~cold], step_tol)
     glob = curve.closest(x[cold])
     t, foot, dist = np.empty(x.shape[0]), np.empty_like(x), np.empty(x.shape[0])
     t[~cold], foot[~cold], dist[~cold] = warm.t, warm.foot, warm.distance

@@ -32,7 +32,8 @@ import numpy as np
 from medax import tolerances
 from medax.errors import MeshError
 from medax.geometry._types import FloatArray
-from medax.geometry.certify import PointGroups, certify_many
+from medax.geometry.certify import PointGroups, certify_many, group_cells
+from medax.geometry.curve import Curve, certify_closest, track_closest
 from medax.geometry.region import Region
 from medax.mesh.boundary_nodes import RULES, side_params
 from medax.mesh.coarse_start import (
@@ -43,6 +44,7 @@ from medax.mesh.coarse_start import (
     refine_guess,
     start_feet,
 )
+from medax.mesh.free_field import FreeField, newton_free
 from medax.mesh.grid import boundary_indices
 from medax.mesh.ratio_field import (
     WEIGHTINGS,
@@ -214,7 +216,8 @@ def _grid(
     counts["interpolated"] = float(m - rows.size - fine.size)
     for key in ("newton_iterations", "global_resolved", "interpolated", "copied"):
         counts[f"coarse_{key}"] = coarse_counts.get(key, 0) + coarse_counts.get(f"coarse_{key}", 0)
-    out_feet = _level_feet(region, grid, feet0, feet, rows, kinds) if with_feet else []
+    own = [(idx[k], side_t[0][k][0]) for k in range(4)]
+    out_feet = _level_feet(region, grid, feet0, feet, rows, kinds, own, tol) if with_feet else []
     return _Level(grid, out_feet, error, moved, counts)
 
 
@@ -225,19 +228,23 @@ def _level_feet(
     solved: list[FloatArray],
     rows: np.ndarray,
     kinds: tuple[str, str],
+    own: list[tuple[np.ndarray, FloatArray]],
+    tol: float,
 ) -> list[FloatArray]:
     """Feet (n2 + 1, n1 + 1) of every node of ``grid`` on each tracked side: those the
     solve found at the interior nodes ``rows``, the interpolated ``start`` (2, m) at the
-    others (all interior nodes solved if None), a global query on the boundary."""
+    others (all interior nodes solved if None), on the boundary a global query, or the
+    node's own parameter on its own side (``own``: per side, node indices and
+    parameters)."""
     if start is None:
-        return _full_feet(region, grid, solved, kinds)
+        return _full_feet(region, grid, solved, kinds, own, tol)
     inner = []
     for k in range(4):
         f = start[k][0].copy() if start[k].size else start[k]
         if f.size:
             f[rows] = solved[k]
         inner.append(f)
-    return _full_feet(region, grid, inner, kinds)
+    return _full_feet(region, grid, inner, kinds, own, tol)
 
 
 def _coincident(n1: int, n2: int, coarse: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
@@ -283,24 +290,54 @@ def _targets(
     return ra.ravel(), rb.ravel(), (rows, cols)
 
 
+def _ring_feet(
+    curve: Curve, x: FloatArray, t: FloatArray, at: np.ndarray, tol: float
+) -> FloatArray:
+    """Global feet (len(at),) on ``curve`` of the boundary nodes ``at`` (flat indices into
+    the grid's feet ``t`` (n2 + 1, n1 + 1), interior ones known) at points ``x``: tracked
+    from the nearest interior node's foot, certified global
+    (:func:`~medax.geometry.curve.certify_closest`, slack ``tol``), a global query where
+    that is not shown."""
+    n2, n1 = t.shape[0] - 1, t.shape[1] - 1
+    j, i = np.divmod(at, n1 + 1)
+    start = t[np.clip(j, 1, n2 - 1), np.clip(i, 1, n1 - 1)]
+    c = track_closest(curve, x, start)
+    ok = certify_closest(curve, x, c.t, c.distance, tol)
+    if not ok.all():
+        c.t[~ok] = curve.closest(x[~ok]).t
+    return c.t
+
+
 def _full_feet(
-    region: Region, grid: FloatArray, inner: list[FloatArray], kinds: tuple[str, str]
+    region: Region,
+    grid: FloatArray,
+    inner: list[FloatArray],
+    kinds: tuple[str, str],
+    own: list[tuple[np.ndarray, FloatArray]],
+    tol: float = 0.0,
 ) -> list[FloatArray]:
     """Feet (n2 + 1, n1 + 1) on each tracked side: interior ones from the solve, boundary
-    ones by a global query (few points); empty arrays for untracked sides."""
+    ones by a global query (few points), except on the side's own boundary nodes (``own``:
+    per side, node indices and parameters), which lie on it; empty arrays for untracked
+    sides."""
     n2, n1 = grid.shape[0] - 1, grid.shape[1] - 1
     sides = SideDistances(region, 0, kinds)
     out: list[FloatArray] = []
     ring = np.ones((n2 + 1, n1 + 1), dtype=bool)
     ring[1:-1, 1:-1] = False
-    x = region.embedding.evaluate(grid[ring])
+    flat = grid.reshape(-1, 2)
     for k in range(4):
         if not sides.tracked[k]:
             out.append(np.empty(0))
             continue
         t = np.empty((n2 + 1, n1 + 1))
         t[1:-1, 1:-1] = inner[k].reshape(n2 - 1, n1 - 1)
-        t[ring] = sides.curves[k].closest(x).t
+        tf = t.reshape(-1)
+        others = ring.copy().reshape(-1)
+        others[own[k][0]] = False
+        at = np.flatnonzero(others)
+        tf[at] = _ring_feet(sides.curves[k], region.embedding.evaluate(flat[at]), t, at, tol)
+        tf[own[k][0]] = own[k][1]
         out.append(t)
     return out
 
@@ -344,6 +381,7 @@ def _solve(
         _check_residual(region, res, ra, rb, tol, counts)
         return p, [np.empty(0)] * 4, counts
     sides = SideDistances(region, n, kinds)
+    sides.set_tolerance(tol)
     if n == 0:
         return p, sides.t, counts
     if feet0 is not None:
@@ -355,8 +393,14 @@ def _solve(
     p = p.copy()
     res = np.zeros(n)
     rows = np.arange(n)
+    free = FreeField.supports(region, kinds)
     for round_ in range(_GLOBAL_ROUNDS + 1):
-        p[rows], it, res[rows] = _newton(sides, p[rows], ra, rb, rows, tol, kinds)
+        if free:
+            p[rows], it, res[rows] = newton_free(
+                sides, p[rows], ra, rb, rows, tol, _NEWTON_ITERS, _TRACK_STEP
+            )
+        else:
+            p[rows], it, res[rows] = _newton(sides, p[rows], ra, rb, rows, tol, kinds)
         counts["newton_iterations"] += it
         # not converged: the tracked feet may have stalled it (a foot passing to another
         # part of its side between trial points): solved again from global feet
@@ -542,7 +586,7 @@ def _wrong_feet(sides: SideDistances, p: FloatArray, tol: float, rows: np.ndarra
             continue
         curve, tk, dk = sides.curves[k], sides.t[k][rows], sides.d[k][rows]
         if groups is None and rows.size >= 2048:
-            groups = PointGroups.build(x)
+            groups = PointGroups.build(x, group_cells(rows.size))
         doubt = np.flatnonzero(~certify_many(curve, x, tk, dk, tol, groups))
         if doubt.size == 0:
             continue
