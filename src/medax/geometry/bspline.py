@@ -291,12 +291,7 @@ class BSpline(Curve):
         inner, x, rows = self._row_pieces
         t = np.minimum(np.maximum(np.asarray(t, dtype=np.float64), 0.0), 1.0)
         i = np.searchsorted(inner, t, side="right")
-        s = t - x[i]
-        w = rows[0].take(i, axis=1)
-        for p in range(1, rows.shape[0]):
-            w *= s
-            w += rows[p].take(i, axis=1)
-        return w
+        return _horner_rows(rows, i, t - x[i])
 
     def evaluate(self, t: FloatArray) -> FloatArray:
         h = self._raw(t, 0)
@@ -342,7 +337,13 @@ def stacked_jet(
     inner, starts, rows = table
     t = np.minimum(np.maximum(np.asarray(t, dtype=np.float64), 0.0), 1.0)
     i = np.searchsorted(inner, t + offset, side="right")
-    s = t - starts[i]
+    return _horner_rows(rows, i, t - starts[i])
+
+
+def _horner_rows(rows: FloatArray, i: np.ndarray, s: FloatArray) -> FloatArray:
+    """Horner on power-basis component rows ``rows`` (degree + 1, r, spans), highest power
+    first: the ``r`` rows (r, n) of the pieces ``i`` (n,) at their local parameters ``s``
+    (n,)."""
     w = rows[0].take(i, axis=1)
     for p in range(1, rows.shape[0]):
         w *= s

@@ -240,6 +240,23 @@ def track_closest(
     return Closest(t=t, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
 
 
+def _tracking_step(
+    tr: FloatArray, g: FloatArray, dg: FloatArray, speed2: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """One step of the foot tracking from parameters ``tr`` (n,): Newton on
+    ``g = (C - x) . C'`` where ``g' = dg > 0``, away from a local minimum (``dg <= 0``) a
+    gradient step scaled by ``speed2 = |C'|^2``; clamped to ``[0, 1]``. Returns the new
+    parameters, the step taken and the denominator used (n,) each; ``g`` is overwritten."""
+    den = np.where(dg > 0.0, dg, speed2)
+    np.maximum(den, 1e-300, out=den)
+    ds = np.divide(g, den, out=g)
+    ds = np.subtract(tr, ds, out=ds)
+    np.minimum(np.maximum(ds, 0.0, out=ds), 1.0, out=ds)
+    new = ds.copy()
+    ds -= tr  # the step taken
+    return new, ds, den
+
+
 def _track_block(
     curve: Curve, x: FloatArray, t: FloatArray, step_tol: float, iters: int
 ) -> tuple[FloatArray, FloatArray]:
@@ -259,14 +276,7 @@ def _track_block(
         speed2 = np.einsum("ij,ij->i", c1, c1)
         dg = np.einsum("ij,ij->i", c, c2)
         dg += speed2
-        # away from a local minimum (dg <= 0) a gradient step scaled by the speed
-        den = np.where(dg > 0.0, dg, speed2)
-        np.maximum(den, 1e-300, out=den)
-        ds = np.divide(g, den, out=g)
-        ds = np.subtract(tr, ds, out=ds)
-        np.clip(ds, 0.0, 1.0, out=ds)
-        new = ds.copy()
-        ds -= tr  # the step taken
+        new, ds, den = _tracking_step(tr, g, dg, speed2)
         if rows is None:
             t = new
         else:
@@ -359,14 +369,7 @@ def _track_rows(
             speed2 += c1[k] * c1[k]
             dg += c[k] * c2[k]
         dg += speed2
-        # away from a local minimum (dg <= 0) a gradient step scaled by the speed
-        den = np.where(dg > 0.0, dg, speed2)
-        np.maximum(den, 1e-300, out=den)
-        ds = np.divide(g, den, out=g)
-        ds = np.subtract(tr, ds, out=ds)
-        np.minimum(np.maximum(ds, 0.0, out=ds), 1.0, out=ds)
-        new = ds.copy()
-        ds -= tr  # the step taken
+        new, ds, den = _tracking_step(tr, g, dg, speed2)
         if rows is None:
             t = new
         else:
