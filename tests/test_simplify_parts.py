@@ -252,3 +252,22 @@ def test_area_change_keeps_the_fillets(monkeypatch):
     assert len(r.blends_kept) == 4
     assert all("boundary area changed by +1.00e-05" in why for _, why in r.blends_kept)
     assert r.valid and r.volume_rel_change == 0.0 and r.area_rel_change == 0.0
+
+
+@pytest.mark.parametrize("direction", [(0.5, 0.0, 0.866025403784329), (0.3, 0.4, 0.866)])
+def test_tilted_ring_fillet_across_the_seam(direction):
+    """A quarter-torus fillet round a tilted cylinder's top: its v = 0 smooth edge projects
+    partly onto v = 2 pi (refused as "not iso-lines" before the unwrapping); simplified to
+    the exact revolution, checked by OCCT and BRepExtrema."""
+    import medax.cad.parts as catalogue
+    from medax.cad.classify import classify_solid
+
+    part = catalogue.tilted_cylinder(direction)
+    cls = classify_solid(part.shape)
+    r = simplify(cls.shape, specs_from_classification(cls))
+    assert (r.faces_before, r.faces_after) == (4, 3) and not r.blends_kept
+    c = check(r.shape)
+    assert c.valid and c.shells == 1 and c.closed
+    assert abs(r.volume_rel_change) <= 1e-9
+    old_to_new, new_to_old = boundary_distances(part.shape, r.shape, 6, 6)
+    assert max(old_to_new, new_to_old) <= 1e-7 * r.diagonal

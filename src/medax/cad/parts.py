@@ -290,6 +290,20 @@ def slanted_boss(radius: float = 2.0) -> BuiltPart:
     return fillet(_solid(body), _select(body, root), radius, "slanted_boss")
 
 
+def tilted_cylinder(
+    direction: tuple[float, float, float] = (0.5, 0.0, 0.866025403784329), radius: float = 3.0
+) -> BuiltPart:
+    """A cylinder (r = 38.75, 20 long) along a tilted axis, its top edge filleted: a
+    quarter torus all the way round (as on ANC101's tilted boss, whose torus's v = 0 circle
+    projects partly onto v = 2 pi)."""
+    ax = np.asarray(direction, dtype=np.float64)
+    ax /= np.linalg.norm(ax)
+    base = gp_Ax2(gp_Pnt(304.375, 100.25, 169.67), gp_Dir(*map(float, ax)))
+    cyl = BRepPrimAPI_MakeCylinder(base, 38.75, 20.0).Shape()
+    top = max(_edges(cyl), key=lambda e: float(_edge_mid(e) @ ax))
+    return fillet(_solid(cyl), [top], radius, "tilted_cylinder")
+
+
 #: the catalogue used by tests and the demo (name -> builder without arguments)
 CATALOGUE = {
     "l_bracket": l_bracket,

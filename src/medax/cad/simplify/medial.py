@@ -54,6 +54,23 @@ def _uv(surface: Any, p: np.ndarray) -> tuple[float, float]:
     return float(u), float(v)
 
 
+def _unwrapped(uv: np.ndarray, ad: Any, bounds: tuple[float, float, float, float]) -> np.ndarray:
+    """Surface parameters ``uv`` (n, 2) of points along an edge, each periodic direction
+    unwrapped along the edge (projections land on either side of a seam: the v = 0 circle
+    of a quarter torus in ANC101 came back partly at v = 2 pi) and shifted by whole periods
+    to the representative nearest the face's own range ``bounds`` (u0, u1, v0, v1)."""
+    out = uv.copy()
+    for k in (0, 1):
+        per = _period(ad, k)
+        if not per:
+            continue
+        d = out[:, k] - out[0, k]
+        out[:, k] = out[0, k] + d - per * np.round(d / per)
+        mid = 0.5 * (bounds[2 * k] + bounds[2 * k + 1])
+        out[:, k] -= per * np.round((out[0, k] - mid) / per)
+    return out
+
+
 def _period(ad: Any, k: int) -> float:
     """Period of the surface in u (``k = 0``) or v (``k = 1``), 0 when not periodic."""
     if k == 0:
@@ -76,11 +93,10 @@ def medial_curve(face: Any, edge1: Any, edge2: Any, rel_tol: float = 1e-9) -> Me
         radius = ad.Torus().MinorRadius()
     surf = BRep_Tool.Surface_s(face)
     u0, u1, v0, v1 = uv_bounds(face)
-    ends = []
-    for e in (edge1, edge2):
-        pts = edge_points(e, 5)
-        uv = np.array([_uv(surf, p) for p in pts])
-        ends.append(uv)
+    ends = [
+        _unwrapped(np.array([_uv(surf, p) for p in edge_points(e, 5)]), ad, (u0, u1, v0, v1))
+        for e in (edge1, edge2)
+    ]
     spread = [np.ptp(uv, axis=0) for uv in ends]
     if all(s[0] < 1e-9 for s in spread):  # smooth edges are u-iso lines: cross direction u
         iso, k, lo, hi, closed_dir = "u", 0, v0, v1, ad.IsVPeriodic()
