@@ -5,8 +5,10 @@ filleted boss and a hole (10 -> 9 faces, revolution surfaces) and a boss fillete
 and top (10 -> 8 faces; the top face holds the pole of its revolution surface) and a box with
 all 12 edges filleted (26 -> 6 faces: eight sphere corners split, fitted faces) and a box
 with rounded vertical edges whose top loop was filleted after them (18 -> 6 faces: the tori
-ride on the vertical fillets and are split by bridges): the input STEP, the simplified
-STEP, the JSON report and the before/after picture of each.
+ride on the vertical fillets and are split by bridges) and a plate with a slanted boss
+whose root blend is a B-spline rolling ball (11 -> 10 faces: the ring route's periodic
+fitted faces): the input STEP, the simplified STEP, the JSON report and the before/after
+picture of each.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ def demo(outdir: Path) -> list[Path]:
         ("boss-top", parts.boss_top_fillet(2.0, root=True)),
         ("box-12-edges", parts.box_all_fillets()),
         ("rounded-box-chain", catalogue.rounded_box_chain()),
+        ("slanted-boss", catalogue.slanted_boss()),
     ):
         src = write_step(part.shape, outdir / f"simplify-{name}-input.step")
         out, rep, png = (outdir / f"simplify-{name}{ext}" for ext in (".step", ".json", ".png"))
