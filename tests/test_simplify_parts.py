@@ -271,3 +271,23 @@ def test_tilted_ring_fillet_across_the_seam(direction):
     assert abs(r.volume_rel_change) <= 1e-9
     old_to_new, new_to_old = boundary_distances(part.shape, r.shape, 6, 6)
     assert max(old_to_new, new_to_old) <= 1e-7 * r.diagonal
+
+
+def test_fillet_trimmed_obliquely_is_measured_where_both_edges_run():
+    """A fillet running into an oblique end face: its smooth edges end 0.5 apart, and its
+    mid iso-line is equidistant only where both run (beyond the shorter, the distance to it
+    is to its end point: refused as "not equidistant" before); simplified to the exact
+    extrusions, checked by OCCT and BRepExtrema."""
+    import medax.cad.parts as catalogue
+    from medax.cad.classify import classify_solid
+
+    part = catalogue.oblique_end_fillet()
+    cls = classify_solid(part.shape)
+    r = simplify(cls.shape, specs_from_classification(cls))
+    assert (r.faces_before, r.faces_after) == (7, 6) and not r.blends_kept
+    assert {g.surface for g in r.face_groups if g.halves} == {"extrusion"}
+    c = check(r.shape)
+    assert c.valid and c.shells == 1 and c.closed
+    assert abs(r.volume_rel_change) <= 1e-9
+    old_to_new, new_to_old = boundary_distances(part.shape, r.shape, 6, 6)
+    assert max(old_to_new, new_to_old) <= 1e-7 * r.diagonal

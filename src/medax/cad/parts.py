@@ -290,6 +290,18 @@ def slanted_boss(radius: float = 2.0) -> BuiltPart:
     return fillet(_solid(body), _select(body, root), radius, "slanted_boss")
 
 
+def oblique_end_fillet(radius: float = 2.0) -> BuiltPart:
+    """A prism on the quadrilateral (0, 0), (30, 0), (25, 20), (0, 20), 10 high, its top
+    front edge filleted: the fillet runs into the oblique end face, so its two smooth edges
+    end 0.5 apart along it (7 faces, one cylinder blend)."""
+    body = _prism([(0.0, 0.0), (30.0, 0.0), (25.0, 20.0), (0.0, 20.0)], 10.0)
+
+    def top_front(m: np.ndarray) -> bool:
+        return abs(m[1]) < 1e-9 and abs(m[2] - 10.0) < 1e-9
+
+    return fillet(_solid(body), _select(body, top_front), radius, "oblique_end_fillet")
+
+
 def tilted_cylinder(
     direction: tuple[float, float, float] = (0.5, 0.0, 0.866025403784329), radius: float = 3.0
 ) -> BuiltPart:

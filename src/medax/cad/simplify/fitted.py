@@ -482,7 +482,8 @@ def graph_surface(
     if fit.error > fit_tol and not probe:
         return (
             f"fitted surface error {fit.error:.2e} above {fit_tol:.2e} (curvature jumps off the "
-            "knot lines, e.g. along circles, or a step at a cross edge)"
+            "knot lines, e.g. along circles, a step at a cross edge, or a crease where two "
+            "fillets meet in a mitre)"
         )
     outward = _outward_sign(plane_face, n)
     return FittedSurface(

@@ -54,6 +54,19 @@ def _uv(surface: Any, p: np.ndarray) -> tuple[float, float]:
     return float(u), float(v)
 
 
+def _common_span(ends: list[np.ndarray], j: int, a: float, b: float) -> tuple[float, float]:
+    """The part of ``[a, b]`` (the face's range in the along parameter ``j``) that both
+    smooth edges span, by their sample parameters ``ends`` (each (n, 2), unwrapped), shrunk
+    by 1 % of its length at either end; ``[a, b]`` when they share less."""
+    lo = max(float(e[:, j].min()) for e in ends)
+    hi = min(float(e[:, j].max()) for e in ends)
+    lo, hi = max(lo, a), min(hi, b)
+    if not hi > lo:
+        return a, b
+    pad = 0.01 * (hi - lo)
+    return lo + pad, hi - pad
+
+
 def _unwrapped(uv: np.ndarray, ad: Any, bounds: tuple[float, float, float, float]) -> np.ndarray:
     """Surface parameters ``uv`` (n, 2) of points along an edge, each periodic direction
     unwrapped along the edge (projections land on either side of a seam: the v = 0 circle
@@ -127,8 +140,13 @@ def medial_curve(face: Any, edge1: Any, edge2: Any, rel_tol: float = 1e-9) -> Me
     if not mk.IsDone():
         return "could not build the medial edge"
     edge = mk.Edge()
-    # Equidistance, measured with BRepExtrema at samples inside the face.
+    # Equidistance, measured with BRepExtrema at samples inside the face, along the stretch
+    # both smooth edges span (beyond the end of the shorter one, where a fillet is trimmed
+    # obliquely by a neighbour, the distance to that edge is to its end point, not to the
+    # constraint: a random box's fillets measured 0.98 x radius there and were kept)
     a, b = (lo, hi) if full else (lo + (hi - lo) * EXTEND, hi - (hi - lo) * EXTEND)
+    if not full:
+        a, b = _common_span(ends, 1 - k, a, b)
     err, near = 0.0, float("inf")
     for t in np.linspace(a, b, 9):
         p = curve.Value(float(t))
