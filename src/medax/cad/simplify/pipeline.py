@@ -27,6 +27,7 @@ from medax.cad.simplify.corner import corner_arcs, plane_normal
 from medax.cad.simplify.fitted import FittedSurface, graph_surface
 from medax.cad.simplify.groups import Group, build_groups
 from medax.cad.simplify.medial import Medial, medial_curve
+from medax.cad.simplify.mitre import mitre_keeps, mitre_pairs
 from medax.cad.simplify.occ import count, diagonal, shape_map, small_list
 from medax.cad.simplify.rebuild import build_solid
 from medax.cad.simplify.ring import NOT_A_RING, ring_surface
@@ -231,6 +232,10 @@ def simplify(
     _keep_next_to_corners(work, blends, job.medials, kept)
     say(f"{len(job.medials)} fillets with a medial curve, {len(job.corners)} corner blends split")
     job.specs = {s.face: s for s in blends.fillets if s.face in job.medials}
+    for f, why in mitre_keeps(mitre_pairs(work, fmap, job.specs), job.corners).items():
+        job.specs.pop(f)
+        kept[f] = why
+    _cascade(job.specs, job.corners, kept)
     _refresh_surfaces(job)
     n_fit = sum(1 for v in job.surfaces.values() if v == FITTED)
     say(f"{len(job.specs)} fillets on {len(job.surfaces)} merged faces ({n_fit} fitted)")
