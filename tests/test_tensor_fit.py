@@ -144,3 +144,25 @@ def test_only_the_direction_that_matters_is_refined(monkeypatch):
     assert one.error <= 1e-4 and both.error <= 1e-4
     assert one.coef.shape[0] == both.coef.shape[0]  # the same x spacing
     assert 3 * one.coef.size < both.coef.size
+
+
+def test_coefficient_count_is_that_of_the_knots():
+    """The count checked against the cap before any knot vector is built equals the built
+    knot vector's (random breaks, fine flags and spacings)."""
+    from medax.geometry import tensor_fit as tf
+
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        breaks = sorted(rng.uniform(0.05, 0.95, int(rng.integers(0, 4))).tolist())
+        fine = rng.integers(0, 2, len(breaks) + 1).astype(bool).tolist()
+        sp = float(rng.uniform(0.01, 0.5))
+        built = tf._knots(0.0, 1.0, breaks, fine, sp).size - tf.DEGREE - 1
+        assert tf._coefficient_count(0.0, 1.0, breaks, fine, sp) == built
+
+
+def test_a_degenerate_spacing_is_refused_not_raised():
+    """A spacing of 0 or 1e-300 (a degenerate piece's radius / 4) is a fit too large to
+    solve: None, not a knot vector beyond memory (numpy's 'Maximum allowed size
+    exceeded', seen on a box with fillets of three radii)."""
+    for step in (0.0, 1e-300):
+        assert fit_height((0.9, 20.0), (0.9, 20.0), [R], [R], _h, 1e-6, step) is None

@@ -99,6 +99,21 @@ def greville(t: FloatArray) -> FloatArray:
     return np.array([t[i + 1 : i + DEGREE + 1].mean() for i in range(n)])
 
 
+def _coefficient_count(
+    lo: float, hi: float, breaks: Sequence[float], fine: Sequence[bool], sp_: float
+) -> float:
+    """Coefficients of :func:`_knots` with the same arguments, counted without building the
+    knots (inf for a spacing that is not positive: a degenerate piece's radius)."""
+    if not sp_ > 0.0:
+        return float("inf")
+    pts = [lo, *breaks, hi]
+    spans = sum(
+        max(1.0, np.ceil((b - a) / sp_ - 1e-9)) if fine[k] else 1.0
+        for k, (a, b) in enumerate(zip(pts[:-1], pts[1:], strict=True))
+    )
+    return float(spans + DEGREE + (DEGREE - 2) * len(breaks))
+
+
 def _knots(
     lo: float, hi: float, breaks: Sequence[float], fine: Sequence[bool], sp_: float
 ) -> FloatArray:
@@ -192,6 +207,8 @@ def fit_height(
     ``x_breaks``/``y_breaks``: coordinates strictly inside the ranges where the height's
     curvature may jump (C1 knots there).
     """
+    if not spacing > 0.0:  # (a degenerate piece's radius): no fit
+        return None
     (x0, x1), (y0, y1) = x_range, y_range
     xb = sorted(b for b in set(x_breaks) if x0 < b < x1)
     yb = sorted(b for b in set(y_breaks) if y0 < b < y1)
@@ -202,9 +219,10 @@ def fit_height(
 
     def fit_at(sx: float, sy: float) -> TensorFit | None:
         """The fit with spans of at most ``sx``, ``sy``; None when too large to solve."""
-        nx = _knots(x0, x1, xb, fine_x, sx).size - DEGREE - 1
-        ny = _knots(y0, y1, yb, fine_y, sy).size - DEGREE - 1
-        if nx * ny > MAX_COEFFICIENTS:
+        # (counted first: a spacing near 0 would build knot vectors beyond memory)
+        nx = _coefficient_count(x0, x1, xb, fine_x, sx)
+        ny = _coefficient_count(y0, y1, yb, fine_y, sy)
+        if not nx * ny <= MAX_COEFFICIENTS:
             return None
         return _fit_once(x_range, y_range, xb, yb, fine_x, fine_y, h, sx, sy)
 

@@ -448,6 +448,11 @@ def graph_surface(
     if not curved:
         return "no curved piece to merge"
     rmin = min(curved)
+    if not rmin > geom_tol:  # a pole or apex of a freeform blend piece (seen: 6e-23)
+        return (
+            f"a merged piece has a degenerate curvature radius ({rmin:.1e}): no height-field "
+            "fit spacing follows from it"
+        )
     bnds = [m.boundary for m in ms]
     allb = np.vstack(bnds)
     margin = 0.25 * rmin
