@@ -291,3 +291,23 @@ def test_fillet_trimmed_obliquely_is_measured_where_both_edges_run():
     assert abs(r.volume_rel_change) <= 1e-9
     old_to_new, new_to_old = boundary_distances(part.shape, r.shape, 6, 6)
     assert max(old_to_new, new_to_old) <= 1e-7 * r.diagonal
+
+
+def test_edge_parameters_unwrapped_across_the_seam():
+    """On a torus (periodic in both directions): a v = 0 circle whose projection landed at
+    v = 2 pi on one sample stays at v = 0; an arc of 1.2 turns of pi in u stays whole
+    (unwrapped step by step, not against its first sample)."""
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeTorus
+
+    from medax.cad.simplify.medial import _unwrapped
+
+    face = next(iter(faces_of(BRepPrimAPI_MakeTorus(10.0, 2.0).Shape())))
+    ad = BRepAdaptor_Surface(face)
+    bounds = (0.0, 2 * math.pi, 0.0, 0.5 * math.pi)
+    seam = np.array([[0.0, 0.0], [1.5, 0.0], [3.0, 0.0], [4.5, 2 * math.pi - 1e-15], [6.0, 0.0]])
+    out = _unwrapped(seam, ad, bounds)
+    assert np.ptp(out[:, 1]) < 1e-12 and abs(out[0, 1]) < 1e-12
+    arc = np.column_stack((np.linspace(0.0, 1.2 * math.pi, 5), np.full(5, 0.3)))
+    out = _unwrapped(arc, ad, bounds)
+    assert np.allclose(out[:, 0], arc[:, 0]) and np.allclose(out[:, 1], 0.3)

@@ -77,8 +77,9 @@ def _unwrapped(uv: np.ndarray, ad: Any, bounds: tuple[float, float, float, float
         per = _period(ad, k)
         if not per:
             continue
-        d = out[:, k] - out[0, k]
-        out[:, k] = out[0, k] + d - per * np.round(d / per)
+        # consecutive samples are less than half a period apart (5 along an edge of at most
+        # a full turn): unwrapped step by step, an arc of more than half a turn stays whole
+        out[:, k] = np.unwrap(out[:, k], period=per)
         mid = 0.5 * (bounds[2 * k] + bounds[2 * k + 1])
         out[:, k] -= per * np.round((out[0, k] - mid) / per)
     return out
