@@ -7,12 +7,9 @@ import pytest
 from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
 
 import medax.cad.parts as catalogue
-from medax.cad.classify import classify_solid
-from medax.cad.simplify import simplify, specs_from_classification
 from medax.cad.simplify.mitre import mitre_keeps
 from medax.cad.simplify.specs import CornerSpec
-from medax.cad.simplify.validate import check
-from truth import boundary_distances
+from truth import assert_same_solid, classified_and_simplified
 
 
 @pytest.fixture(scope="module")
@@ -25,8 +22,7 @@ def mitred():
         return abs(m[2] - 10.0) < 1e-9 and (abs(m[1]) < 1e-9 or abs(m[0] - 30.0) < 1e-9)
 
     part = catalogue.fillet(box, catalogue._select(box, top_front_right), 2.0, "mitred")
-    cls = classify_solid(part.shape)
-    return part, cls, simplify(cls.shape, specs_from_classification(cls))
+    return (part, *classified_and_simplified(part.shape))
 
 
 def test_mitre_pair_keeps_one_merges_the_other(mitred):
@@ -37,11 +33,7 @@ def test_mitre_pair_keeps_one_merges_the_other(mitred):
     (_, why), other = r.blends_kept[0], r.blends_removed[0]
     assert f"meets fillet {other} in a mitre" in why
     assert {g.surface for g in r.face_groups if g.halves} == {"extrusion"}
-    c = check(r.shape)
-    assert c.valid and c.shells == 1 and c.closed
-    assert abs(r.volume_rel_change) <= 1e-9
-    old_to_new, new_to_old = boundary_distances(part.shape, r.shape, 6, 6)
-    assert max(old_to_new, new_to_old) <= 1e-7 * r.diagonal
+    assert_same_solid(part.shape, r, 6, 6, volume_tol=1e-9, deviation_tol=1e-7)
 
 
 def test_mitre_keeps_covers_every_pair():

@@ -14,7 +14,7 @@ from medax.cad.simplify import parts as P
 from medax.cad.simplify import simplify, specs_from_blend_faces, specs_from_classification
 from medax.cad.simplify.occ import count, faces_of
 from medax.cad.simplify.validate import check, face_samples, max_distance
-from truth import boundary_distances
+from truth import assert_same_solid, boundary_distances, classified_and_simplified
 
 
 def _run(part: P.BuiltPart):
@@ -260,17 +260,11 @@ def test_tilted_ring_fillet_across_the_seam(direction):
     partly onto v = 2 pi (refused as "not iso-lines" before the unwrapping); simplified to
     the exact revolution, checked by OCCT and BRepExtrema."""
     import medax.cad.parts as catalogue
-    from medax.cad.classify import classify_solid
 
     part = catalogue.tilted_cylinder(direction)
-    cls = classify_solid(part.shape)
-    r = simplify(cls.shape, specs_from_classification(cls))
+    _, r = classified_and_simplified(part.shape)
     assert (r.faces_before, r.faces_after) == (4, 3) and not r.blends_kept
-    c = check(r.shape)
-    assert c.valid and c.shells == 1 and c.closed
-    assert abs(r.volume_rel_change) <= 1e-9
-    old_to_new, new_to_old = boundary_distances(part.shape, r.shape, 6, 6)
-    assert max(old_to_new, new_to_old) <= 1e-7 * r.diagonal
+    assert_same_solid(part.shape, r, 6, 6, volume_tol=1e-9, deviation_tol=1e-7)
 
 
 def test_fillet_trimmed_obliquely_is_measured_where_both_edges_run():
@@ -279,18 +273,12 @@ def test_fillet_trimmed_obliquely_is_measured_where_both_edges_run():
     is to its end point: refused as "not equidistant" before); simplified to the exact
     extrusions, checked by OCCT and BRepExtrema."""
     import medax.cad.parts as catalogue
-    from medax.cad.classify import classify_solid
 
     part = catalogue.oblique_end_fillet()
-    cls = classify_solid(part.shape)
-    r = simplify(cls.shape, specs_from_classification(cls))
+    _, r = classified_and_simplified(part.shape)
     assert (r.faces_before, r.faces_after) == (7, 6) and not r.blends_kept
     assert {g.surface for g in r.face_groups if g.halves} == {"extrusion"}
-    c = check(r.shape)
-    assert c.valid and c.shells == 1 and c.closed
-    assert abs(r.volume_rel_change) <= 1e-9
-    old_to_new, new_to_old = boundary_distances(part.shape, r.shape, 6, 6)
-    assert max(old_to_new, new_to_old) <= 1e-7 * r.diagonal
+    assert_same_solid(part.shape, r, 6, 6, volume_tol=1e-9, deviation_tol=1e-7)
 
 
 def test_edge_parameters_unwrapped_across_the_seam():

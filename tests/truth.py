@@ -180,13 +180,22 @@ def classified_and_simplified(shape: object) -> tuple[object, object]:
     return cls, simplify(cls.shape, specs_from_classification(cls))
 
 
-def assert_same_solid(before: object, r: object, n_old: int = 9, n_new: int = 16) -> None:
-    """The simplified solid is one valid closed shell, its volume within 1e-6 of the input's,
-    and its boundary within 1e-5 x diagonal of the input's both ways (whole solids)."""
+def assert_same_solid(
+    before: object,
+    r: object,
+    n_old: int = 9,
+    n_new: int = 16,
+    volume_tol: float = 1e-6,
+    deviation_tol: float = 1e-5,
+) -> None:
+    """The simplified solid is one valid closed shell, its volume within ``volume_tol``
+    (relative) of the input's, and its boundary within ``deviation_tol`` x diagonal of the
+    input's both ways (whole solids; the defaults are the issue's, exact surfaces are held
+    to tighter ones)."""
     from medax.cad.simplify.validate import check
 
     c = check(r.shape)  # type: ignore[attr-defined]
     assert c.valid and c.shells == 1 and c.closed
-    assert abs(r.volume_rel_change) <= 1e-6  # type: ignore[attr-defined]
+    assert abs(r.volume_rel_change) <= volume_tol  # type: ignore[attr-defined]
     old_to_new, new_to_old = boundary_distances(before, r.shape, n_old, n_new)  # type: ignore[attr-defined]
-    assert max(old_to_new, new_to_old) <= 1e-5 * r.diagonal  # type: ignore[attr-defined]
+    assert max(old_to_new, new_to_old) <= deviation_tol * r.diagonal  # type: ignore[attr-defined]

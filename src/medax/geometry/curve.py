@@ -240,66 +240,21 @@ def track_closest(
     return Closest(t=t, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
 
 
-def _tracking_step(
-    tr: FloatArray, g: FloatArray, dg: FloatArray, speed2: FloatArray
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """One step of the foot tracking from parameters ``tr`` (n,): Newton on
-    ``g = (C - x) . C'`` where ``g' = dg > 0``, away from a local minimum (``dg <= 0``) a
-    gradient step scaled by ``speed2 = |C'|^2``; clamped to ``[0, 1]``. Returns the new
-    parameters, the step taken and the denominator used (n,) each; ``g`` is overwritten."""
-    den = np.where(dg > 0.0, dg, speed2)
-    np.maximum(den, 1e-300, out=den)
-    ds = np.divide(g, den, out=g)
-    ds = np.subtract(tr, ds, out=ds)
-    np.minimum(np.maximum(ds, 0.0, out=ds), 1.0, out=ds)
-    new = ds.copy()
-    ds -= tr  # the step taken
-    return new, ds, den
-
-
 def _track_block(
     curve: Curve, x: FloatArray, t: FloatArray, step_tol: float, iters: int
 ) -> tuple[FloatArray, FloatArray]:
-    """:func:`track_closest` on one block: feet (n,) and foot points (n, dim)."""
+    """:func:`track_closest` on one block: feet (n,) and foot points (n, dim), by the row
+    tracking (:func:`_track_rows`), on :meth:`Curve.jet` turned into rows for kinds that
+    have no :meth:`Curve.jet_rows` (the same steps and stopping rule either way)."""
     if curve.jet_rows(t[:1]) is not None:
-        t, foot_rows, _ = track_rows(curve, np.ascontiguousarray(x.T), t, step_tol, iters)
-        return t, foot_rows.T
-    t = t.copy()
-    foot = np.empty_like(x)
-    rows: np.ndarray | None = None  # rows still moving (None: all)
-    for it in range(iters):
-        tr = t if rows is None else t[rows]
-        xr = x if rows is None else x[rows]
-        c0, c1, c2 = curve.jet(tr)
-        c = c0 - xr
-        g = np.einsum("ij,ij->i", c, c1)
-        speed2 = np.einsum("ij,ij->i", c1, c1)
-        dg = np.einsum("ij,ij->i", c, c2)
-        dg += speed2
-        new, ds, den = _tracking_step(tr, g, dg, speed2)
-        if rows is None:
-            t = new
-        else:
-            t[rows] = new
-        if it == iters - 1:
-            done = np.ones(tr.size, dtype=bool)
-        else:  # a short Newton step, or a foot held at an end of the curve
-            done = (np.abs(ds) <= step_tol) & ((dg > 0.0) | (ds == 0.0))
-        half = 0.5 * ds
-        c2 *= half[:, None]
-        c2 += c1
-        c2 *= ds[:, None]
-        c2 += c0  # C(t) + C'(t) ds + C''(t) ds^2 / 2
-        if done.all():
-            if rows is None:
-                foot = c2
-            else:
-                foot[rows] = c2
-            break
-        idx = np.flatnonzero(done) if rows is None else rows[done]
-        foot[idx] = c2[done]
-        rows = np.flatnonzero(~done) if rows is None else rows[~done]
-    return t, foot
+        jet: RowJet = lambda tr, rows: curve.jet_rows(tr)  # noqa: E731
+    else:
+
+        def jet(tr: FloatArray, rows: np.ndarray | slice | None) -> FloatArray:
+            return np.concatenate([c.T for c in curve.jet(tr)])
+
+    t, foot_rows, _ = _track_rows(jet, np.ascontiguousarray(x.T), t, step_tol, iters)
+    return t, foot_rows.T
 
 
 #: component-row jets of the points ``rows`` (indices or a slice; None: all) of a tracking
@@ -369,7 +324,14 @@ def _track_rows(
             speed2 += c1[k] * c1[k]
             dg += c[k] * c2[k]
         dg += speed2
-        new, ds, den = _tracking_step(tr, g, dg, speed2)
+        # away from a local minimum (dg <= 0) a gradient step scaled by the speed
+        den = np.where(dg > 0.0, dg, speed2)
+        np.maximum(den, 1e-300, out=den)
+        ds = np.divide(g, den, out=g)
+        ds = np.subtract(tr, ds, out=ds)
+        np.minimum(np.maximum(ds, 0.0, out=ds), 1.0, out=ds)
+        new = ds.copy()
+        ds -= tr  # the step taken
         if rows is None:
             t = new
         else:
