@@ -10,6 +10,7 @@ from medax.geometry.certify import (
     PointGroups,
     certify_groups,
     certify_many,
+    group_cells,
     piece_bounds,
     supports,
 )
@@ -86,3 +87,21 @@ def test_points_in_groups_are_within_rho():
     assert np.all(d <= gr.rho[gr.group] + 1e-15)
     assert np.array_equal(np.sort(gr.order), np.arange(x.shape[0]))
     np.testing.assert_array_equal(gr.reduce_max(d), gr.rho)
+
+
+@pytest.mark.parametrize("side", [0, 1, 2, 3])
+def test_group_window_runs_through_rising_and_convex_pieces(side):
+    """The group pass alone decides most true feet of points inside ``wavy``: its window
+    continues from the feet's own pieces through pieces where the distance rises or is
+    convex (measured 0.755 - 0.80 of 12000 points; 0.61 - 0.67 when one convex piece on
+    each side of the feet was required instead), and what it decides is the brute-force
+    nearest."""
+    c = REGIONS["wavy"].sides[side]
+    r = REGIONS["wavy"]
+    lo, hi = r.corners.min(axis=0), r.corners.max(axis=0)
+    x = np.random.default_rng(side).uniform(lo, hi, (12000, 2))
+    g = c.closest(x)
+    ok = certify_groups(c, PointGroups.build(x, group_cells(x.shape[0])), g.t, g.distance, 1e-12)
+    assert ok.mean() > 0.72
+    truth = _brute(c, x[ok])
+    assert np.all(truth >= g.distance[ok] - 1e-12 - 1e-9)

@@ -4,9 +4,12 @@ at once, by bounds on curve pieces shared by groups of nearby points.
 For a point ``x`` with local foot ``t`` at distance ``d``, the foot is global (to ``slack``)
 when the curve splits into
 
-- a parameter window ``W`` (contiguous pieces, containing ``t``) on which the squared distance
-  ``f(s) = |C(s) - x|^2`` is convex: ``f'' / 2 = |C'|^2 + (C - x) . C'' > 0``; then the
-  stationary foot is the minimum of ``f`` over ``W``;
+- a parameter window ``W`` (contiguous pieces, containing ``t``) over which ``f(s) =
+  |C(s) - x|^2`` has its minimum at ``t``: the pieces of ``t`` convex (``f'' / 2 = |C'|^2 +
+  (C - x) . C'' > 0``, so the stationary foot is their minimum), then pieces after them on
+  which ``f`` rises and pieces before them on which it falls (``f' / 2 = (C - x) . C'``
+  of one sign, or the piece convex: ``f'`` then keeps the sign it had at the piece's inner
+  end);
 - pieces outside ``W`` whose distance from ``x`` is at least ``d - slack``.
 
 Both tests use the Bernstein coefficients of polynomials over each piece (a polynomial lies
@@ -206,14 +209,14 @@ def certify_groups(
     spread = (groups.rho + eps * cn) * b.vel_max[:, None] + b.margin
     rising = _coef_min(b.slope, -c, b.vel) > spread  # of (C - c) . C'
     falling = _coef_min(-b.slope, c, b.vel) > spread
-    # the window: the pieces of the group's feet and one more on each side convex (one
-    # basin: a foot there is the one local minimum, or Newton's way to it), then
-    # strictly rising pieces after them and falling ones before them, contiguous
+    # the window: the pieces of the group's feet convex (a stationary foot there is their
+    # minimum), then contiguous pieces after them where f rises (f' > 0 bounded, or f
+    # convex: f' > 0 at the inner end stays so) and before them where it falls
     inner = b.edges[1:-1]
     t_lo, t_hi = groups.reduce_min(t), groups.reduce_max(t)
     finite = np.isfinite(t_lo) & np.isfinite(t_hi)  # (a NaN foot fails its whole group)
-    jlo = np.searchsorted(inner, np.where(finite, t_lo, 0.0), side="right") - 1
-    jhi = np.searchsorted(inner, np.where(finite, t_hi, 0.0), side="right") + 1
+    jlo = np.searchsorted(inner, np.where(finite, t_lo, 0.0), side="right")
+    jhi = np.searchsorted(inner, np.where(finite, t_hi, 0.0), side="right")
     np.maximum(jlo, 0, out=jlo)
     np.minimum(jhi, npc - 1, out=jhi)
     # feet all held at an end of the curve: no core, only falling (rising) pieces before
@@ -227,11 +230,11 @@ def certify_groups(
     covered = far | core_in
     run = np.zeros(ng, dtype=bool)  # the window still open, walking right from the core
     for k in range(npc):
-        run = (run | (k == jhi + 1)) & rising[k]
+        run = (run | (k == jhi + 1)) & (rising[k] | convex[k])
         covered[k] |= run
     run[:] = False  # ... and walking left
     for k in range(npc - 1, -1, -1):
-        run = (run | (k == jlo - 1)) & falling[k]
+        run = (run | (k == jlo - 1)) & (falling[k] | convex[k])
         covered[k] |= run
     ok = finite & core & np.all(covered, axis=0)
     return ok[groups.group]
