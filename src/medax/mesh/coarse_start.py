@@ -163,19 +163,36 @@ def start_feet(
     the nearer kept (:func:`~medax.mesh.ratio_field._tracked`; the feet are certified
     global at the end)."""
     c2, c1 = spread.shape[1], spread.shape[2]
-    if rows is None:
-        rows = np.arange((n1 - 1) * (n2 - 1))
-    jj, ii = np.divmod(rows, n1 - 1)
-    ci, cj = _cells(ii + 1, n1, c1), _cells(jj + 1, n2, c2)
-    out = np.full((2, rows.size), np.nan)
-    if cubic is not None:
-        out[0] = np.clip(cubic[rows], 0.0, 1.0)
+    ci, cj = _cells(np.arange(1, n1), n1, c1), _cells(np.arange(1, n2), n2, c2)  # per column, row
+    if rows is None and cubic is not None:  # every node: no indices needed
+        out = np.full((2, cubic.size), np.nan)
+        np.clip(cubic, 0.0, 1.0, out=out[0])
+        cell = (cj[:, None] * c1 + ci).ravel()
     else:
-        fu, fv = (ii + 1) / n1 * c1 - ci, (jj + 1) / n2 * c2 - cj
-        lower = coarse[cj, ci] * (1.0 - fu) + coarse[cj, ci + 1] * fu
-        upper = coarse[cj + 1, ci] * (1.0 - fu) + coarse[cj + 1, ci + 1] * fu
-        out[0] = lower * (1.0 - fv) + upper * fv
-    jump = spread[0][cj, ci] > FOOT_JUMP
-    out[0, jump] = spread[1][cj[jump], ci[jump]]
-    out[1, jump] = spread[2][cj[jump], ci[jump]]
+        rows = np.arange((n1 - 1) * (n2 - 1)) if rows is None else rows
+        jj = rows // (n1 - 1)
+        ii = rows - jj * (n1 - 1)
+        out = np.full((2, rows.size), np.nan)
+        if cubic is not None:
+            np.clip(cubic[rows], 0.0, 1.0, out=out[0])
+        else:
+            out[0] = _bilinear(coarse, ii, jj, n1, n2)
+        cell = cj[jj] * c1 + ci[ii]
+    at = np.flatnonzero(spread[0].ravel()[cell] > FOOT_JUMP)
+    out[0, at] = spread[1].ravel()[cell[at]]
+    out[1, at] = spread[2].ravel()[cell[at]]
     return out
+
+
+def _bilinear(coarse: FloatArray, ii: np.ndarray, jj: np.ndarray, n1: int, n2: int) -> FloatArray:
+    """The ``coarse`` values (c2 + 1, c1 + 1) bilinear at the interior nodes ``(ii + 1,
+    jj + 1)`` (each (p,)) of an ``n1 x n2`` grid: (p,)."""
+    c2, c1 = coarse.shape[0] - 1, coarse.shape[1] - 1
+    i, j = np.arange(1, n1), np.arange(1, n2)
+    ci, cj = _cells(i, n1, c1), _cells(j, n2, c2)
+    fu, fv = (i / n1 * c1 - ci)[ii], (j / n2 * c2 - cj)[jj]  # (p,) the fractions in the cells
+    q = cj[jj] * (c1 + 1) + ci[ii]  # (p,) the lower left corners
+    flat = coarse.ravel()
+    lower = flat[q] * (1.0 - fu) + flat[q + 1] * fu
+    upper = flat[q + c1 + 1] * (1.0 - fu) + flat[q + c1 + 2] * fu
+    return lower * (1.0 - fv) + upper * fv
