@@ -386,33 +386,37 @@ def certify_closest(
     n, m = x.shape[0], pts.shape[0]
     half, quarter, sag = curve._gaps
     dt = ts[1] - ts[0]
-    pt2 = -2.0 * pts.T
+    pt2 = -2.0 * pts  # (m, dim)
     ok = np.empty(n, dtype=bool)
     # the samples within 1.5 spacings of the foot (excluded): among the 5 nearest indices
     near = np.floor(t / dt).astype(np.int64)[:, None] + np.arange(-2, 3)
     near = np.minimum(np.maximum(near, 0), m - 1)
     excluded = np.abs(ts[near] - t[:, None]) <= 1.5 * dt
-    rows = max(1, _TABLE_BLOCK // m)  # small blocks: the table stays in cache
-    is_min = np.empty((rows, m), dtype=bool)
-    for s in range(0, n, rows):
-        xs = x[s : s + rows]
-        r = xs.shape[0]
-        d2 = xs @ pt2  # |x - p|^2 - |x|^2
-        d2 += pp[None, :]
-        im = is_min[:r]
-        im[:, 0] = True
-        np.less_equal(d2[:, 1:], d2[:, :-1], out=im[:, 1:])
-        im[:, :-1] &= d2[:, :-1] <= d2[:, 1:]
-        rr = np.arange(r)[:, None]
-        ex = excluded[s : s + rows]
-        im[rr, near[s : s + rows]] &= ~ex
-        other = np.minimum.reduce(d2, axis=1, where=im, initial=np.inf)
-        other += np.einsum("ij,ij->i", xs, xs)
+    xx = np.einsum("ij,ij->i", x, x)
+    xt = np.ascontiguousarray(x.T)
+    # tables (samples, points) in blocks that stay in cache: the neighbour comparisons are
+    # then contiguous runs, not one short row per point (measured 1.6x faster)
+    cols = max(1, _TABLE_BLOCK // m)
+    d2_buf, min_buf = np.empty((m, cols)), np.empty((m, cols), dtype=bool)
+    le_buf = np.empty((m - 1, cols), dtype=bool)
+    for s in range(0, n, cols):
+        e = min(n, s + cols)
+        d2, im, le = d2_buf[:, : e - s], min_buf[:, : e - s], le_buf[:, : e - s]
+        np.matmul(pt2, xt[:, s:e], out=d2)  # |x - p|^2 - |x|^2
+        d2 += pp[:, None]
+        np.less_equal(d2[1:], d2[:-1], out=im[1:])
+        im[0] = True
+        np.less_equal(d2[:-1], d2[1:], out=le)
+        im[:-1] &= le
+        rr, kk = np.nonzero(excluded[s:e])
+        im[near[s:e][rr, kk], rr] = False
+        other = np.minimum.reduce(d2, axis=0, where=im, initial=np.inf)
+        other += xx[s:e]
         np.maximum(other, 0.0, out=other)  # the nearest other sample, squared
         bound = np.sqrt(other) - half
         with np.errstate(invalid="ignore"):  # (inf - inf: no other part, or no chord bound)
             np.fmax(bound, np.sqrt(np.maximum(other - quarter, 0.0)) - sag, out=bound)
-        ok[s : s + rows] = bound >= distance[s : s + rows] - slack
+        ok[s:e] = bound >= distance[s:e] - slack
     return ok
 
 
