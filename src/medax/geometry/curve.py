@@ -325,7 +325,8 @@ def _track_rows(
             dg += c[k] * c2[k]
         dg += speed2
         # away from a local minimum (dg <= 0) a gradient step scaled by the speed
-        den = np.where(dg > 0.0, dg, speed2)
+        pos = dg > 0.0
+        den = np.where(pos, dg, speed2)
         np.maximum(den, 1e-300, out=den)
         ds = np.divide(g, den, out=g)
         ds = np.subtract(tr, ds, out=ds)
@@ -338,14 +339,22 @@ def _track_rows(
             t[rows] = new
         # a short Newton step, or a foot held at an end of the curve
         tol = step_tol if not per_row or rows is None else step_tol[rows]  # type: ignore[index]
-        settled = (np.abs(ds) <= tol) & ((dg > 0.0) | (ds == 0.0))
+        zero = ds == 0.0
+        settled = np.abs(ds) <= tol
+        settled &= pos | zero
         done = settled if it < iters - 1 else np.ones(tr.size, dtype=bool)
-        # |(C - x) . C''| / g'; 0 for a foot held at an end where g' <= 0 (the distance is to
-        # the end point there); inf away from a local minimum or where the steps ran out
-        # unsettled (the foot, and its Taylor point, may then be off)
-        kap = np.where(dg > 0.0, np.abs(dg - speed2) / den, np.inf)
-        kap[(dg <= 0.0) & (ds == 0.0) & ((new == 0.0) | (new == 1.0))] = 0.0
+        # |(C - x) . C''| / g'; inf where the steps ran out unsettled (the foot, and its
+        # Taylor point, may then be off); where g' <= 0 (away from a local minimum, settled
+        # only if held) 0 for a foot held at an end (the distance is to the end point
+        # there), else inf
+        kap = np.subtract(dg, speed2, out=dg)
+        np.abs(kap, out=kap)
+        kap /= den
         kap[~settled] = np.inf
+        neg = np.flatnonzero(~pos)
+        if neg.size:
+            nn = new[neg]
+            kap[neg] = np.where(zero[neg] & ((nn == 0.0) | (nn == 1.0)), 0.0, np.inf)
         half = 0.5 * ds
         c2 *= half
         c2 += c1
