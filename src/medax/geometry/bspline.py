@@ -249,11 +249,11 @@ class BSpline(Curve):
     @cached_property
     def _row_pieces(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """:attr:`_pieces` for :meth:`jet_rows`: the interior breaks, all breaks, and the
-        coefficients (degree+1, 3 * dim, m) by power (highest first), then order and
-        coordinate, spans last (one gather per power fetches a contiguous row block)."""
+        value's coefficients (degree+1, dim, m) by power (highest first), then coordinate,
+        spans last (the derivatives' follow from them: :func:`_horner_rows`)."""
         x, coefs = self._pieces
         m, k1, _, dim = coefs.shape
-        rows = np.ascontiguousarray(coefs.transpose(1, 2, 3, 0).reshape(k1, 3 * dim, m))
+        rows = np.ascontiguousarray(coefs[:, :, 0, :].transpose(1, 2, 0))
         return np.ascontiguousarray(x[1:-1]), x, rows
 
     def chord_smooth(self) -> bool:
@@ -341,12 +341,25 @@ def stacked_jet(
 
 
 def _horner_rows(rows: FloatArray, i: np.ndarray, s: FloatArray) -> FloatArray:
-    """Horner on power-basis component rows ``rows`` (degree + 1, r, spans), highest power
-    first: the ``r`` rows (r, n) of the pieces ``i`` (n,) at their local parameters ``s``
-    (n,)."""
-    coef = rows.take(i, axis=2)  # (degree + 1, r, n): one gather (measured 1.45x faster
-    w = coef[0]  # than one per power)
-    for p in range(1, rows.shape[0]):
-        w *= s
-        w += coef[p]
-    return w
+    """Value, first and second derivative as component rows (3 * dim, n) of the pieces
+    ``i`` (n,) at their local parameters ``s`` (n,), from the value's power-basis
+    coefficients ``rows`` (degree + 1, dim, spans), highest power first, by Horner's rule.
+    The derivatives' coefficients are formed from the gathered ones as :meth:`BSpline._pack`
+    forms them (``p a_p``, then ``(p - 1) p a_p``: the same numbers), so that only the
+    value's are gathered (measured 1.4x faster than gathering all three orders)."""
+    k, dim = rows.shape[0] - 1, rows.shape[1]
+    a = rows.take(i, axis=2)  # (k + 1, dim, n): one gather
+    out = np.empty((3 * dim, s.size))
+    powers = np.arange(k, -1, -1, dtype=np.float64)[:, None, None]
+    for order in range(3):
+        w = out[order * dim : (order + 1) * dim]
+        if order > k:
+            w[...] = 0.0
+            continue
+        if order:
+            a = a[:-1] * powers[order - 1 : -1]
+        np.copyto(w, a[0])
+        for p in range(1, a.shape[0]):
+            w *= s
+            w += a[p]
+    return out
