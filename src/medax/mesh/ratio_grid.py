@@ -107,10 +107,11 @@ def _levels(n1: int, n2: int) -> list[tuple[int, int]]:
 @dataclass
 class _Level:
     """A solved level: nodes ``grid`` (n2 + 1, n1 + 1, 2), feet on the tracked sides (each
-    (n2 + 1, n1 + 1), empty arrays for the others; none unless asked for), the estimated
-    error of each node ((n2 + 1, n1 + 1): 0 where solved), how far the solve moved each
-    node from its interpolated start ((n2 + 1, n1 + 1): the measured interpolation error; 0
-    where not solved, inf where solved from no interpolation) and counts."""
+    (n2 + 1, n1 + 1), empty arrays for the others), the estimated error of each node
+    ((n2 + 1, n1 + 1): 0 where solved), how far the solve moved each node from its
+    interpolated start ((n2 + 1, n1 + 1): the measured interpolation error; 0 where not
+    solved, inf where solved from no interpolation) and counts; feet, errors and moves only
+    where asked for (a coarse start), else empty arrays."""
 
     grid: FloatArray
     feet: list[FloatArray]
@@ -201,17 +202,24 @@ def _grid(
         kinds, start,
         axes if rows.size == m else (None, None),
     )  # fmt: skip
-    moved = np.zeros((n2 + 1, n1 + 1))  # how far the solve moved each node from its start
-    if rows.size:
-        step = np.zeros(m)
-        step[rows] = np.linalg.norm(solved - inner[rows], axis=1) if len(levels) > 1 else np.inf
-        moved[1:-1, 1:-1] = step.reshape(n2 - 1, n1 - 1)
+    moved = error = np.empty((0, 0))  # (only a coarse start's are used)
+    if with_feet:
+        moved = np.zeros((n2 + 1, n1 + 1))  # how far the solve moved each node from its start
+        if rows.size:
+            step = np.zeros(m)
+            if len(levels) > 1:
+                d = solved - inner[rows]
+                step[rows] = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
+            else:
+                step[rows] = np.inf
+            moved[1:-1, 1:-1] = step.reshape(n2 - 1, n1 - 1)
     inner[rows] = solved
     grid[1:-1, 1:-1] = inner.reshape(n2 - 1, n1 - 1, 2)
-    error = np.zeros((n2 + 1, n1 + 1))  # solved and boundary nodes: exact
-    if rows.size < m:
-        err[rows] = 0.0
-        error[1:-1, 1:-1] = err.reshape(n2 - 1, n1 - 1)
+    if with_feet:
+        error = np.zeros((n2 + 1, n1 + 1))  # solved and boundary nodes: exact
+        if rows.size < m:
+            err[rows] = 0.0
+            error[1:-1, 1:-1] = err.reshape(n2 - 1, n1 - 1)
     counts["copied"] = float(fine.size)  # on a solved coarse node: solved there
     counts["interpolated"] = float(m - rows.size - fine.size)
     for key in ("newton_iterations", "global_resolved", "interpolated", "copied"):
