@@ -157,7 +157,11 @@ class PointGroups:
         group = np.empty(x.shape[0], dtype=np.int64)
         group[order] = np.cumsum(np.r_[False, ks[1:] != ks[:-1]])
         centre = lo + (cell[order[starts]] + 0.5) * h
-        offset = np.linalg.norm(x - centre[group], axis=1)
+        d = x - centre[group]
+        offset = d[:, 0] * d[:, 0]  # (the norm's sum of squares, without its slow reduction
+        for k in range(1, x.shape[1]):  # over a short axis)
+            offset += d[:, k] * d[:, k]
+        np.sqrt(offset, out=offset)
         rho = np.maximum.reduceat(offset[order], starts)
         return cls(x, order, starts, group, centre, rho, offset)
 
