@@ -282,19 +282,10 @@ def track_rows(
         jet: RowJet = lambda tr, rows: single.jet_rows(tr)  # noqa: E731
     else:
         jet = curve
-    if t.size <= _TRACK_BLOCK:
-        return _track_rows(jet, xs, t, step_tol, iters)
-    foot, curv = np.empty(xs.shape), np.empty(t.size)
-    per_row = np.ndim(step_tol) > 0
-    for s in range(0, t.size, _TRACK_BLOCK):  # blocks: the temporaries stay in cache
-        e = min(t.size, s + _TRACK_BLOCK)
+    return _track_rows(jet, xs, t, step_tol, iters)
 
-        def block(tr: FloatArray, rows: np.ndarray | slice | None, s: int = s, e: int = e):
-            return jet(tr, slice(s, e) if rows is None else np.asarray(rows) + s)
 
-        tol = step_tol[s:e] if per_row else step_tol  # type: ignore[index]
-        t[s:e], foot[:, s:e], curv[s:e] = _track_rows(block, xs[:, s:e], t[s:e], tol, iters)
-    return t, foot, curv
+_STEP_CHUNK = 8192  # rows per evaluation of a tracking step (its temporaries stay in cache)
 
 
 def _track_rows(
@@ -303,73 +294,89 @@ def _track_rows(
     """:func:`_track_block` on component rows (``jet``: :meth:`Curve.jet_rows` of the rows'
     curve; points ``xs`` (dim, n)): the same steps and stopping rule, coordinates as
     contiguous rows; feet (n,), foot points (dim, n) and the curvature terms of
-    :func:`track_rows`."""
-    dim = xs.shape[0]
+    :func:`track_rows`. Each step runs in chunks of ``_STEP_CHUNK`` rows (small
+    temporaries: no fresh pages per step), and the rows still moving after it are stepped
+    together (one short tail of steps, not one per block)."""
     t = t.copy()
-    foot, curv = np.empty((dim, t.size)), np.empty(t.size)
+    foot, curv = np.empty((xs.shape[0], t.size)), np.empty(t.size)
     per_row = np.ndim(step_tol) > 0
     rows: np.ndarray | None = None  # rows still moving (None: all)
     for it in range(iters):
-        tr = t if rows is None else t[rows]
-        xr = xs if rows is None else xs[:, rows]
-        w = jet(tr, rows)
-        assert w is not None
-        c0, c1, c2 = w[:dim], w[dim : 2 * dim], w[2 * dim :]
-        c = c0 - xr
-        g = c[0] * c1[0]
-        speed2 = c1[0] * c1[0]
-        dg = c[0] * c2[0]
-        for k in range(1, dim):
-            g += c[k] * c1[k]
-            speed2 += c1[k] * c1[k]
-            dg += c[k] * c2[k]
-        dg += speed2
-        # away from a local minimum (dg <= 0) a gradient step scaled by the speed
-        pos = dg > 0.0
-        den = np.where(pos, dg, speed2)
-        np.maximum(den, 1e-300, out=den)
-        ds = np.divide(g, den, out=g)
-        ds = np.subtract(tr, ds, out=ds)
-        np.minimum(np.maximum(ds, 0.0, out=ds), 1.0, out=ds)
-        new = ds.copy()
-        ds -= tr  # the step taken
-        if rows is None:
-            t = new
-        else:
-            t[rows] = new
-        # a short Newton step, or a foot held at an end of the curve
-        tol = step_tol if not per_row or rows is None else step_tol[rows]  # type: ignore[index]
-        zero = ds == 0.0
-        settled = np.abs(ds) <= tol
-        settled &= pos | zero
-        done = settled if it < iters - 1 else np.ones(tr.size, dtype=bool)
-        # |(C - x) . C''| / g'; inf where the steps ran out unsettled (the foot, and its
-        # Taylor point, may then be off); where g' <= 0 (away from a local minimum, settled
-        # only if held) 0 for a foot held at an end (the distance is to the end point
-        # there), else inf
-        kap = np.subtract(dg, speed2, out=dg)
-        np.abs(kap, out=kap)
-        kap /= den
-        kap[~settled] = np.inf
-        neg = np.flatnonzero(~pos)
-        if neg.size:
-            nn = new[neg]
-            kap[neg] = np.where(zero[neg] & ((nn == 0.0) | (nn == 1.0)), 0.0, np.inf)
-        half = 0.5 * ds
-        c2 *= half
-        c2 += c1
-        c2 *= ds
-        c2 += c0  # C(t) + C'(t) ds + C''(t) ds^2 / 2
-        if done.all():
-            if rows is None:
-                foot, curv = c2, kap
-            else:
-                foot[:, rows], curv[rows] = c2, kap
+        last = it == iters - 1
+        n = t.size if rows is None else rows.size
+        moving = []
+        for s in range(0, n, _STEP_CHUNK):
+            e = min(n, s + _STEP_CHUNK)
+            at: np.ndarray | slice = slice(s, e) if rows is None else rows[s:e]
+            tol = step_tol[at] if per_row else step_tol  # type: ignore[index]
+            # (a row's foot and term are stored at every step: the last one stays)
+            t[at], foot[:, at], curv[at], done = _track_step(jet, xs[:, at], t[at], at, tol, last)
+            if not last:
+                moving.append(np.flatnonzero(~done) + s if rows is None else rows[s:e][~done])
+        if last or not moving:  # (not moving: no rows at all)
             break
-        idx = np.flatnonzero(done) if rows is None else rows[done]
-        foot[:, idx], curv[idx] = c2[:, done], kap[done]
-        rows = np.flatnonzero(~done) if rows is None else rows[~done]
+        rows = np.concatenate(moving)
+        if rows.size == 0:
+            break
     return t, foot, curv
+
+
+def _track_step(
+    jet: RowJet,
+    xr: FloatArray,
+    tr: FloatArray,
+    at: np.ndarray | slice,
+    step_tol: float | FloatArray,
+    last: bool,
+) -> tuple[FloatArray, FloatArray, FloatArray, np.ndarray]:
+    """One step of :func:`_track_rows` on the rows ``at`` (points ``xr`` (dim, m), feet
+    ``tr`` (m,)): new feet, the Taylor foot points (dim, m), the curvature terms, and which
+    rows are done (all on the ``last`` step)."""
+    dim = xr.shape[0]
+    w = jet(tr, at)
+    assert w is not None
+    c0, c1, c2 = w[:dim], w[dim : 2 * dim], w[2 * dim :]
+    c = c0 - xr
+    g = c[0] * c1[0]
+    speed2 = c1[0] * c1[0]
+    dg = c[0] * c2[0]
+    for k in range(1, dim):
+        g += c[k] * c1[k]
+        speed2 += c1[k] * c1[k]
+        dg += c[k] * c2[k]
+    dg += speed2
+    # away from a local minimum (dg <= 0) a gradient step scaled by the speed
+    pos = dg > 0.0
+    den = np.where(pos, dg, speed2)
+    np.maximum(den, 1e-300, out=den)
+    ds = np.divide(g, den, out=g)
+    ds = np.subtract(tr, ds, out=ds)
+    np.minimum(np.maximum(ds, 0.0, out=ds), 1.0, out=ds)
+    new = ds.copy()
+    ds -= tr  # the step taken
+    # a short Newton step, or a foot held at an end of the curve
+    zero = ds == 0.0
+    settled = np.abs(ds) <= step_tol
+    settled &= pos | zero
+    done = np.ones(tr.size, dtype=bool) if last else settled
+    # |(C - x) . C''| / g'; inf where the steps ran out unsettled (the foot, and its
+    # Taylor point, may then be off); where g' <= 0 (away from a local minimum, settled
+    # only if held) 0 for a foot held at an end (the distance is to the end point
+    # there), else inf
+    kap = np.subtract(dg, speed2, out=dg)
+    np.abs(kap, out=kap)
+    kap /= den
+    kap[~settled] = np.inf
+    neg = np.flatnonzero(~pos)
+    if neg.size:
+        nn = new[neg]
+        kap[neg] = np.where(zero[neg] & ((nn == 0.0) | (nn == 1.0)), 0.0, np.inf)
+    half = 0.5 * ds
+    c2 *= half
+    c2 += c1
+    c2 *= ds
+    c2 += c0  # C(t) + C'(t) ds + C''(t) ds^2 / 2
+    return new, c2, kap, done
 
 
 def certify_closest(
