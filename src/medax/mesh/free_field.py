@@ -274,41 +274,48 @@ def newton_free(
     results; the feet start from and end in ``sides``), in blocks of ``_BLOCK`` nodes."""
     field = FreeField(sides, tol)
     n = rows.size
-    ra, rb = ra_all[rows], rb_all[rows]
+    # every row (``rows`` are sorted and distinct): views and copies, no gathers or scatters
+    at: np.ndarray | slice = slice(None) if n == ra_all.size else rows
+    ra, rb = ra_all[at], rb_all[at]
     w = [1.0 - ra, 1.0 - rb, ra, rb]
     xs = np.ascontiguousarray(p.T, dtype=np.float64)
-    t0 = [sides.t[k][rows] if field.tracked[k] else None for k in range(4)]
-    t1 = [sides.t_alt[k][rows] if field.tracked[k] else None for k in range(4)]
+    t0 = [sides.t[k][at] if field.tracked[k] else None for k in range(4)]
+    t1 = [sides.t_alt[k][at] if field.tracked[k] else None for k in range(4)]
     res = np.empty(n)
-    t_out: list[FloatArray | None] = [None if f is None else np.empty(n) for f in t0]
-    d_out: list[FloatArray | None] = [None if f is None else np.empty(n) for f in t0]
+    # (on every row the blocks' feet go to ``sides`` at once: a block reads only its own)
+    full = isinstance(at, slice)
+    t_out = [None if f is None else f if full else np.empty(n) for f in t0]
+    d_out = [None if f is None else sides.d[k] if full else np.empty(n) for k, f in enumerate(t0)]
     diag = sides.region.diagonal
     it = 0
     for s in range(0, n, _BLOCK):
         e = min(n, s + _BLOCK)
         sl = slice(s, e)
-        bx, br, bt, bd, bit = _newton_block(
+        out = (
+            xs[:, sl],
+            res[sl],
+            [None if f is None else f[sl] for f in t_out],
+            [None if f is None else f[sl] for f in d_out],
+        )
+        bit = _newton_block(
             field,
             xs[:, sl],
             [v[sl] for v in w],
             [None if f is None else f[sl] for f in t0],
             [None if f is None else f[sl] for f in t1],
+            out,
             tol,
             diag,
             iters,
             track_step,
         )
-        xs[:, sl], res[sl] = bx, br
-        for k in range(4):
-            to, do, tb, db = t_out[k], d_out[k], bt[k], bd[k]
-            if to is not None and do is not None and tb is not None and db is not None:
-                to[sl], do[sl] = tb, db
         it = max(it, bit)
     for k in range(4):
         to, do = t_out[k], d_out[k]
         if to is not None and do is not None:
-            sides.t[k][rows], sides.d[k][rows] = to, do
-            sides.t_alt[k][rows] = np.nan
+            if not full:
+                sides.t[k][rows], sides.d[k][rows] = to, do
+            sides.t_alt[k][at] = np.nan
     return np.ascontiguousarray(xs.T), it, res
 
 
@@ -318,13 +325,16 @@ def _newton_block(
     w: list[FloatArray],
     t0: list[FloatArray | None],
     t1: list[FloatArray | None],
+    out: tuple[FloatArray, FloatArray, list[FloatArray | None], list[FloatArray | None]],
     tol: float,
     diag: float,
     iters: int,
     track_step: float,
-) -> tuple[FloatArray, FloatArray, list[FloatArray | None], list[FloatArray | None], int]:
-    """One block of :func:`newton_free`: nodes (2, n), residuals, feet and distances per
-    side, iterations. Converged rows leave the working arrays once they are half of them.
+) -> int:
+    """One block of :func:`newton_free`: fills ``out`` (nodes (2, n), which may be ``xs0``
+    itself, read only before; residuals (n,); feet and distances (n,) per side, None on
+    closed-form sides) and returns the iterations. Converged rows leave the working arrays
+    once they are half of them.
 
     A full Newton step ``s`` whose remainder is bounded below ``tol / 2`` is taken without
     evaluating the equations at its end: by Taylor's theorem each ``g`` there is at most
@@ -335,17 +345,15 @@ def _newton_block(
     points lie on the sides: the distances to them, stored for the global check, are upper
     bounds of the true ones, off by less than the bound)."""
     n = xs0.shape[1]
-    out_x, out_res = xs0.copy(), np.empty(n)
+    out_x, out_res, out_t, out_d = out  # (every row is stored once: at a compaction or last)
     g, t, d, f, h = field.evaluate(xs0, w, t0, None, t1)
-    out_t: list[FloatArray | None] = [None if v is None else v.copy() for v in t]
-    out_d: list[FloatArray | None] = [None if v is None else v.copy() for v in d]
-    xs = out_x.copy()
+    xs = xs0.copy()
     res = np.sqrt(g[0] * g[0] + g[3] * g[3])
     rows = np.arange(n)  # block rows held in the working arrays
     max_step = 0.1 * diag
     it = 0
 
-    def store(sel: np.ndarray | slice, at: np.ndarray) -> None:
+    def store(sel: np.ndarray | slice, at: np.ndarray | slice) -> None:
         out_x[:, at], out_res[at] = xs[:, sel], res[sel]
         for k in range(4):
             to, tk, do, dk = out_t[k], t[k], out_d[k], d[k]
@@ -387,15 +395,7 @@ def _newton_block(
         )
         sure = hot & (cap == 1.0) & (norm * top <= _LOCAL) & (bound <= 0.5 * tol)
         if sure.any():
-            jump = np.flatnonzero(sure)
-            xs[0, jump] += sx[jump]
-            xs[1, jump] += sy[jump]
-            res[jump] = bound[jump]
-            for k in range(4):
-                dk, fk = d[k], f[k]
-                if dk is not None and fk is not None:
-                    rx, ry = xs[0, jump] - fk[0, jump], xs[1, jump] - fk[1, jump]
-                    dk[jump] = np.sqrt(rx * rx + ry * ry)
+            _jump(xs, sx, sy, res, bound, d, f, sure)
             hot &= ~sure
         todo = np.flatnonzero(hot)
         lam = 1.0
@@ -437,5 +437,48 @@ def _newton_block(
             if todo.size == 0:
                 break
             lam *= 0.5
-    store(slice(None), rows)
-    return out_x, out_res, out_t, out_d, it
+    store(slice(None), slice(None) if rows.size == n else rows)
+    return it
+
+
+def _jump(
+    xs: FloatArray,
+    sx: FloatArray,
+    sy: FloatArray,
+    res: FloatArray,
+    bound: FloatArray,
+    d: list[FloatArray | None],
+    f: list[FloatArray | None],
+    sure: np.ndarray,
+) -> None:
+    """The unevaluated steps of :func:`_newton_block` on rows ``sure`` (bool (m,)), in place:
+    nodes ``xs`` (2, m) moved by ``(sx, sy)``, residuals ``res`` set to ``bound``, distances
+    to the kept foot points ``f`` (2, m) per side. Where most rows jump (the first
+    iterations) on whole rows, copied where ``sure``: 2x faster than gathers and scatters of
+    them (and 4x than masked arithmetic)."""
+    x, y = xs
+    m = x.size
+    jump = np.flatnonzero(sure)
+    if 3 * jump.size <= 2 * m:
+        x[jump] += sx[jump]
+        y[jump] += sy[jump]
+        res[jump] = bound[jump]
+        for dk, fk in zip(d, f, strict=True):
+            if dk is not None and fk is not None:
+                rx, ry = x[jump] - fk[0, jump], y[jump] - fk[1, jump]
+                dk[jump] = np.sqrt(rx * rx + ry * ry)
+        return
+    rx, ry = np.add(x, sx), np.empty(m)
+    np.copyto(x, rx, where=sure)
+    np.add(y, sy, out=rx)
+    np.copyto(y, rx, where=sure)
+    np.copyto(res, bound, where=sure)
+    for dk, fk in zip(d, f, strict=True):
+        if dk is not None and fk is not None:
+            np.subtract(x, fk[0], out=rx)
+            np.subtract(y, fk[1], out=ry)
+            rx *= rx
+            ry *= ry
+            rx += ry
+            np.sqrt(rx, out=rx)
+            np.copyto(dk, rx, where=sure)
