@@ -334,8 +334,16 @@ def stacked_jet(
 ) -> FloatArray:
     """:meth:`BSpline.jet_rows` of points on several curves at once (``table``:
     :meth:`BSpline.stacked_rows`; ``offset`` (n,) ``2 j`` for a point on curve ``j``)."""
-    inner, starts, rows = table
     t = np.minimum(np.maximum(np.asarray(t, dtype=np.float64), 0.0), 1.0)
+    return stacked_jet_in(table, t, offset)
+
+
+def stacked_jet_in(
+    table: tuple[FloatArray, FloatArray, FloatArray], t: FloatArray, offset: FloatArray
+) -> FloatArray:
+    """:func:`stacked_jet` at parameters ``t`` (n,) already in ``[0, 1]`` (a tracking's:
+    not clamped again)."""
+    inner, starts, rows = table
     i = np.searchsorted(inner, t + offset, side="right")
     return _horner_rows(rows, i, t - starts[i])
 
@@ -350,7 +358,7 @@ def _horner_rows(rows: FloatArray, i: np.ndarray, s: FloatArray) -> FloatArray:
     k, dim = rows.shape[0] - 1, rows.shape[1]
     a = rows.take(i, axis=2)  # (k + 1, dim, n): one gather
     out = np.empty((3 * dim, s.size))
-    powers = np.arange(k, -1, -1, dtype=np.float64)[:, None, None]
+    powers = _powers(k)
     for order in range(3):
         w = out[order * dim : (order + 1) * dim]
         if order > k:
@@ -358,8 +366,20 @@ def _horner_rows(rows: FloatArray, i: np.ndarray, s: FloatArray) -> FloatArray:
             continue
         if order:
             a = a[:-1] * powers[order - 1 : -1]
-        np.copyto(w, a[0])
-        for p in range(1, a.shape[0]):
+        if a.shape[0] == 1:
+            np.copyto(w, a[0])
+            continue
+        np.multiply(a[0], s, out=w)  # (the first product written at once: one call less)
+        w += a[1]
+        for p in range(2, a.shape[0]):
             w *= s
             w += a[p]
     return out
+
+
+@lru_cache(maxsize=8)
+def _powers(k: int) -> FloatArray:
+    """The powers ``k, ..., 1, 0`` of the coefficients of :func:`_horner_rows`, (k + 1, 1, 1)."""
+    powers = np.arange(k, -1, -1, dtype=np.float64)[:, None, None]
+    powers.flags.writeable = False
+    return powers

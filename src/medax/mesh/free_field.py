@@ -22,7 +22,7 @@ import numpy as np
 
 from medax.geometry._types import FloatArray
 from medax.geometry.arc import Arc
-from medax.geometry.bspline import BSpline, stacked_jet
+from medax.geometry.bspline import BSpline, stacked_jet_in
 from medax.geometry.curve import Curve, certify_closest, has_closed_form_closest, track_rows
 from medax.geometry.line import Line
 from medax.geometry.region import Region
@@ -137,15 +137,19 @@ class FreeField:
         sizes = [r[2].size for r in every]
         if self.table is not None:
             table = self.table
-            offset = np.concatenate(
-                [np.full(m, self.offset[r[0]]) for r, m in zip(every, sizes, strict=True)]
-            )
-            tol = np.concatenate(
-                [np.full(m, self.step_tol[r[0]]) for r, m in zip(every, sizes, strict=True)]
+            sides = [r[0] for r in every]
+            offset = np.repeat(np.array([self.offset[k] for k in sides]), sizes)
+            tols = {self.step_tol[k] for k in sides}
+            # (one tolerance for all: no per-row array to build and gather)
+            tol: float | FloatArray = (
+                tols.pop()
+                if len(tols) == 1
+                else np.repeat(np.array([self.step_tol[k] for k in sides]), sizes)
             )
 
             def jet(tr: FloatArray, rows: np.ndarray | slice | None) -> FloatArray:
-                return stacked_jet(table, tr, offset if rows is None else offset[rows])
+                # (a tracking's parameters are in [0, 1])
+                return stacked_jet_in(table, tr, offset if rows is None else offset[rows])
 
             t_all, f_all, h_all = track_rows(jet, pts, starts, tol)
         else:  # (curves that do not stack: one tracking per run)
