@@ -370,8 +370,11 @@ def _newton_block(
         if count == 0 or it == iters:
             break
         if 2 * count <= rows.size:  # compact: keep the unconverged rows only
-            done = np.flatnonzero(~hot)
-            store(done, rows[done])
+            if rows.size == n:  # every row, contiguous (the kept ones are stored again)
+                store(slice(None), slice(None))
+            else:
+                done = np.flatnonzero(~hot)
+                store(done, rows[done])
             keep = np.flatnonzero(hot)
             rows, xs, res = rows[keep], xs[:, keep], res[keep]
             g = [v[keep] for v in g]
