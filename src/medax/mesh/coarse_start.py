@@ -176,7 +176,7 @@ def start_feet(
         if cubic is not None:
             np.clip(cubic[rows], 0.0, 1.0, out=out[0])
         else:
-            out[0] = _bilinear(coarse, ii, jj, n1, n2)
+            out[0] = _bilinear(coarse, ii, jj, n1, n2, ci, cj)
         cell = cj[jj] * c1 + ci[ii]
     at = np.flatnonzero(spread[0].ravel()[cell] > FOOT_JUMP)
     out[0, at] = spread[1].ravel()[cell[at]]
@@ -184,12 +184,20 @@ def start_feet(
     return out
 
 
-def _bilinear(coarse: FloatArray, ii: np.ndarray, jj: np.ndarray, n1: int, n2: int) -> FloatArray:
+def _bilinear(
+    coarse: FloatArray,
+    ii: np.ndarray,
+    jj: np.ndarray,
+    n1: int,
+    n2: int,
+    ci: np.ndarray,
+    cj: np.ndarray,
+) -> FloatArray:
     """The ``coarse`` values (c2 + 1, c1 + 1) bilinear at the interior nodes ``(ii + 1,
-    jj + 1)`` (each (p,)) of an ``n1 x n2`` grid: (p,)."""
+    jj + 1)`` (each (p,)) of an ``n1 x n2`` grid, whose interior columns and rows lie in
+    the coarse cells ``ci`` (n1 - 1,) and ``cj`` (n2 - 1,): (p,)."""
     c2, c1 = coarse.shape[0] - 1, coarse.shape[1] - 1
     i, j = np.arange(1, n1), np.arange(1, n2)
-    ci, cj = _cells(i, n1, c1), _cells(j, n2, c2)
     fu, fv = (i / n1 * c1 - ci)[ii], (j / n2 * c2 - cj)[jj]  # (p,) the fractions in the cells
     q = cj[jj] * (c1 + 1) + ci[ii]  # (p,) the lower left corners
     flat = coarse.ravel()
