@@ -3,8 +3,9 @@
 :func:`simplify` splits every fillet it can handle along its medial curve, merges each half
 into its supporting face on one exact surface, rebuilds the solid on shared edges and
 validates it against the original. Fillets it cannot handle are kept, each with its reason;
-when the rebuilt solid fails validation the failing fillets are found by bisection over
-independent clusters and kept. The input solid is never modified and an invalid solid is
+when the rebuilt solid fails validation the failing fillets themselves are found by
+bisection (halves of the fillets added to what already rebuilds) and kept, their neighbours
+still simplified. The input solid is never modified and an invalid solid is
 never returned: at worst the result is the input itself with every fillet kept.
 """
 
@@ -28,7 +29,7 @@ from medax.cad.simplify.fitted import FittedSurface, graph_surface
 from medax.cad.simplify.groups import Group, build_groups
 from medax.cad.simplify.medial import Medial, medial_curve
 from medax.cad.simplify.mitre import mitre_keeps, mitre_pairs
-from medax.cad.simplify.occ import count, diagonal, shape_map, small_list
+from medax.cad.simplify.occ import count, diagonal, shape_map
 from medax.cad.simplify.rebuild import build_solid
 from medax.cad.simplify.ring import NOT_A_RING, ring_surface
 from medax.cad.simplify.specs import BlendInput, CornerSpec, FilletSpec
@@ -63,6 +64,8 @@ BUILD_TOL = 1e-7
 FIT_SHARE = 0.1
 #: Deviation samples per face (n x n) for groups on a fitted surface.
 FITTED_DEVIATION_SAMPLES = 12
+#: Seconds the search for failing fillets may take after the first rebuild failed.
+ISOLATION_BUDGET = 300.0
 #: Marker in the surface table: this supporting plane gets a fitted surface per attempt.
 FITTED = "fitted"
 
@@ -181,6 +184,7 @@ class _Job:
     bridges: dict[tuple[int, int], Any] = field(default_factory=dict)
     surfaces: dict[int, MergedSurface | str] = field(default_factory=dict)
     cache: dict[tuple[int, ...], FittedSurface | str] = field(default_factory=dict)
+    exact: dict[tuple[Any, ...], MergedSurface | str] = field(default_factory=dict)
     area0: float | None = None  # the input's boundary area (measured at the first attempt)
 
     @property
@@ -198,11 +202,14 @@ def simplify(
     blends: BlendInput,
     tol: float = DEVIATION_TOL,
     progress: Callable[[str], None] | None = None,
+    time_budget: float = ISOLATION_BUDGET,
 ) -> SimplifyResult:
     """Simplify the fillets of ``shape`` described by ``blends``.
 
     ``tol``: deviation tolerance relative to the diagonal. ``progress`` receives one-line
-    messages (the CLI prints them on stderr).
+    messages (the CLI prints them on stderr). ``time_budget`` (s) bounds the search for the
+    failing fillets when the rebuild with all of them fails; fillets not tried by then are
+    kept, with that reason.
     """
     t0 = time.perf_counter()
     say = progress or (lambda msg: log.info(msg))
@@ -230,7 +237,6 @@ def simplify(
             job.medials[spec.face] = m
     _corners(job, blends)
     _bridges(job, blends)
-    _keep_next_to_corners(work, blends, job.medials, kept)
     say(f"{len(job.medials)} fillets with a medial curve, {len(job.corners)} corner blends split")
     job.specs = {s.face: s for s in blends.fillets if s.face in job.medials}
     for f, why in mitre_keeps(mitre_pairs(work, fmap, job.specs), job.corners).items():
@@ -247,16 +253,14 @@ def simplify(
     if n_fit:
         _fit_pass(job)
     specs, corners = job.specs, job.corners
-    result = attempt(specs) if specs else None
-    if isinstance(result, str):
-        say(f"rebuild with all fillets failed ({result}); bisecting")
-        good = _bisect(specs, attempt, kept, say)
-        result = attempt(good) if good else None
-        if isinstance(result, str):
-            for f in good:
-                kept[f] = f"rebuild failed: {result}"
-            result = None
-        specs = good
+    first = attempt(specs) if specs else None
+    result: _Attempt | None
+    if isinstance(first, str):
+        say(f"rebuild with all fillets failed ({first}); isolating the failing fillets")
+        deadline = time.perf_counter() + time_budget
+        result, specs = _isolate(specs, attempt, kept, say, deadline, first)
+    else:
+        result = first
     used_corners = (
         sorted(c for c, cs in corners.items() if set(cs.fillets) <= set(specs))
         if result is not None
@@ -298,30 +302,6 @@ def simplify(
         area_rel_change=result.area_change if result is not None else 0.0,
         notes=notes,
     )
-
-
-def _keep_next_to_corners(shape, blends, medials, kept) -> None:  # type: ignore[no-untyped-def]
-    """Fillets sharing an edge with a blend that stays (a refused or unsplit corner blend)
-    are kept too: their medial curves would have to end at that blend's centre."""
-    from medax.cad.simplify.specs import edge_face_map
-
-    refused = {f for f, _ in blends.refused} | {c.face for c in blends.corners if c.face in kept}
-    if not refused:
-        return
-    fmap = shape_map(shape, TopAbs_FACE)
-    e2f = edge_face_map(shape)
-    from medax.cad.simplify.occ import edges_of
-
-    for spec in blends.fillets:
-        if spec.face not in medials:
-            continue
-        face = fmap.FindKey(spec.face + 1)
-        near = {
-            fmap.FindIndex(g) - 1 for e in edges_of(face) for g in small_list(e2f.FindFromKey(e))
-        } & refused
-        if near:
-            medials.pop(spec.face)
-            kept[spec.face] = f"meets blend {min(near)}, which is kept"
 
 
 def _corners(job: _Job, blends: BlendInput) -> None:
@@ -419,46 +399,62 @@ def _refresh_surfaces(job: _Job) -> None:
     specs, kept = job.specs, job.kept
     while True:
         _cascade(specs, job.corners, kept)
-        with_corner = {s for cs in job.corners.values() for s in cs.supporting}
-        with_corner |= {s for base in _riders(specs) for s in specs[base].supporting}
-        surfaces: dict[int, MergedSurface | str] = {}
-        failed = False
-        for sup, hs in _halves_of(specs).items():
-            if sup in specs:  # a simplified fillet: its riders' pieces go to its supports
-                continue
-            support = job.face(sup)
-            planar = BRepAdaptor_Surface(support).GetType() == GeomAbs_Plane
-            if sup in with_corner:
-                ms: MergedSurface | str = (
-                    FITTED if planar else "corner or bridged pieces on a curved face"
-                )
-            else:
-                halves = [
-                    Half(job.face(f), job.medials[f], TopoDS.Edge(job.emap.FindKey(e + 1)))
-                    for f, e in hs
-                ]
-                try:
-                    ms = merged_surface(support, halves, job.btol)
-                except (ValueError, RuntimeError) as err:  # OCCT construction failures
-                    ms = f"surface construction failed: {err}"
-                if isinstance(ms, str) and (planar or _ring_kind(support)):
-                    ms = FITTED
-                elif isinstance(ms, str):
-                    kind = str(BRepAdaptor_Surface(support).GetType()).split("_")[-1].lower()
-                    ms = (
-                        f"{ms}; the fitted routes take planar and cylindrical supporting faces "
-                        f"only (this one is a {kind})"
-                    )
-            if isinstance(ms, str) and ms != FITTED:
-                for f, _ in hs:
-                    kept.setdefault(f, f"supporting face {sup}: {ms}")
-                    specs.pop(f, None)
-                failed = True
-                break
-            surfaces[sup] = ms
+        surfaces, failed = _surfaces_for(job, specs, job.corners)
         if not failed:
             job.surfaces = surfaces
             return
+        for f, why in failed.items():
+            kept.setdefault(f, why)
+            specs.pop(f, None)
+
+
+def _surfaces_for(
+    job: _Job, specs: dict[int, FilletSpec], corners: dict[int, CornerSpec]
+) -> tuple[dict[int, MergedSurface | str], dict[int, str]]:
+    """The merged surface of every supporting face for the fillets ``specs`` and corner
+    blends ``corners`` (``FITTED`` where a fitted route serves), and the fillets of the
+    first face that has none, each with the reason (empty when every face has one)."""
+    with_corner = {s for cs in corners.values() for s in cs.supporting}
+    with_corner |= {s for base in _riders(specs) for s in specs[base].supporting}
+    surfaces: dict[int, MergedSurface | str] = {}
+    for sup, hs in _halves_of(specs).items():
+        if sup in specs:  # a simplified fillet: its riders' pieces go to its supports
+            continue
+        key = (sup, sup in with_corner, *sorted(hs))
+        if key not in job.exact:
+            job.exact[key] = _surface_of(job, sup, hs, sup in with_corner)
+        ms = job.exact[key]
+        if isinstance(ms, str) and ms != FITTED:
+            return surfaces, {f: f"supporting face {sup}: {ms}" for f, _ in hs}
+        surfaces[sup] = ms
+    return surfaces, {}
+
+
+def _surface_of(
+    job: _Job, sup: int, hs: list[tuple[int, int]], with_corner: bool
+) -> MergedSurface | str:
+    """The merged surface of supporting face ``sup`` with the halves ``hs`` ((fillet, smooth
+    edge) pairs): exact, ``FITTED``, or the reason there is none."""
+    support = job.face(sup)
+    planar = BRepAdaptor_Surface(support).GetType() == GeomAbs_Plane
+    if with_corner:
+        return FITTED if planar else "corner or bridged pieces on a curved face"
+    halves = [
+        Half(job.face(f), job.medials[f], TopoDS.Edge(job.emap.FindKey(e + 1))) for f, e in hs
+    ]
+    try:
+        ms = merged_surface(support, halves, job.btol)
+    except (ValueError, RuntimeError) as err:  # OCCT construction failures
+        ms = f"surface construction failed: {err}"
+    if isinstance(ms, str) and (planar or _ring_kind(support)):
+        return FITTED
+    if isinstance(ms, str):
+        kind = str(BRepAdaptor_Surface(support).GetType()).split("_")[-1].lower()
+        return (
+            f"{ms}; the fitted routes take planar and cylindrical supporting faces "
+            f"only (this one is a {kind})"
+        )
+    return ms
 
 
 def _fitted(job: _Job, split: Any, g: Group, probe: bool = False) -> FittedSurface | str:
@@ -555,8 +551,10 @@ def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
     """Split, merge and rebuild with the fillets ``sel`` (and the corners all of whose
     fillets are in it), then validate; the reason (str) when any step or check fails."""
     csel = {c: cs for c, cs in job.corners.items() if set(cs.fillets) <= set(sel)}
-    diag, tol = job.diag, job.tol
     fit_err = 0.0
+    surfaces, failed = _surfaces_for(job, sel, csel)
+    if failed:
+        return next(iter(failed.values()))
     try:
         job.say(f"splitting {len(sel)} fillets and {len(csel)} corner blends along medial curves")
         split, groups = _split(job, sel, csel)
@@ -565,7 +563,7 @@ def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
         for g in groups:
             if g.support is None:
                 continue
-            ms = job.surfaces[g.support]
+            ms = surfaces[g.support]
             if isinstance(ms, str):
                 fs = _fitted(job, split, g)
                 if isinstance(fs, str):
@@ -582,6 +580,41 @@ def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
         return str(err)
     except Exception as err:  # OCCT Standard_Failure subclasses, translated here
         return f"OCCT failed while rebuilding ({type(err).__name__}: {err})"
+    try:
+        checked = _validated(job, split, groups, faces, shape, surfaces, expected)
+    except Exception as err:  # OCCT failures while measuring: the solid is not accepted
+        return f"OCCT failed while validating ({type(err).__name__}: {err})"
+    if isinstance(checked, str):
+        return checked
+    dv, da, dev, kinds = checked
+    halves_origin = {g.id: [split.origin[k] for k in g.halves] for g in groups}
+    return _Attempt(
+        shape,
+        groups,
+        faces,
+        dev,
+        job.vol0 * (1 + dv),
+        split.origin,
+        halves_origin,
+        kinds,
+        fit_err,
+        expected or 0.0,
+        da,
+    )
+
+
+def _validated(
+    job: _Job,
+    split: Any,
+    groups: list[Group],
+    faces: list[Any],
+    shape: Any,
+    surfaces: dict[int, MergedSurface | str],
+    expected: float | None,
+) -> tuple[float, float, float, dict[int, str]] | str:
+    """The checks of a rebuilt ``shape``: (relative volume change, relative area change,
+    largest deviation, surface kind per group), or the reason it fails."""
+    diag, tol = job.diag, job.tol
     job.say("validating (analyzer, shell, volume, area, deviation both ways)")
     c = check(shape, with_volume=False)
     if not c.valid:
@@ -601,27 +634,14 @@ def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
     for g, face in zip(groups, faces, strict=True):
         if g.support is None:
             continue
-        ms = job.surfaces[g.support]
+        ms = surfaces[g.support]
         kinds[g.id] = FITTED if isinstance(ms, str) else ms.kind
         n = FITTED_DEVIATION_SAMPLES if isinstance(ms, str) else DEVIATION_SAMPLES
         old = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
         dev = max(dev, *deviation(old, face, n=n, enough=1e-3 * tol * diag))
     if dev > tol * diag:
         return f"surface deviation {dev / diag:.2e} x diagonal (> {tol:g})"
-    halves_origin = {g.id: [split.origin[k] for k in g.halves] for g in groups}
-    return _Attempt(
-        shape,
-        groups,
-        faces,
-        dev,
-        job.vol0 * (1 + dv),
-        split.origin,
-        halves_origin,
-        kinds,
-        fit_err,
-        expected or 0.0,
-        da,
-    )
+    return dv, da, dev, kinds
 
 
 def _clusters(specs: dict[int, FilletSpec]) -> list[list[int]]:
@@ -648,29 +668,51 @@ def _clusters(specs: dict[int, FilletSpec]) -> list[list[int]]:
     return out
 
 
-def _bisect(specs, attempt, kept, say) -> dict[int, FilletSpec]:  # type: ignore[no-untyped-def]
-    clusters = _clusters(specs)
-    good: dict[int, FilletSpec] = {}
+def _isolate(
+    specs: dict[int, FilletSpec],
+    attempt: Callable[[dict[int, FilletSpec]], _Attempt | str],
+    kept: dict[int, str],
+    say: Callable[[str], None],
+    deadline: float,
+    why: str,
+) -> tuple[_Attempt | None, dict[int, FilletSpec]]:
+    """The fillets that rebuild together after the rebuild with all of ``specs`` failed
+    (for the reason ``why``), and their (last successful) attempt.
 
-    def rec(cs: list[list[int]]) -> None:
-        sel = {f: specs[f] for c in cs for f in c}
-        r = attempt(sel)
+    Fillets are taken in cluster order (linked fillets next to each other) and added in
+    halves to the accepted set: a half that rebuilds with everything accepted so far is
+    accepted, one that fails is halved again, down to the single fillet, which is kept with
+    the reason of its failure. So one failing fillet costs about 2 log2(n) rebuilds and its
+    neighbours still go, and the result is always an attempt that passed as a whole."""
+    order = [f for c in _clusters(specs) for f in c]
+    accepted: dict[int, FilletSpec] = {}
+    best: _Attempt | None = None
+
+    def rec(fillets: list[int]) -> None:
+        nonlocal best
+        if not fillets:
+            return
+        if time.perf_counter() > deadline:
+            for f in fillets:
+                kept[f] = "not tried alone: the time for finding the failing fillets ran out"
+            return
+        r = attempt({**accepted, **{f: specs[f] for f in fillets}})
         if not isinstance(r, str):
-            good.update(sel)
-        elif len(cs) == 1:
-            for f in cs[0]:
-                kept[f] = f"rebuild failed: {r}"
-            say(f"fillets {cs[0]} kept: {r}")
+            accepted.update({f: specs[f] for f in fillets})
+            best = r
+        elif len(fillets) == 1:
+            kept[fillets[0]] = f"rebuild failed: {r}"
+            say(f"fillet {fillets[0]} kept: {r}")
         else:
-            rec(cs[: len(cs) // 2])
-            rec(cs[len(cs) // 2 :])
+            rec(fillets[: len(fillets) // 2])
+            rec(fillets[len(fillets) // 2 :])
 
-    if len(clusters) > 1:
-        rec(clusters[: len(clusters) // 2])
-        rec(clusters[len(clusters) // 2 :])
-    else:
-        rec(clusters)
-    return good
+    if len(order) == 1:  # the failed rebuild with all of them tried this one alone
+        kept[order[0]] = f"rebuild failed: {why}"
+        return None, {}
+    rec(order[: len(order) // 2])
+    rec(order[len(order) // 2 :])
+    return best, accepted
 
 
 def _identity_groups(n: int) -> list[FaceGroup]:

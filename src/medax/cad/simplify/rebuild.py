@@ -2,7 +2,8 @@
 
 Every run of a group's boundary becomes one edge, shared by the two faces it separates: an
 original edge when the run has one edge, else the run's curves joined into one B-spline
-(``GeomConvert_CompCurveToBSplineCurve``) between the run's end vertices. Faces are built on
+(``GeomConvert_CompCurveToBSplineCurve``) between the run's end vertices, or the run's own
+edges where OCCT cannot join them (joining only tidies). Faces are built on
 their (new or original) surface with pcurves projected explicitly, then healed
 (``ShapeFix_Shape``) and made same-parameter.
 """
@@ -62,6 +63,18 @@ def _joined_edge(run: Run, tol: float) -> Any:
     if not mk.IsDone():
         raise CadError("could not build a joined boundary edge")
     return mk.Edge()
+
+
+def _try_joined_edge(run: Run, tol: float) -> Any | None:
+    """The run joined into one edge (:func:`_joined_edge`), or None where OCCT cannot join
+    it: joining is tidying, and the unjoined edges bound the same face."""
+    try:
+        return _joined_edge(run, tol)
+    except CadError as err:
+        log.info("boundary run %s left unjoined: %s", run.indices, err)
+    except Exception as err:  # OCCT Standard_Failure subclasses
+        log.info("boundary run %s left unjoined: %s: %s", run.indices, type(err).__name__, err)
+    return None
 
 
 def _surface_normal(surf: Any, p: np.ndarray) -> np.ndarray | None:
@@ -289,7 +302,7 @@ def build_solid(
     ``surfaces`` maps a supporting face (original index) to its merged ``Geom_Surface``.
     """
     builder = BRep_Builder()
-    joined: dict[frozenset[int], tuple[Any, int]] = {}
+    joined: dict[frozenset[int], tuple[Any | None, int]] = {}
     faces: list[Any] = []
     for g in groups:
         member = TopoDS.Face(split.face_map.FindKey(g.members[0] + 1))
@@ -333,9 +346,12 @@ def build_solid(
                     continue
                 key = frozenset(run.indices)
                 if key not in joined:
-                    joined[key] = (_joined_edge(run, tol), g.id)
+                    joined[key] = (_try_joined_edge(run, tol), g.id)
                 edge, owner = joined[key]
-                edges.append(edge if owner == g.id else edge.Reversed())
+                if edge is None:  # joining only tidies: the run's own edges serve as well
+                    edges.extend(run.edges)
+                else:
+                    edges.append(edge if owner == g.id else edge.Reversed())
             if flip:
                 edges = [e.Reversed() for e in reversed(edges)]
             wire = TopoDS_Wire()

@@ -144,7 +144,10 @@ def nurbs_copy(shape: Any) -> Any:
         if kind == GeomAbs_SurfaceOfExtrusion:
             copy = _extrusion_copy(f)
         if copy is None:
-            copy = BRepBuilderAPI_NurbsConvert(f, True).Shape()
+            try:
+                copy = BRepBuilderAPI_NurbsConvert(f, True).Shape()
+            except Exception:  # OCCT cannot convert this face (seen on a torus piece)
+                copy = f  # measured as it is: the other integrator still checks it
         builder.Add(out, copy)
     return out
 
