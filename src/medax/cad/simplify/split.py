@@ -47,7 +47,7 @@ def split_along(shape: Any, tools: Sequence[Any], fuzzy: float = 0.0) -> SplitRe
     sp.Build()
     if not sp.IsDone():
         raise CadError("splitting the fillets along their medial curves failed (OCCT splitter)")
-    result = sp.Shape()
+    result, reshape = _without_internal_edges(sp.Shape())
     rmap = shape_map(result, TopAbs_FACE)
     omap = shape_map(shape, TopAbs_FACE)
     origin = [-1] * rmap.Size()
@@ -56,9 +56,28 @@ def split_along(shape: Any, tools: Sequence[Any], fuzzy: float = 0.0) -> SplitRe
         mods = sp.Modified(f)
         targets = small_list(mods) if mods.Size() > 0 else [f]
         for g in targets:
-            k = rmap.FindIndex(g)
+            k = rmap.FindIndex(reshape.Value(g) if reshape is not None else g)
             if k > 0:
                 origin[k - 1] = i - 1
     if min(origin) < 0:
         raise CadError("splitter history lost a face (cannot trace pieces to their faces)")
     return SplitResult(result, rmap, tuple(origin))
+
+
+def _without_internal_edges(shape: Any) -> tuple[Any, Any | None]:
+    """``shape`` without the edges lying inside a face (INTERNAL): where a medial tool
+    edge's overshoot runs on into a neighbouring blend that continues the fillet's surface,
+    the splitter embeds it there; it bounds nothing. Returns the shape and the
+    ``BRepTools_ReShape`` that removed them (None when there were none)."""
+    from OCP.BRepTools import BRepTools_ReShape
+    from OCP.TopAbs import TopAbs_INTERNAL
+
+    from medax.cad.simplify.occ import edges_of, faces_of
+
+    inner = [e for f in faces_of(shape) for e in edges_of(f) if e.Orientation() == TopAbs_INTERNAL]
+    if not inner:
+        return shape, None
+    reshape = BRepTools_ReShape()
+    for e in inner:
+        reshape.Remove(e)
+    return reshape.Apply(shape), reshape

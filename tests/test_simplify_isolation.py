@@ -1,0 +1,105 @@
+"""Failures stay local: a fillet that cannot be merged is kept alone and its neighbours
+still go; tidying steps never decide (truth: the search's own bookkeeping against a known
+set of failing fillets, OCCT's checks and BRepExtrema distances on a part built with OCCT)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from OCP.BRepAlgoAPI import BRepAlgoAPI_Fuse
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge
+from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+from OCP.gp import gp_Pnt
+from OCP.TopAbs import TopAbs_FACE, TopAbs_INTERNAL
+
+import medax.cad.parts as catalogue
+from medax.cad.classify import classify_solid
+from medax.cad.reader import heal
+from medax.cad.simplify import simplify, specs_from_classification
+from medax.cad.simplify.occ import count, edges_of, faces_of
+from medax.cad.simplify.pipeline import _isolate
+from medax.cad.simplify.specs import BlendInput, FilletSpec
+from medax.cad.simplify.split import split_along
+from truth import assert_same_solid
+
+
+def _chain(n: int) -> dict[int, FilletSpec]:
+    """``n`` fillets in one cluster: fillet ``f`` between faces ``100 + f`` and ``101 + f``
+    (each neighbour shares a supporting face)."""
+    return {f: FilletSpec(f, (2 * f, 2 * f + 1), (100 + f, 101 + f), 1.0) for f in range(n)}
+
+
+@pytest.mark.parametrize("bad", [{3}, {0, 11}, {2, 3, 4}, set()])
+def test_isolation_keeps_exactly_the_failing_fillets(bad):
+    specs = _chain(12)
+    calls: list[set[int]] = []
+
+    def attempt(sel):
+        calls.append(set(sel))
+        hit = sorted(set(sel) & bad)
+        return f"fillet {hit[0]} fails" if hit else ("ok", frozenset(sel))
+
+    kept: dict[int, str] = {}
+    best, accepted = _isolate(specs, attempt, kept, lambda m: None, math.inf, "first failed")
+    assert set(kept) == bad
+    assert all(kept[f] == f"rebuild failed: fillet {f} fails" for f in bad)
+    assert set(accepted) == set(specs) - bad
+    # the result is an attempt that passed with exactly the accepted fillets
+    assert best == ("ok", frozenset(accepted))
+    # about 2 log2(n) rebuilds per failing fillet, not one per fillet
+    assert len(calls) <= 2 + 2 * max(len(bad), 1) * math.ceil(math.log2(12))
+
+
+def test_isolation_out_of_time_keeps_the_rest_with_the_reason():
+    specs = _chain(6)
+    kept: dict[int, str] = {}
+    best, accepted = _isolate(specs, lambda sel: "fails", kept, lambda m: None, -1.0, "x")
+    assert best is None and accepted == {}
+    assert set(kept) == set(specs)
+    assert all("time for finding the failing fillets ran out" in why for why in kept.values())
+
+
+def test_split_drops_a_tool_overshoot_embedded_in_a_neighbour():
+    """A tool edge across one face that runs on 1 mm into the coplanar face beside it: the
+    splitter embeds the overshoot in that face as an INTERNAL edge; it bounds nothing and
+    is removed, the crossed face is split in two."""
+    a = BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), 10.0, 10.0, 5.0).Shape()
+    b = BRepPrimAPI_MakeBox(gp_Pnt(10, 0, 0), 10.0, 10.0, 5.0).Shape()
+    solid = BRepAlgoAPI_Fuse(a, b).Shape()  # the top is two coplanar faces
+    tool = BRepBuilderAPI_MakeEdge(gp_Pnt(-1, 5, 5), gp_Pnt(11, 5, 5)).Edge()
+    r = split_along(solid, [tool])
+    assert r.face_map.Size() == count(solid, TopAbs_FACE) + 1
+    assert not [
+        e for f in faces_of(r.shape) for e in edges_of(f) if e.Orientation() == TopAbs_INTERNAL
+    ]
+    assert sorted(set(r.origin)) == list(range(count(solid, TopAbs_FACE)))
+
+
+@pytest.fixture(scope="module")
+def corner_kept():
+    """A 30 x 20 x 10 box with the three edges at its corner (0, 0, 10) filleted (r 2): three
+    fillets and a sphere corner blend, the corner kept by the caller."""
+    box = BRepPrimAPI_MakeBox(30.0, 20.0, 10.0).Shape()
+
+    def at_corner(m):
+        top = abs(m[2] - 10.0) < 1e-9 and (abs(m[0]) < 1e-9 or abs(m[1]) < 1e-9)
+        return top or (abs(m[0]) < 1e-9 and abs(m[1]) < 1e-9)
+
+    part = catalogue.fillet(box, catalogue._select(box, at_corner), 2.0, "corner")
+    cls = classify_solid(heal(part.shape))
+    specs = specs_from_classification(cls)
+    (corner,) = specs.corners
+    kept_by_caller = (*specs.refused, (corner.face, "kept by the caller"))
+    blends = BlendInput(specs.fillets, kept_by_caller, ())
+    return part, corner, simplify(cls.shape, blends)
+
+
+def test_fillets_meeting_a_kept_blend_still_go(corner_kept):
+    part, corner, r = corner_kept
+    assert sorted(r.blends_removed) == sorted(corner.fillets)
+    assert r.blends_kept == [(corner.face, "kept by the caller")]
+    assert (r.faces_before, r.faces_after) == (10, 7)
+    # the kept corner blend is a face of the result as it was
+    assert any(g.whole == (corner.face,) and not g.halves for g in r.face_groups)
+    assert_same_solid(part.shape, r, 6, 6)
