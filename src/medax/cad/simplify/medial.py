@@ -24,7 +24,7 @@ from OCP.GeomAbs import GeomAbs_BSplineSurface, GeomAbs_Cylinder, GeomAbs_Torus
 from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
 from OCP.gp import gp_Pnt
 
-from medax.cad.simplify.occ import edge_points, uv_bounds
+from medax.cad.simplify.occ import compound, edge_points, uv_bounds
 from medax.cad.simplify.traced import traced_medial_edge
 
 #: The medial tool edge is extended past the fillet by this fraction of its length on both
@@ -85,6 +85,13 @@ def _unwrapped(uv: np.ndarray, ad: Any, bounds: tuple[float, float, float, float
     return out
 
 
+def _speeds(surf: Any, uv: np.ndarray) -> np.ndarray:
+    """Lengths of the surface's first derivatives (dS/du, dS/dv) at ``uv`` (2,): a parameter
+    spread times these is a length."""
+    u, v = float(uv[0]), float(uv[1])
+    return np.array([surf.DN(u, v, 1, 0).Magnitude(), surf.DN(u, v, 0, 1).Magnitude()])
+
+
 def _period(ad: Any, k: int) -> float:
     """Period of the surface in u (``k = 0``) or v (``k = 1``), 0 when not periodic."""
     if k == 0:
@@ -92,11 +99,16 @@ def _period(ad: Any, k: int) -> float:
     return float(ad.VPeriod()) if ad.IsVPeriodic() else 0.0
 
 
-def medial_curve(face: Any, edge1: Any, edge2: Any, rel_tol: float = 1e-9) -> Medial | str:
-    """Medial curve of the fillet ``face`` between smooth edges ``edge1`` and ``edge2``.
+def medial_curve(
+    face: Any, edge1: Any, edge2: Any, rel_tol: float = 1e-9, tol: float = 0.0
+) -> Medial | str:
+    """Medial curve of the fillet ``face`` between smooth edges ``edge1`` and ``edge2`` (each
+    an edge, or the list of edges of a constraint side that is a chain).
 
     Returns a :class:`Medial`, or a one-line reason (str) when the fillet is not a
-    constant-radius iso-line fillet whose mid iso-line is equidistant to ``rel_tol x radius``.
+    constant-radius iso-line fillet whose mid iso-line is equidistant to ``rel_tol x radius``
+    (or to twice the larger of ``tol``, a length, and the smooth edges' own tolerance: imported
+    edges lie on iso-lines only to within these).
     """
     ad = BRepAdaptor_Surface(face)
     kind = ad.GetType()
@@ -107,14 +119,23 @@ def medial_curve(face: Any, edge1: Any, edge2: Any, rel_tol: float = 1e-9) -> Me
         radius = ad.Torus().MinorRadius()
     surf = BRep_Tool.Surface_s(face)
     u0, u1, v0, v1 = uv_bounds(face)
+    sides = [list(e) if isinstance(e, list | tuple) else [e] for e in (edge1, edge2)]
     ends = [
-        _unwrapped(np.array([_uv(surf, p) for p in edge_points(e, 5)]), ad, (u0, u1, v0, v1))
-        for e in (edge1, edge2)
+        _unwrapped(
+            np.array([_uv(surf, p) for e in side for p in edge_points(e, 5)]),
+            ad,
+            (u0, u1, v0, v1),
+        )
+        for side in sides
     ]
-    spread = [np.ptp(uv, axis=0) for uv in ends]
-    if all(s[0] < 1e-9 for s in spread):  # smooth edges are u-iso lines: cross direction u
+    # the input's own tolerance: imported edges lie on iso-lines only to within it (a
+    # corpus part's straight smooth edges strayed 6e-7 mm round a 2 mm cylinder, tolerance 1e-7)
+    slack = max([tol] + [BRep_Tool.Tolerance_s(e) for side in sides for e in side])
+    edge1, edge2 = (side[0] if len(side) == 1 else compound(side) for side in sides)
+    spread = [np.ptp(uv, axis=0) * _speeds(surf, uv[0]) for uv in ends]
+    if all(s[0] <= slack for s in spread):  # smooth edges are u-iso lines: cross direction u
         iso, k, lo, hi, closed_dir = "u", 0, v0, v1, ad.IsVPeriodic()
-    elif all(s[1] < 1e-9 for s in spread):
+    elif all(s[1] <= slack for s in spread):
         iso, k, lo, hi, closed_dir = "v", 1, u0, u1, ad.IsUPeriodic()
     else:
         return "smooth edges are not iso-lines of the fillet surface: not supported"
@@ -160,13 +181,19 @@ def medial_curve(face: Any, edge1: Any, edge2: Any, rel_tol: float = 1e-9) -> Me
     freeform = radius is None
     if radius is None:  # a variable-radius or freeform blend: the scale is its half-width
         radius = near
-    if err > rel_tol * radius and freeform and kind == GeomAbs_BSplineSurface:
+    accept = max(rel_tol * radius, 2 * slack)  # the iso-line may be as off as the input
+    if err > accept and freeform and kind == GeomAbs_BSplineSurface:
+        if max(len(side) for side in sides) > 1:
+            return (
+                f"mid iso-line not equidistant ({err:.2e} > {rel_tol:g} x radius) on a blend "
+                "whose constraint side is a chain of edges (the traced route takes one edge)"
+            )
         # a B-spline blend whose mid iso-line is off (a rolling ball between a plane and a
-        # slanted cylinder): the medial curve traced per cross-section
+        # slanted cylinder): the medial curve traced per cross-section, to rel_tol x radius
         traced = traced_medial_edge(face, (edge1, edge2), k, cross, (lo, hi), rel_tol * radius)
         if isinstance(traced, str):
             return f"mid iso-line not equidistant ({err:.2e} > {rel_tol:g} x radius), {traced}"
         return Medial(traced[0], TRACED, float("nan"), traced[1], float(radius))
-    if err > rel_tol * radius:
-        return f"mid iso-line not equidistant ({err:.2e} > {rel_tol:g} x radius)"
+    if err > accept:
+        return f"mid iso-line not equidistant ({err:.2e} > {accept / radius:.2g} x radius)"
     return Medial(edge, iso, float(mid), float(err), float(radius))

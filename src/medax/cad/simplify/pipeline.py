@@ -227,10 +227,10 @@ def simplify(
     )
     nfaces, vol0, kept, diag = fmap.Size(), job.vol0, job.kept, job.diag
     for spec in blends.fillets:
-        m = medial_curve(
-            job.face(spec.face),
-            *[TopoDS.Edge(job.emap.FindKey(i + 1)) for i in spec.smooth_edges],
+        side0, side1 = (
+            [TopoDS.Edge(job.emap.FindKey(i + 1)) for i in spec.side_edges(k)] for k in (0, 1)
         )
+        m = medial_curve(job.face(spec.face), side0, side1, tol=job.btol)
         if isinstance(m, str):
             kept[spec.face] = m
         else:

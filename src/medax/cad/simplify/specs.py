@@ -39,6 +39,13 @@ class FilletSpec:
     smooth_edges: tuple[int, int]
     supporting: tuple[int, int]
     radius: float | None = None
+    #: Every edge of each constraint side where a side is a chain of several edges
+    #: (``smooth_edges`` holds the first of each); None when each side is one edge.
+    chains: tuple[tuple[int, ...], tuple[int, ...]] | None = None
+
+    def side_edges(self, k: int) -> tuple[int, ...]:
+        """The edge indices of constraint side ``k`` (0 or 1)."""
+        return self.chains[k] if self.chains is not None else (self.smooth_edges[k],)
 
 
 @dataclass(frozen=True)
@@ -149,17 +156,20 @@ def _with_corners(
 def specs_from_classification(cls: Any) -> BlendInput:
     """Fillet specs from a :class:`~medax.cad.model.Classification` (no reclassification).
 
-    Fillets whose constraint sides are single edges with two distinct supporting faces are
-    tried; corner blends and the rest are refused with the reason.
+    Fillets with two distinct supporting faces are tried (a constraint side may be a chain
+    of edges); corner blends and the rest are refused with the reason.
     """
     fillets: list[FilletSpec] = []
     refused: list[tuple[int, str]] = []
     for rec in cls.fillets:
         a, b = rec.smooth_edges
-        if len(a) != 1 or len(b) != 1:
-            refused.append((rec.face, "a constraint side has several edges"))
+        if not a or not b:
+            refused.append((rec.face, "a constraint side has no edge"))
         elif rec.supporting[0] == rec.supporting[1]:
             refused.append((rec.face, f"both smooth edges on face {rec.supporting[0]}"))
         else:
-            fillets.append(FilletSpec(rec.face, (a[0], b[0]), tuple(rec.supporting), rec.radius))
+            chains = (tuple(a), tuple(b)) if len(a) > 1 or len(b) > 1 else None
+            fillets.append(
+                FilletSpec(rec.face, (a[0], b[0]), tuple(rec.supporting), rec.radius, chains)
+            )
     return _with_corners(fillets, refused, {c.face: set(c.fillets) for c in cls.corners})
