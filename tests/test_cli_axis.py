@@ -152,8 +152,8 @@ LINES = [{"kind": "line"}] * 4
             "crosses",
         ),
         (lambda t: SAMPLE, ["--region", "wavy", "--pair", "0,1"], "--pair must be"),
-        (lambda t: SAMPLE, ["--region", "wavy", "--tol", "-1"], "--tol must be positive"),
-        (lambda t: SAMPLE, ["--region", "wavy", "--plot", "x.gif"], "use a .png or .svg"),
+        (lambda t: SAMPLE, ["--region", "wavy", "--tol", "-1"], "--tol -1: must be positive"),
+        (lambda t: SAMPLE, ["--region", "wavy", "--plot", "x.gif"], "(use .png, .svg)"),
     ],
 )
 def test_bad_input_one_line_error_no_output(tmp_path, capsys, make, args, message):

@@ -2,8 +2,9 @@
 
 Each subcommand lives in ``medax.cli.<name>`` and provides ``add_parser(subparsers)`` (which
 registers its options) and ``run(args) -> int``. ``main(argv)`` is callable in-process.
-Errors of the :class:`~medax.errors.MedaxError` family are printed on one line with a
-non-zero exit code; nothing else is caught.
+Errors of the :class:`~medax.errors.MedaxError` family and OS errors are printed on one
+line with exit code 1; an interrupt (Ctrl-C) prints one line and exits 130 after every
+output's temporary file is removed (outputs are all written at the end, or none).
 """
 
 from __future__ import annotations
@@ -58,6 +59,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     except MedaxError as err:
         print(f"medax {args.command}: error: {err}", file=sys.stderr)
         return 1
+    except OSError as err:  # a file system failure not caught nearer (disk full, EIO)
+        where = f"{err.filename}: " if err.filename else ""
+        print(f"medax {args.command}: error: {where}{err.strerror or err}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"medax {args.command}: interrupted; no output written", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":  # pragma: no cover
