@@ -18,6 +18,8 @@ from medax.geometry.embedding import Embedding, PlaneEmbedding
 #: the two opposite pairs: (0, 2) and (1, 3)
 PAIRS: tuple[tuple[int, int], ...] = ((0, 2), (1, 3))
 _SAMPLES = 200  # samples per side for orientation and crossing checks
+#: a planar region enclosing less than this x diagonal^2 is degenerate
+MIN_AREA = 1e-10
 
 
 @dataclass(frozen=True)
@@ -122,8 +124,9 @@ class Region:
         return float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
 
     def signed_area(self) -> float:
-        """Signed area in the parameter plane (> 0 for counter-clockwise)."""
-        b = self.boundary
+        """Signed area in the parameter plane (> 0 for counter-clockwise), summed relative to
+        the first corner so that it does not cancel far from the origin."""
+        b = self.boundary - self.boundary[0]
         x, y = b[:, 0], b[:, 1]
         return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
 
@@ -150,8 +153,11 @@ class Region:
     def check(self) -> None:
         """Raise :class:`RegionError` naming the side or corner that is wrong."""
         pts = np.concatenate([s.sample(_SAMPLES) for s in self.sides])
-        diag = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
-        if not np.isfinite(diag) or diag == 0.0:
+        with np.errstate(over="ignore", invalid="ignore"):
+            diag = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
+        if not np.isfinite(diag):
+            raise RegionError(f"region '{self.name}': coordinates too large (sizes overflow)")
+        if diag == 0.0:
             raise RegionError(f"region '{self.name}' is degenerate (all points coincide)")
         for k, s in enumerate(self.sides):
             if s.dim != 2:
@@ -167,6 +173,11 @@ class Region:
                     f"(corner {(k + 1) % 4} open by {gap:.3g})"
                 )
         self._check_crossings(diag)
+        if self.embedding.is_identity and abs(self.signed_area()) <= MIN_AREA * diag * diag:
+            raise RegionError(
+                f"region '{self.name}' encloses no area (sides on one line, corners collinear "
+                "or a side doubling back over another)"
+            )
 
     def _check_crossings(self, diag: float) -> None:
         polys = [s.sample(_SAMPLES) for s in self.sides]

@@ -1,0 +1,97 @@
+"""Hostile regions files: one typed line naming the region and side, never a traceback
+(issue 19); and orientation far from the origin."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from medax.cli.main import main
+from medax.errors import InputError
+from medax.geometry.region_io import read_region, region_from_dict
+
+SQUARE = [[0, 0], [1, 0], [1, 1], [0, 1]]
+LINES = [{"kind": "line"}] * 4
+BIG = "1" + "0" * 400  # an integer no float holds
+
+
+def region_text(corners=SQUARE, side0=None) -> str:
+    sides = [side0 or LINES[0], *LINES[1:]]
+    return json.dumps({"r": {"corners": corners, "sides": sides}})
+
+
+def bspline(degree) -> dict:
+    pts = [[0, 0], [0.3, -0.1], [0.7, 0.1], [1, 0]]
+    return {"kind": "bspline", "degree": degree, "points": pts}
+
+
+CASES = [
+    ("[" * 100_000 + "]" * 100_000, "JSON nested too deeply"),
+    ('{"r": ' + "[" * 100_000 + "]" * 100_000 + "}", "JSON nested too deeply"),
+    ('{"r": {"corners": [[0, 0], [1, 1' + "0" * 5000 + "]]}}", "malformed JSON"),
+    (region_text().replace("[1, 0]", f"[{BIG}, 0]", 1), "corners: a number is too large"),
+    (
+        region_text(side0={"kind": "polyline", "points": [[0, 0], [0.5, 7], [1, 0]]}).replace(
+            "7", BIG
+        ),
+        "side 0: 'points': a number is too large",
+    ),
+    (region_text(side0={"kind": "arc", "sagitta": 7}).replace("7", BIG), "side 0: sagitta is"),
+    (
+        region_text(side0={"kind": "arc", "center": [0.5, -1], "radius": 7}).replace("7", BIG),
+        "side 0: radius is too large",
+    ),
+    (region_text(side0=bspline(7)).replace(": 7", ": Infinity"), "side 0: degree must be"),
+    (region_text(side0=bspline(7)).replace(": 7", ": NaN"), "side 0: degree must be"),
+    (region_text(side0=bspline(2.5)), "side 0: degree must be an integer from 1 to 3"),
+    (region_text(side0=bspline("3")), 'from 1 to 3 (4 points), got "3"'),
+    (region_text(side0=bspline(7)).replace(": 7", ": " + BIG), "side 0: degree must be"),
+    (
+        region_text(side0={"kind": "polyline", "points": [[0, 0], [0.5, 7], [1, 0]]}).replace(
+            "7", "NaN"
+        ),
+        "side 0: 'points' must be finite",
+    ),
+    (region_text(side0={"kind": "polyline", "points": [[0, 0], [1], [1, 0]]}), "side 0: 'points'"),
+    (region_text(side0={"kind": "arc", "center": "ab", "radius": 1}), "side 0: center must be"),
+    (region_text(side0={"kind": "arc", "sagitta": "1"}), "side 0: sagitta must be a number"),
+    (region_text(corners=[[0, 0], [1, 0], [2, 0], [3, 0]]), "region 'r' encloses no area"),
+    (region_text(corners=[[0, 0], [1, 1], [2, 2], [3, 3]]), "region 'r' encloses no area"),
+    (region_text(corners=[[0, 0], [2, 0], [1, 0], [3, 0]]), "region 'r' encloses no area"),
+    (region_text(corners=[[0, 0], [1e308, 0], [1e308, 1e308], [0, 1e308]]), "too large"),
+]
+
+
+@pytest.mark.parametrize(("text", "message"), CASES)
+def test_hostile_regions_one_line(tmp_path, capsys, text, message):
+    src = tmp_path / "r.json"
+    src.write_text(text)
+    with pytest.raises(InputError, match=None) as info:
+        read_region(src, "r")
+    assert message in str(info.value)
+    out = tmp_path / "a.json"
+    for argv in (
+        ["axis", str(src), "--region", "r", "-o", str(out)],
+        ["mesh", str(src), "--region", "r", "--divisions", "4", "-o", str(tmp_path / "m.vtu")],
+    ):
+        assert main(argv) == 1
+        err = capsys.readouterr().err.strip()
+        assert message in err and len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.json"]
+
+
+@pytest.mark.parametrize(
+    ("offset", "width"), [((1e6, -2e6), 0.01), ((1e9, 1e9), 10.0), ((1e12, 1e12), 10.0)]
+)
+def test_orientation_far_from_the_origin(offset, width):
+    """A counter-clockwise trapezoid stays counter-clockwise far away (the signed area is
+    summed relative to a corner; it cancelled in absolute coordinates at 1e6 and 1e9)."""
+    x0, y0 = offset
+    w, h = width, 0.6 * width
+    corners = [[x0, y0], [x0 + w, y0], [x0 + 0.75 * w, y0 + h], [x0 + 0.25 * w, y0 + h]]
+    reg = region_from_dict({"corners": corners, "sides": LINES}, "far")
+    assert not reg.reoriented
+    cw = region_from_dict({"corners": corners[::-1], "sides": LINES}, "far")
+    assert cw.reoriented
+    assert reg.signed_area() == pytest.approx(0.75 * w * h, rel=1e-3)
