@@ -182,16 +182,31 @@ def test_unknown_extensions_refused_up_front(
 
 
 # ---- special files ------------------------------------------------------------------------
+def _char_device(tmp_path):
+    """A character device to aim at: a /dev/null twin in ``tmp_path`` when we may create
+    one; /dev/null itself only when we cannot replace it (not root). Never /dev/null as
+    root: a regression here would replace the machine's /dev/null."""
+    node = tmp_path / "null.json"
+    try:
+        os.mknod(node, stat.S_IFCHR | 0o666, os.makedev(1, 3))
+        return node
+    except (PermissionError, OSError):
+        if os.geteuid() == 0:
+            pytest.skip("cannot create a device node and will not risk /dev/null as root")
+        return "/dev/null"
+
+
 def test_char_device_and_fifo_not_replaced(regions, tmp_path, capsys):
-    null = os.stat("/dev/null")
-    refused(axis(regions, "-o", "/dev/null"), capsys, "is a character device")
-    refused(mesh(regions, "--format", "vtu", "-o", "/dev/null"), capsys, "character device")
-    assert stat.S_ISCHR(os.stat("/dev/null").st_mode)
-    assert os.stat("/dev/null").st_rdev == null.st_rdev
+    dev = _char_device(tmp_path)
+    rdev = os.stat(dev).st_rdev
+    refused(axis(regions, "-o", dev), capsys, "is a character device")
+    refused(mesh(regions, "--format", "vtu", "-o", dev), capsys, "character device")
+    assert stat.S_ISCHR(os.stat(dev).st_mode) and os.stat(dev).st_rdev == rdev
     fifo = tmp_path / "pipe.json"
     os.mkfifo(fifo)
     refused(axis(regions, "-o", fifo), capsys, "is a FIFO")
     assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+    assert not any(p.name.startswith(".") for p in tmp_path.iterdir())
 
 
 def test_read_only_output_not_replaced(regions, tmp_path, capsys):
