@@ -56,9 +56,9 @@ CASES = [
     (region_text(side0={"kind": "polyline", "points": [[0, 0], [1], [1, 0]]}), "side 0: 'points'"),
     (region_text(side0={"kind": "arc", "center": "ab", "radius": 1}), "side 0: center must be"),
     (region_text(side0={"kind": "arc", "sagitta": "1"}), "side 0: sagitta must be a number"),
-    (region_text(corners=[[0, 0], [1, 0], [2, 0], [3, 0]]), "region 'r' encloses no area"),
-    (region_text(corners=[[0, 0], [1, 1], [2, 2], [3, 3]]), "region 'r' encloses no area"),
-    (region_text(corners=[[0, 0], [2, 0], [1, 0], [3, 0]]), "region 'r' encloses no area"),
+    (region_text(corners=[[0, 0], [1, 0], [2, 0], [3, 0]]), "sides 2 and 3 fold onto each other"),
+    (region_text(corners=[[0, 0], [1, 1], [2, 2], [3, 3]]), "sides 2 and 3 fold onto each other"),
+    (region_text(corners=[[0, 0], [2, 0], [1, 0], [3, 0]]), "sides 0 and 1 fold onto each other"),
     (region_text(corners=[[0, 0], [1e308, 0], [1e308, 1e308], [0, 1e308]]), "too large"),
 ]
 
@@ -79,6 +79,86 @@ def test_hostile_regions_one_line(tmp_path, capsys, text, message):
         err = capsys.readouterr().err.strip()
         assert message in err and len(err.splitlines()) == 1 and "Traceback" not in err, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.json"]
+
+
+def poly(*pts) -> dict:
+    return {"kind": "polyline", "points": [list(p) for p in pts]}
+
+
+RECT = [[0, 0], [2, 0], [2, 1], [0, 1]]
+SIMPLE = "the four sides must form one simple closed curve"
+
+
+@pytest.mark.parametrize(
+    ("corners", "sides", "message"),
+    [
+        (
+            RECT,
+            [poly((0, 0), (1, 0), (2, 0)), *LINES[1:2], poly((2, 1), (1, 0), (0, 1)), LINES[3]],
+            "side 0 touches side 2 at (1, 0)",
+        ),  # fmt: skip
+        (
+            RECT,
+            [*LINES[:2], {"kind": "arc", "sagitta": -1.0}, LINES[3]],
+            "side 0 touches side 2 at (1, 0)",
+        ),  # fmt: skip
+        (
+            SQUARE,
+            [poly((0, 0), (0.6, 0), (0.3, 0), (1, 0)), *LINES[1:]],
+            "side 0 doubles back at (0.6, 0)",
+        ),  # fmt: skip
+        (SQUARE, [poly((0, 0), (0.6, 0), (0.59, 0), (1, 0)), *LINES[1:]], "side 0 doubles back"),
+        (
+            SQUARE,
+            [poly((0, 0), (1, 0), (1, 0.5), (1, 0)), *LINES[1:]],
+            "side 0 doubles back at (1, 0.5)",
+        ),  # fmt: skip
+        (
+            [[0, 0], [1, 0], [1, 0], [0, 1]],
+            [LINES[0], poly((1, 0), (1.5, 0.5), (1, 1), (1, 0)), *LINES[2:]],
+            "corners 1 and 2 coincide at (1, 0)",
+        ),  # fmt: skip
+        (
+            SQUARE,
+            [poly((0, 0), (0.5, 0), (0.5, 0.5), (0.5, 0.999_999_99), (0.6, 0), (1, 0)), *LINES[1:]],
+            "side 0 touches side 2",
+        ),  # fmt: skip
+    ],
+)
+def test_degenerate_regions_refused(corners, sides, message):
+    """Pinched (also by an arc's apex, between samples), doubling back, running up a
+    neighbour and back, a side that is a loop, a spike nearly touching the far side."""
+    with pytest.raises(InputError) as info:
+        region_from_dict({"corners": corners, "sides": sides}, "r")
+    assert message in str(info.value) and SIMPLE in str(info.value), str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("corners", "sides"),
+    [
+        (
+            [[0, 0], [10, 0], [10, 10], [0, 10]],
+            [poly((0, 0), (4.8, 0), (5, 9), (5.2, 0), (10, 0)), *LINES[1:]],
+        ),  # fmt: skip
+        ([[0, 0], [20, 0], [20, 1e-3], [0, 1e-3]], LINES),
+        (SQUARE, [{"kind": "arc", "sagitta": 0.2}, *LINES[1:]]),
+        (RECT, [*LINES[:2], {"kind": "arc", "sagitta": -0.99}, LINES[3]]),
+    ],
+)
+def test_narrow_but_simple_regions_accepted(corners, sides):
+    """A thin spike, a 1:20000 strip, arcs; an arc passing 0.01 from the opposite side."""
+    region_from_dict({"corners": corners, "sides": sides}, "ok")
+
+
+def test_sample_regions_still_accepted():
+    from medax.geometry.region_io import read_regions, sample_regions_path
+
+    assert set(read_regions(sample_regions_path())) == {
+        "trapezoid",
+        "arcs",
+        "wavy",
+        "annulus_sector",
+    }
 
 
 @pytest.mark.parametrize(

@@ -14,12 +14,11 @@ from medax.geometry._types import FloatArray
 from medax.geometry.curve import Curve
 from medax.geometry.embedded_curve import EmbeddedCurve
 from medax.geometry.embedding import Embedding, PlaneEmbedding
+from medax.geometry.simple_boundary import check_simple
 
 #: the two opposite pairs: (0, 2) and (1, 3)
 PAIRS: tuple[tuple[int, int], ...] = ((0, 2), (1, 3))
 _SAMPLES = 200  # samples per side for orientation and crossing checks
-#: a planar region enclosing less than this x diagonal^2 is degenerate
-MIN_AREA = 1e-10
 
 
 @dataclass(frozen=True)
@@ -173,11 +172,8 @@ class Region:
                     f"(corner {(k + 1) % 4} open by {gap:.3g})"
                 )
         self._check_crossings(diag)
-        if self.embedding.is_identity and abs(self.signed_area()) <= MIN_AREA * diag * diag:
-            raise RegionError(
-                f"region '{self.name}' encloses no area (sides on one line, corners collinear "
-                "or a side doubling back over another)"
-            )
+        if self.embedding.is_identity:
+            check_simple(self.sides, diag, self.name)
 
     def _check_crossings(self, diag: float) -> None:
         polys = [s.sample(_SAMPLES) for s in self.sides]
