@@ -70,8 +70,9 @@ class Region:
         """Check the sides (closed corners, no zero-length side, no crossings) and orient
         them counter-clockwise in the parameter plane.
 
-        Clockwise input is reversed keeping side numbers: side k still joins the same two
-        corners, so pair (0, 2) still means the same two sides; ``reoriented`` says so.
+        Clockwise input is reversed: sides 0 and 2 keep their numbers, sides 1 and 3 swap,
+        so pairs (0, 2) and (1, 3) still mean the same two sides; ``reoriented`` says so
+        (``medax.axis.export`` reports sides in the input's numbering).
         """
         if len(sides) != 4:
             raise RegionError(f"region '{name}' needs 4 sides, got {len(sides)}")
