@@ -175,3 +175,27 @@ def test_orientation_far_from_the_origin(offset, width):
     cw = region_from_dict({"corners": corners[::-1], "sides": LINES}, "far")
     assert cw.reoriented
     assert reg.signed_area() == pytest.approx(0.75 * w * h, rel=1e-3)
+
+
+def test_far_region_states_its_coordinate_bound(tmp_path, caplog):
+    """At 1e12 doubles hold a 10-unit region to 1e-5 x diagonal: axis and mesh succeed and
+    say so (a warning and the JSON), instead of claiming 1e-10; near the origin, silent."""
+    w, h, x0 = 10.0, 6.0, 1e12
+    far = [[x0, x0], [x0 + w, x0], [x0 + 0.75 * w, x0 + h], [x0 + 0.25 * w, x0 + h]]
+    near = [[x - x0 for x in c] for c in far]
+    regions = {n: {"corners": c, "sides": LINES} for n, c in (("far", far), ("near", near))}
+    src = tmp_path / "r.json"
+    src.write_text(json.dumps(regions))
+    for name in ("far", "near"):
+        caplog.clear()
+        out, rep = tmp_path / f"{name}.json", tmp_path / f"{name}-q.json"
+        assert main(["axis", str(src), "--region", name, "-o", str(out)]) == 0
+        assert main(["mesh", str(src), "--region", name, "--divisions", "8", "-o",
+                     str(tmp_path / f"{name}.vtu"), "--report", str(rep)]) == 0  # fmt: skip
+        res = json.loads(out.read_text())["coordinate_resolution_rel"]
+        res_mesh = json.loads(rep.read_text())["coordinate_resolution_rel"]
+        if name == "far":
+            assert 0.5e-5 < res < 2e-5 and 0.5e-5 < res_mesh < 2e-5
+            assert caplog.text.count("resolve its coordinates only to 1.0e-05 x diagonal") == 2
+        else:
+            assert res < 1e-15 and res_mesh < 1e-15 and "resolve" not in caplog.text

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from medax.axis.result import MedialAxis
+from medax.geometry.resolution import coordinate_resolution
 
 #: a reversed (clockwise) region's side k is the file's side USER_SIDE[k]: reversal keeps
 #: sides 0 and 2 and swaps 1 and 3 (``Region.build``)
@@ -47,6 +48,7 @@ def axis_record(axis: MedialAxis) -> dict[str, Any]:
         "max_point_error_rel": axis.max_point_error / diag,
         "max_curve_error_rel": axis.max_curve_error / diag,
         "tol": axis.tol,
+        "coordinate_resolution_rel": coordinate_resolution(axis.space_points, diag),
         "diagonal": diag,
         "n_points": axis.n_points,
         "counts": {

@@ -49,6 +49,7 @@ def run(args: argparse.Namespace) -> int:
     from medax.axis import trace_axis
     from medax.axis.export import axis_record
     from medax.geometry.region_io import read_region
+    from medax.geometry.resolution import coordinate_resolution, resolution_note
     from medax.io_utils import staged_outputs, write_json
 
     pairs = PAIR_CHOICES.get(args.pair.replace(" ", ""))
@@ -63,6 +64,10 @@ def run(args: argparse.Namespace) -> int:
     if region.reoriented:
         log.warning("region '%s' was clockwise: sides reversed in place", region.name)
     axes = [trace_axis(region, pr, tol=args.tol, method=args.method) for pr in pairs]
+    res = coordinate_resolution(region.boundary, region.diagonal)
+    note = resolution_note(region.name, res, tolerances.POINT_TOL)
+    if note:
+        log.warning("%s", note)
     for a in axes:
         print(
             f"{region.name} pair {a.pair[0]},{a.pair[1]}: {a.n_points} points, "

@@ -110,6 +110,7 @@ def report(mesh: Any, time_s: float) -> dict[str, Any]:
 
 def run(args: argparse.Namespace) -> int:
     from medax.geometry.region_io import read_region
+    from medax.geometry.resolution import coordinate_resolution, resolution_note
     from medax.io_utils import staged_outputs, write_json
     from medax.mesh.export import format_from_path, write_mesh
     from medax.mesh.mesher import mesh_region
@@ -142,6 +143,11 @@ def run(args: argparse.Namespace) -> int:
     )
     time_s = float(mesh.info["time_s"])
     rep = report(mesh, time_s)
+    res = coordinate_resolution(mesh.points, region.diagonal)
+    rep["coordinate_resolution_rel"] = res
+    note = resolution_note(region.name, res, args.tol or tolerances.CURVE_TOL)
+    if note:
+        log.warning("%s", note)
     sj = rep["scaled_jacobian"]
     print(
         f"{region.name}: {mesh.n1}x{mesh.n2} quads ({args.method}), {mesh.n_nodes} nodes, "
