@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from medax.cli.main import main
@@ -199,3 +200,19 @@ def test_far_region_states_its_coordinate_bound(tmp_path, caplog):
             assert caplog.text.count("resolve its coordinates only to 1.0e-05 x diagonal") == 2
         else:
             assert res < 1e-15 and res_mesh < 1e-15 and "resolve" not in caplog.text
+
+
+@pytest.mark.parametrize("size", [1e-3, 1e-4])
+def test_corners_meet_to_what_doubles_resolve(size):
+    """A 1e-3 region of arcs at 1.1e6: its arcs' computed end points miss the corners by a
+    few units in the last place there (4.7e-10, above 1e-7 x diagonal); not an open corner."""
+    off = np.array([1102191.6626334107, -1148783.277913306])
+    corners = off + size * np.array([[0, 0], [1, 0.1], [0.9, 1], [-0.1, 0.8]])
+    sides = [{"kind": "arc", "sagitta": s * size} for s in (0.1, -0.1, 0.1, -0.1)]
+    region = region_from_dict({"corners": corners.tolist(), "sides": sides}, "far")
+    assert not region.reoriented
+    end = (corners[1] + [0.0, 1e-3 * size]).tolist()  # a real gap, 1e-3 of the size
+    spec = {"corners": corners.tolist(), "sides": [{"kind": "line"}] * 4}
+    spec["sides"][0] = {"kind": "polyline", "points": [corners[0].tolist(), end]}
+    with pytest.raises(InputError, match="corner 1 open by"):
+        region_from_dict(spec, "open")

@@ -164,9 +164,11 @@ class Region:
                 raise RegionError(f"region '{self.name}': side {k} is not a 2-D curve")
             if s.length() <= tolerances.MIN_SIDE * diag:
                 raise RegionError(f"region '{self.name}': side {k} has zero length")
+        # corners meet to the tolerance, or to what doubles resolve far from the origin
+        corner_tol = max(tolerances.CORNER_TOL * diag, 16.0 * float(np.spacing(np.abs(pts).max())))
         for k in range(4):
             gap = float(np.linalg.norm(self.sides[k].end - self.sides[(k + 1) % 4].start))
-            if gap > tolerances.CORNER_TOL * diag:
+            if gap > corner_tol:
                 raise RegionError(
                     f"region '{self.name}': side {k} ends {self.sides[k].end.tolist()} but side "
                     f"{(k + 1) % 4} starts {self.sides[(k + 1) % 4].start.tolist()} "
