@@ -117,7 +117,7 @@ def test_truncated_step(tmp_path):
 def test_garbage_with_step_extension(tmp_path):
     p = tmp_path / "junk.stp"
     p.write_text("this is not a STEP file\n")
-    assert "not a readable STEP" in _err(p)
+    assert "not a STEP file (it does not start with ISO-10303-21;)" in _err(p)
 
 
 def test_unknown_extension(tmp_path):

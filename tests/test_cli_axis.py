@@ -152,8 +152,8 @@ LINES = [{"kind": "line"}] * 4
             "crosses",
         ),
         (lambda t: SAMPLE, ["--region", "wavy", "--pair", "0,1"], "--pair must be"),
-        (lambda t: SAMPLE, ["--region", "wavy", "--tol", "-1"], "--tol must be positive"),
-        (lambda t: SAMPLE, ["--region", "wavy", "--plot", "x.gif"], "use a .png or .svg"),
+        (lambda t: SAMPLE, ["--region", "wavy", "--tol", "-1"], "--tol -1: must be positive"),
+        (lambda t: SAMPLE, ["--region", "wavy", "--plot", "x.gif"], "(use .png, .svg)"),
     ],
 )
 def test_bad_input_one_line_error_no_output(tmp_path, capsys, make, args, message):
@@ -181,3 +181,28 @@ def test_demo_writes_axis_files(tmp_path, capsys):
     assert {"axis-wavy.json", "axis-wavy.png", "axis-annulus_sector.json"} <= names
     recs = json.loads((tmp_path / "axis-wavy.json").read_text())
     assert [r["pair"] for r in recs] == [[0, 2], [1, 3]]
+
+
+@pytest.mark.parametrize("pair", ["0,2", "1,3"])
+def test_clockwise_region_reports_the_files_side_numbers(tmp_path, pair):
+    """A clockwise region is reversed inside; axis.json names sides as the file does: the
+    first point lies on the file's start_side, the last on its end_side."""
+    from medax.geometry.region_io import read_region
+
+    corners = [[0, 0], [0, 6], [10, 4], [10, 0]]  # clockwise; side k from corner k to k+1
+    spec = {"corners": corners, "sides": [{"kind": "line"}] * 4}
+    src, out = tmp_path / "cw.json", tmp_path / "a.json"
+    src.write_text(json.dumps({"cw": spec}))
+    assert read_region(src, "cw").reoriented
+    assert main(["axis", str(src), "--region", "cw", "--pair", pair, "-o", str(out)]) == 0
+    rec = json.loads(out.read_text())
+    c = np.array(corners, dtype=float)
+
+    def gap(p, k):  # distance from p to the file's side k (a segment)
+        a, b = c[k], c[(k + 1) % 4]
+        t = np.clip(np.dot(p - a, b - a) / np.dot(b - a, b - a), 0, 1)
+        return np.linalg.norm(p - (a + t * (b - a)))
+
+    first, last = np.array(rec["points"][0]), np.array(rec["points"][-1])
+    assert gap(first, rec["start_side"]) <= 1e-9 and gap(last, rec["end_side"]) <= 1e-9
+    assert sorted(rec["constraints"]) == sorted(int(x) for x in pair.split(","))

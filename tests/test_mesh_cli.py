@@ -58,8 +58,10 @@ def test_format_override(tmp_path):
         (["--divisions", "4", "--format", "stl"], "unknown mesh format"),
         (["--divisions", "4", "--method", "paper", "--boundary", "ratio"], "not to paper"),
         (["--divisions", "4", "--tol=-1e-6"], "non-negative"),
-        (["--divisions", "4", "--tol", "nan"], "non-negative"),
-        (["--divisions", "4", "--method", "paper", "--tol", "0"], "positive tol"),
+        (["--divisions", "4", "--tol", "nan"], "--tol nan: must be a finite number"),
+        (["--divisions", "4", "--tol", "inf"], "--tol inf: must be a finite number"),
+        (["--divisions", "4", "--tol", "1e-15"], "below 1e-12"),
+        (["--divisions", "4", "--method", "paper", "--tol", "0"], "--tol 0: must be positive"),
     ],
 )
 def test_bad_input(tmp_path, capsys, extra, message):

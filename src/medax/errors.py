@@ -31,3 +31,7 @@ class MeshError(MedaxError, RuntimeError):
 
 class CadError(MedaxError, RuntimeError):
     """A CAD file could not be read, classified or rebuilt."""
+
+
+class OutputError(MedaxError, RuntimeError):
+    """An output could not be written (nothing was written, any previous file is intact)."""

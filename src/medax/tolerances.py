@@ -15,3 +15,7 @@ CORNER_TOL = 1e-7
 MIN_SIDE = 1e-9
 #: Two faces are tangent along an edge when their normals differ by less than this (radians).
 TANGENT_ANGLE = 1e-3
+#: Smallest curve tolerance accepted (relative): about 4500 x the double epsilon. Measured on
+#: ``wavy``: 1e-12 is met in 1.4 s; at 1e-13 the error stalls at 1.4e-12 (points) after 13 s
+#: and 0.9 GB, and smaller asks only grow the work.
+MIN_CURVE_TOL = 1e-12

@@ -26,6 +26,7 @@ from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_SHELL, TopAbs_SOLID, Top
 from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopoDS import TopoDS, TopoDS_Shape
 
+from medax.cad.file_check import check_cad_file
 from medax.errors import CadError
 
 log = logging.getLogger(__name__)
@@ -60,8 +61,9 @@ class Part:
 def read_part(path: str | Path, unify: bool = True) -> Part:
     """Read ``path`` (STEP, IGES or BRep by extension) into healed solids.
 
-    Raises :class:`CadError` (one line naming the file) for a missing, empty, unreadable or
-    truncated file, an unknown extension, a file with no solid, or a shell that is not closed.
+    Raises :class:`CadError` (one line naming the file) for a missing, empty, unreadable,
+    truncated or appended-to file, content of another format than the extension, an unknown
+    extension, a file with no solid, or a shell that is not closed.
     """
     p = Path(path)
     fmt = EXTENSIONS.get(p.suffix.lower())
@@ -74,6 +76,7 @@ def read_part(path: str | Path, unify: bool = True) -> Part:
         raise CadError(f"{p}: no such file")
     if p.stat().st_size == 0:
         raise CadError(f"{p}: file is empty")
+    check_cad_file(p, fmt)  # OCCT crashes or loops on some truncated files
     try:
         with quiet_occt():
             shape, file_unit = _READERS[fmt](p)

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import argparse
 import logging
-from pathlib import Path
 
 from medax import tolerances
+from medax.cli.options import check_tol
+from medax.cli.outputs import JSON_SUFFIXES, Output, check_outputs
 from medax.errors import InputError
 
 log = logging.getLogger(__name__)
+AXIS_PLOTS = (".png", ".svg")
 PAIR_CHOICES = {"0,2": [(0, 2)], "1,3": [(1, 3)], "both": [(0, 2), (1, 3)]}
 
 
@@ -47,37 +49,41 @@ def run(args: argparse.Namespace) -> int:
     from medax.axis import trace_axis
     from medax.axis.export import axis_record
     from medax.geometry.region_io import read_region
-    from medax.io_utils import check_writable, write_json
+    from medax.geometry.resolution import coordinate_resolution, resolution_note
+    from medax.io_utils import staged_outputs, write_json
 
     pairs = PAIR_CHOICES.get(args.pair.replace(" ", ""))
     if pairs is None:
         raise InputError(f"--pair must be 0,2 or 1,3 or both, got '{args.pair}'")
-    if not args.tol > 0.0:
-        raise InputError(f"--tol must be positive, got {args.tol}")
-    if args.plot and Path(args.plot).suffix.lower() not in (".png", ".svg"):
-        raise InputError(f"--plot {args.plot}: use a .png or .svg file name")
-    for out in (args.output, args.plot):
-        if out:
-            check_writable(out)
+    check_tol(args.tol, "--tol", tolerances.MIN_CURVE_TOL)
+    check_outputs(
+        [Output("-o", args.output, JSON_SUFFIXES), Output("--plot", args.plot, AXIS_PLOTS)],
+        {"regions file": args.regions},
+    )
     region = read_region(args.regions, args.region)
     if region.reoriented:
         log.warning("region '%s' was clockwise: sides reversed in place", region.name)
     axes = [trace_axis(region, pr, tol=args.tol, method=args.method) for pr in pairs]
+    res = coordinate_resolution(region.boundary, region.diagonal)
+    note = resolution_note(region.name, res, tolerances.POINT_TOL)
+    if note:
+        log.warning("%s", note)
     for a in axes:
         print(
             f"{region.name} pair {a.pair[0]},{a.pair[1]}: {a.n_points} points, "
             f"max |d1-d2| {a.max_point_error / a.diagonal:.2e} (points) "
             f"{a.max_curve_error / a.diagonal:.2e} (spline) x diagonal {a.diagonal:.6g}"
         )
-    if args.output:
-        records = [axis_record(a) for a in axes]
-        write_json(args.output, records[0] if len(records) == 1 else records)
-        print(f"wrote {args.output}")
-    if args.plot:
-        from medax.io_utils import atomic_path
-        from medax.viz.axis_plot import plot_axes
+    with staged_outputs() as out:  # all outputs or none
+        if args.output is not None:
+            records = [axis_record(a) for a in axes]
+            data = records[0] if len(records) == 1 else records
+            write_json(out.path(args.output, "-o"), data, "-o")
+        if args.plot is not None:
+            from medax.viz.axis_plot import plot_axes
 
-        with atomic_path(args.plot) as tmp:
-            plot_axes(region, axes, tmp)
-        print(f"wrote {args.plot}")
+            plot_axes(region, axes, out.path(args.plot, "--plot"))
+    for path in (args.output, args.plot):
+        if path is not None:
+            print(f"wrote {path}")
     return 0

@@ -4,13 +4,17 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 from pathlib import Path
 from typing import Any
 
 from medax import tolerances
+from medax.cli.options import check_tol
+from medax.cli.outputs import JSON_SUFFIXES, Output, check_outputs
 from medax.errors import InputError
 
 log = logging.getLogger(__name__)
+VIEW_SUFFIXES = (".png", ".svg")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -49,28 +53,31 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from medax.io_utils import check_writable, write_json
+    from medax.io_utils import staged_outputs, write_json
 
-    if not args.angle > 0.0 or not args.tol > 0.0:
-        raise InputError(f"--angle and --tol must be positive, got {args.angle}, {args.tol}")
-    if args.png and Path(args.png).suffix.lower() not in (".png", ".svg"):
-        raise InputError(f"--png {args.png}: use a .png or .svg file name")
+    if not (math.isfinite(args.angle) and args.angle > 0.0):
+        raise InputError(f"--angle {args.angle}: must be a positive number of radians")
+    check_tol(args.tol, "--tol", tolerances.MIN_CURVE_TOL)
     try:
         elev, azim = (float(x) for x in args.view.split(","))
     except ValueError as err:
         raise InputError(f"--view must be ELEVATION,AZIMUTH in degrees, got '{args.view}'") from err
-    for out in (args.report, args.png):
-        if out:
-            check_writable(out)
+    check_outputs(
+        [Output("--report", args.report, JSON_SUFFIXES), Output("--png", args.png, VIEW_SUFFIXES)],
+        {"input part": args.part},
+    )
     report, solids = classify_part(args.part, args.angle, args.tol, not args.no_axes)
     for line in summary_lines(report):
         print(line)
-    if args.report:
-        write_json(args.report, report)
-        print(f"wrote {args.report}")
-    if args.png:
-        render_solids(solids, args.png, title=Path(args.part).name, view=(elev, azim))
-        print(f"wrote {args.png}")
+    with staged_outputs() as out:  # all outputs or none
+        if args.report is not None:
+            write_json(out.path(args.report, "--report"), report, "--report")
+        if args.png is not None:
+            tmp = out.path(args.png, "--png")
+            render_solids(solids, tmp, title=Path(args.part).name, view=(elev, azim))
+    for path in (args.report, args.png):
+        if path is not None:
+            print(f"wrote {path}")
     return 0
 
 

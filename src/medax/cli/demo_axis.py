@@ -7,7 +7,7 @@ from pathlib import Path
 from medax.axis import trace_axis
 from medax.axis.export import axis_record
 from medax.geometry.region_io import read_regions, sample_regions_path
-from medax.io_utils import write_json
+from medax.io_utils import atomic_path, write_json
 
 #: (region, pairs) traced by the demo: the paper's wavy region both ways and the bent channel
 DEMO_REGIONS = (("wavy", ((0, 2), (1, 3))), ("annulus_sector", ((0, 2), (1, 3))))
@@ -23,5 +23,8 @@ def demo(outdir: Path) -> list[Path]:
         region = regions[name]
         axes = [trace_axis(region, pr) for pr in pairs]
         written.append(write_json(outdir / f"axis-{name}.json", [axis_record(a) for a in axes]))
-        written.append(plot_axes(region, axes, outdir / f"axis-{name}.png"))
+        png = outdir / f"axis-{name}.png"
+        with atomic_path(png) as tmp:
+            plot_axes(region, axes, tmp)
+        written.append(png)
     return written

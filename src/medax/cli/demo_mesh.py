@@ -19,6 +19,7 @@ DEMO_MESHES = (
 
 def demo(outdir: Path) -> list[Path]:
     """Mesh, write ``<stem>.vtu`` and ``<stem>.png`` into ``outdir``."""
+    from medax.io_utils import atomic_path
     from medax.viz.mesh_plot import plot_mesh
 
     regions = read_regions(sample_regions_path())
@@ -28,5 +29,8 @@ def demo(outdir: Path) -> list[Path]:
         mesh = mesh_region(regions[name], divisions=div, method=method, tol=1e-7, boundary="ratio")
         q = mesh.quality()
         written.append(write_mesh(outdir / f"{stem}.vtu", mesh.points, mesh.quads, q.as_dict()))
-        written.append(plot_mesh(mesh, outdir / f"{stem}.png", title=title))
+        png = outdir / f"{stem}.png"
+        with atomic_path(png) as tmp:
+            plot_mesh(mesh, tmp, title=title)
+        written.append(png)
     return written

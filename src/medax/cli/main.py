@@ -2,8 +2,10 @@
 
 Each subcommand lives in ``medax.cli.<name>`` and provides ``add_parser(subparsers)`` (which
 registers its options) and ``run(args) -> int``. ``main(argv)`` is callable in-process.
-Errors of the :class:`~medax.errors.MedaxError` family are printed on one line with a
-non-zero exit code; nothing else is caught.
+Errors of the :class:`~medax.errors.MedaxError` family and OS errors are printed on one
+line with exit code 1; an interrupt (Ctrl-C, or SIGTERM for the real command) prints one
+line and exits 130 (143) after every output's temporary file is removed (outputs are all
+written at the end, or none).
 """
 
 from __future__ import annotations
@@ -11,7 +13,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
+import signal
 import sys
+import threading
 from collections.abc import Sequence
 
 from medax import __version__
@@ -53,11 +57,33 @@ def main(argv: Sequence[str] | None = None) -> int:
         format="medax: %(message)s",
         stream=sys.stderr,
     )
+    if argv is None:  # the real command, not an in-process call
+        _terminate_as_interrupt()
     try:
         return int(args.run(args))
     except MedaxError as err:
         print(f"medax {args.command}: error: {err}", file=sys.stderr)
         return 1
+    except OSError as err:  # a file system failure not caught nearer (disk full, EIO)
+        where = f"{err.filename}: " if err.filename else ""
+        print(f"medax {args.command}: error: {where}{err.strerror or err}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt as err:
+        what = "terminated" if isinstance(err, Terminated) else "interrupted"
+        print(f"medax {args.command}: {what}; no output written", file=sys.stderr)
+        return 143 if isinstance(err, Terminated) else 130
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised like Ctrl-C so that the outputs' temporaries are removed."""
+
+
+def _terminate_as_interrupt() -> None:
+    def handler(signum: int, frame: object) -> None:
+        raise Terminated()
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, handler)
 
 
 if __name__ == "__main__":  # pragma: no cover

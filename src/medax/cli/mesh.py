@@ -5,13 +5,14 @@ from __future__ import annotations
 import argparse
 import logging
 import math
-from pathlib import Path
 from typing import Any
 
-from medax.errors import InputError
+from medax import tolerances
+from medax.cli.options import check_tol
+from medax.cli.outputs import JSON_SUFFIXES, PLOT_SUFFIXES, Output, check_outputs
+from medax.errors import InputError, MeshError
 
 log = logging.getLogger(__name__)
-PLOT_SUFFIXES = (".png", ".svg", ".pdf")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -56,6 +57,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--format", help="override the format: msh, vtu, abaqus, nastran")
     p.add_argument("--report", help="quality report (JSON)")
     p.add_argument("--plot", help="plot coloured by scaled Jacobian (.png, .svg, .pdf)")
+    p.add_argument(
+        "--allow-inverted",
+        action="store_true",
+        help="write the mesh even when quads are inverted (refused by default)",
+    )
     p.set_defaults(run=run)
 
 
@@ -104,24 +110,28 @@ def report(mesh: Any, time_s: float) -> dict[str, Any]:
 
 def run(args: argparse.Namespace) -> int:
     from medax.geometry.region_io import read_region
-    from medax.io_utils import atomic_path, check_writable, write_json
+    from medax.geometry.resolution import coordinate_resolution, resolution_note
+    from medax.io_utils import staged_outputs, write_json
     from medax.mesh.export import format_from_path, write_mesh
     from medax.mesh.mesher import mesh_region
 
     # validate everything before any work, so bad input leaves no file behind
+    check_outputs(
+        [
+            Output("-o", args.output, None),
+            Output("--report", args.report, JSON_SUFFIXES),
+            Output("--plot", args.plot, PLOT_SUFFIXES),
+        ],
+        {"regions file": args.regions},
+    )
     fmt = format_from_path(args.output, args.format)
     divisions = parse_divisions(args.divisions) if args.divisions is not None else None
     if args.size is not None and not (math.isfinite(args.size) and args.size > 0.0):
         raise InputError(f"--size must be positive, got {args.size}")
     if args.boundary is not None and args.method == "paper":
         raise InputError("--boundary applies to the ratio and angle methods, not to paper")
-    if args.tol is not None and not (math.isfinite(args.tol) and args.tol >= 0.0):
-        raise InputError(f"--tol must be a non-negative number, got {args.tol}")
-    if args.plot and Path(args.plot).suffix.lower() not in PLOT_SUFFIXES:
-        raise InputError(f"--plot {args.plot}: use a {', '.join(PLOT_SUFFIXES)} file name")
-    for out in (args.output, args.report, args.plot):
-        if out:
-            check_writable(out)
+    if args.tol is not None:
+        check_tol(args.tol, "--tol", tolerances.MIN_CURVE_TOL, zero_ok=args.method != "paper")
     region = read_region(args.regions, _region_name(args.regions, args.region))
     mesh = mesh_region(
         region,
@@ -133,21 +143,32 @@ def run(args: argparse.Namespace) -> int:
     )
     time_s = float(mesh.info["time_s"])
     rep = report(mesh, time_s)
-    write_mesh(args.output, mesh.points, mesh.quads, mesh.quality().as_dict(), fmt)
+    res = coordinate_resolution(mesh.points, region.diagonal)
+    rep["coordinate_resolution_rel"] = res
+    note = resolution_note(region.name, res, args.tol or tolerances.CURVE_TOL)
+    if note:
+        log.warning("%s", note)
     sj = rep["scaled_jacobian"]
     print(
         f"{region.name}: {mesh.n1}x{mesh.n2} quads ({args.method}), {mesh.n_nodes} nodes, "
         f"{time_s:.3f} s; scaled Jacobian min {sj['min']:.3f} p5 {sj['p5']:.3f} mean "
         f"{sj['mean']:.3f}; {rep['n_inverted']} inverted"
     )
-    print(f"wrote {args.output}")
-    if args.report:
-        write_json(args.report, rep)
-        print(f"wrote {args.report}")
-    if args.plot:
-        from medax.viz.mesh_plot import plot_mesh
+    if rep["n_inverted"] and not args.allow_inverted:
+        raise MeshError(
+            f"region '{region.name}': {rep['n_inverted']} of {mesh.n_quads} quads are inverted "
+            "(scaled Jacobian <= 0); nothing written (--allow-inverted writes it anyway)"
+        )
+    with staged_outputs() as out:  # all outputs or none
+        write_mesh(out.path(args.output, "-o"), mesh.points, mesh.quads,
+                   mesh.quality().as_dict(), fmt)  # fmt: skip
+        if args.report is not None:
+            write_json(out.path(args.report, "--report"), rep, "--report")
+        if args.plot is not None:
+            from medax.viz.mesh_plot import plot_mesh
 
-        with atomic_path(args.plot) as tmp:
-            plot_mesh(mesh, tmp)
-        print(f"wrote {args.plot}")
+            plot_mesh(mesh, out.path(args.plot, "--plot"))
+    for path in (args.output, args.report, args.plot):
+        if path is not None:
+            print(f"wrote {path}")
     return 0

@@ -12,7 +12,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from medax.io_utils import check_writable, write_json
+from medax.cli.options import check_tol
+from medax.cli.outputs import JSON_SUFFIXES, PLOT_SUFFIXES, Output, check_outputs
+from medax.io_utils import staged_outputs, write_json
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -20,12 +22,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "simplify",
         help="remove fillets from a STEP solid without changing its shape",
         description="Split each fillet along its medial curve, merge the halves into the "
-        "supporting faces, rebuild and validate the solid; write it as STEP.",
+        "supporting faces, rebuild and validate the solid; write it as STEP, IGES or BRep (by "
+        "the output's extension). Every output is checked before any work and all are "
+        "written together or none.",
     )
     p.add_argument("part", help="input part (.step/.stp, .iges/.igs, .brep)")
-    p.add_argument("-o", "--output", required=True, help="output STEP file")
+    p.add_argument(
+        "-o", "--output", required=True, help="output solid: .step/.stp, .iges/.igs or .brep"
+    )
     p.add_argument("--report", help="JSON report (faces, blends removed/kept, validation)")
-    p.add_argument("--png", help="before/after picture")
+    p.add_argument("--png", help="before/after picture (.png, .svg or .pdf)")
     p.add_argument("--tol", type=float, default=1e-5, help="deviation tolerance x diagonal (1e-5)")
     p.set_defaults(run=run)
 
@@ -51,15 +57,19 @@ def run(args: argparse.Namespace) -> int:
     from medax.cad.classify import classify_file
     from medax.cad.simplify import simplify, specs_from_classification
     from medax.cad.simplify.occ import compound
-    from medax.cad.simplify.step_out import write_step
+    from medax.cad.simplify.pipeline import BUILD_TOL
+    from medax.cad.simplify.step_out import SHAPE_SUFFIXES, shape_format, write_shape
 
-    for path in (args.output, args.report, args.png):
-        if path:
-            check_writable(path)
-    if args.tol <= 0:
-        from medax.errors import InputError
-
-        raise InputError(f"--tol {args.tol}: must be positive")
+    check_outputs(
+        [
+            Output("-o", args.output, tuple(SHAPE_SUFFIXES)),
+            Output("--report", args.report, JSON_SUFFIXES),
+            Output("--png", args.png, PLOT_SUFFIXES),
+        ],
+        {"input part": args.part},
+    )
+    fmt = shape_format(args.output)
+    check_tol(args.tol, "--tol", BUILD_TOL)
 
     def progress(msg: str) -> None:
         print(f"medax simplify: {msg}", file=sys.stderr)
@@ -72,15 +82,15 @@ def run(args: argparse.Namespace) -> int:
         progress(f"solid {k}: {len(cls.faces)} faces, {n} blends")
         results.append(simplify(cls.shape, specs, tol=args.tol, progress=progress))
     shape = results[0].shape if len(results) == 1 else compound([r.shape for r in results])
-    write_step(shape, args.output)
-    reports = [r.report() for r in results]
-    report = _combine(reports)
+    report = _combine([r.report() for r in results])
     report["input"] = str(args.part)
     report["output"] = str(args.output)
-    if args.report:
-        write_json(args.report, report)
-    if args.png:
-        _png(classes[0].shape, results[0], args.png, Path(args.part).name)
+    with staged_outputs() as out:  # all outputs or none
+        write_shape(shape, out.path(args.output, "-o"), fmt)
+        if args.report is not None:
+            write_json(out.path(args.report, "--report"), report, "--report")
+        if args.png is not None:
+            _png(classes[0].shape, results[0], out.path(args.png, "--png"), Path(args.part).name)
     for k, r in enumerate(results):
         label = f"{args.part}" + (f" solid {k}" if len(results) > 1 else "")
         print(
@@ -118,14 +128,13 @@ def _combine(reports: list[dict[str, Any]]) -> dict[str, Any]:
     }
 
 
-def _png(before_shape: Any, result: Any, path: str, title: str) -> None:
+def _png(before_shape: Any, result: Any, path: Path, title: str) -> None:
+    """The before/after picture, written to ``path`` (a staged temporary)."""
     from medax.cad.simplify.tessellate import face_triangles
-    from medax.io_utils import atomic_path
     from medax.viz.before_after import plot_before_after
 
     rep = result.report()
     before = face_triangles(before_shape)
     after = face_triangles(result.shape)
     kb, ka = colour_keys(rep, len(before))
-    with atomic_path(path) as tmp:
-        plot_before_after(before, after, kb, ka, tmp, title)
+    plot_before_after(before, after, kb, ka, path, title)

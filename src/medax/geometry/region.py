@@ -14,6 +14,7 @@ from medax.geometry._types import FloatArray
 from medax.geometry.curve import Curve
 from medax.geometry.embedded_curve import EmbeddedCurve
 from medax.geometry.embedding import Embedding, PlaneEmbedding
+from medax.geometry.simple_boundary import check_simple
 
 #: the two opposite pairs: (0, 2) and (1, 3)
 PAIRS: tuple[tuple[int, int], ...] = ((0, 2), (1, 3))
@@ -69,8 +70,9 @@ class Region:
         """Check the sides (closed corners, no zero-length side, no crossings) and orient
         them counter-clockwise in the parameter plane.
 
-        Clockwise input is reversed keeping side numbers: side k still joins the same two
-        corners, so pair (0, 2) still means the same two sides; ``reoriented`` says so.
+        Clockwise input is reversed: sides 0 and 2 keep their numbers, sides 1 and 3 swap,
+        so pairs (0, 2) and (1, 3) still mean the same two sides; ``reoriented`` says so
+        (``medax.axis.export`` reports sides in the input's numbering).
         """
         if len(sides) != 4:
             raise RegionError(f"region '{name}' needs 4 sides, got {len(sides)}")
@@ -122,8 +124,9 @@ class Region:
         return float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
 
     def signed_area(self) -> float:
-        """Signed area in the parameter plane (> 0 for counter-clockwise)."""
-        b = self.boundary
+        """Signed area in the parameter plane (> 0 for counter-clockwise), summed relative to
+        the first corner so that it does not cancel far from the origin."""
+        b = self.boundary - self.boundary[0]
         x, y = b[:, 0], b[:, 1]
         return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
 
@@ -150,23 +153,30 @@ class Region:
     def check(self) -> None:
         """Raise :class:`RegionError` naming the side or corner that is wrong."""
         pts = np.concatenate([s.sample(_SAMPLES) for s in self.sides])
-        diag = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
-        if not np.isfinite(diag) or diag == 0.0:
+        with np.errstate(over="ignore", invalid="ignore"):
+            diag = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
+        if not np.isfinite(diag):
+            raise RegionError(f"region '{self.name}': coordinates too large (sizes overflow)")
+        if diag == 0.0:
             raise RegionError(f"region '{self.name}' is degenerate (all points coincide)")
         for k, s in enumerate(self.sides):
             if s.dim != 2:
                 raise RegionError(f"region '{self.name}': side {k} is not a 2-D curve")
             if s.length() <= tolerances.MIN_SIDE * diag:
                 raise RegionError(f"region '{self.name}': side {k} has zero length")
+        # corners meet to the tolerance, or to what doubles resolve far from the origin
+        corner_tol = max(tolerances.CORNER_TOL * diag, 16.0 * float(np.spacing(np.abs(pts).max())))
         for k in range(4):
             gap = float(np.linalg.norm(self.sides[k].end - self.sides[(k + 1) % 4].start))
-            if gap > tolerances.CORNER_TOL * diag:
+            if gap > corner_tol:
                 raise RegionError(
                     f"region '{self.name}': side {k} ends {self.sides[k].end.tolist()} but side "
                     f"{(k + 1) % 4} starts {self.sides[(k + 1) % 4].start.tolist()} "
                     f"(corner {(k + 1) % 4} open by {gap:.3g})"
                 )
         self._check_crossings(diag)
+        if self.embedding.is_identity:
+            check_simple(self.sides, diag, self.name)
 
     def _check_crossings(self, diag: float) -> None:
         polys = [s.sample(_SAMPLES) for s in self.sides]

@@ -9,6 +9,7 @@ A file maps region names to ``{"corners": [[x, y] x 4], "sides": [side x 4]}``; 
 from __future__ import annotations
 
 import json
+import math
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -42,6 +43,10 @@ def load_region_file(path: str | Path) -> dict[str, Any]:
         raise InputError(f"{p}: not a text file ({err.reason})") from err
     except json.JSONDecodeError as err:
         raise InputError(f"{p}: malformed JSON at line {err.lineno}: {err.msg}") from err
+    except RecursionError:
+        raise InputError(f"{p}: JSON nested too deeply to be a regions file") from None
+    except ValueError as err:  # e.g. an integer of more than 4300 digits
+        raise InputError(f"{p}: malformed JSON ({err})") from None
     if not isinstance(data, dict):
         raise InputError(f"{p}: expected a JSON object mapping region names to regions")
     return data
@@ -71,17 +76,56 @@ def region_from_dict(spec: Any, name: str) -> Region:
     """A checked, counter-clockwise :class:`Region` from one JSON region object."""
     if not isinstance(spec, dict) or "corners" not in spec or "sides" not in spec:
         raise RegionError(f"region '{name}': needs 'corners' and 'sides'")
-    try:
-        corners = np.asarray(spec["corners"], dtype=np.float64)
-    except (TypeError, ValueError) as err:
-        raise RegionError(f"region '{name}': corners are not numbers") from err
-    if corners.shape != (4, 2) or not np.all(np.isfinite(corners)):
-        raise RegionError(f"region '{name}': needs 4 finite corners [x, y], got {corners.shape}")
+    corners = _points(spec["corners"], f"region '{name}': corners", RegionError)
+    if corners.shape != (4, 2):
+        raise RegionError(f"region '{name}': needs 4 corners [x, y], got shape {corners.shape}")
     sides_spec = spec["sides"]
     if not isinstance(sides_spec, list) or len(sides_spec) != 4:
         raise RegionError(f"region '{name}': needs a list of 4 sides")
     sides = [_side(sides_spec[k], corners[k], corners[(k + 1) % 4], name, k) for k in range(4)]
     return Region.build(sides, name=name)
+
+
+def _points(value: Any, what: str, error: type[InputError] = CurveError) -> np.ndarray:
+    """``value`` as a finite float array; ``error`` naming ``what`` otherwise."""
+    if isinstance(value, str | bool | dict) or value is None:
+        raise error(f"{what} must be numbers, got {type(value).__name__}")
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except OverflowError:
+        raise error(f"{what}: a number is too large for a float") from None
+    except (TypeError, ValueError):
+        raise error(f"{what} must be lists of numbers [x, y]") from None
+    if not np.all(np.isfinite(arr)):
+        raise error(f"{what} must be finite numbers (NaN, infinity or overflow found)")
+    return arr
+
+
+def _number(value: Any, what: str) -> float:
+    """``value`` as a finite float (a JSON number, not a string or boolean)."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise CurveError(f"{what} must be a number, got {json.dumps(value)[:40]}")
+    try:
+        x = float(value)
+    except OverflowError:
+        raise CurveError(f"{what} is too large for a float") from None
+    if not math.isfinite(x):
+        raise CurveError(f"{what} must be finite, got {x}")
+    return x
+
+
+def _degree(value: Any, n_points: int) -> int:
+    """A B-spline degree: an integer from 1 to ``n_points - 1``."""
+    top = n_points - 1
+    ok = not isinstance(value, bool) and isinstance(value, int | float)
+    if ok and isinstance(value, float):
+        ok = math.isfinite(value) and value.is_integer()
+    if not ok or not 1 <= value <= top:
+        shown = json.dumps(value)[:40] if not isinstance(value, float) else repr(value)
+        raise CurveError(
+            f"degree must be an integer from 1 to {top} ({n_points} points), got {shown}"
+        )
+    return int(value)
 
 
 def _side(spec: Any, p0: np.ndarray, p1: np.ndarray, name: str, k: int) -> Curve:
@@ -94,12 +138,15 @@ def _side(spec: Any, p0: np.ndarray, p1: np.ndarray, name: str, k: int) -> Curve
             return Line(p0, p1)
         if kind == "arc":
             if "sagitta" in spec:
-                return Arc.from_sagitta(p0, p1, float(spec["sagitta"]))
+                return Arc.from_sagitta(p0, p1, _number(spec["sagitta"], "sagitta"))
             if "center" in spec and "radius" in spec:
-                return Arc.from_center(p0, p1, np.asarray(spec["center"], float), spec["radius"])
+                center = _points(spec["center"], "center")
+                if center.shape != (2,):
+                    raise CurveError(f"center must be [x, y], got shape {center.shape}")
+                return Arc.from_center(p0, p1, center, _number(spec["radius"], "radius"))
             raise CurveError("an arc needs 'sagitta', or 'center' and 'radius'")
         if kind in ("bspline", "polyline"):
-            pts = np.asarray(spec.get("points"), dtype=np.float64)
+            pts = _points(spec.get("points"), "'points'")
             if pts.ndim != 2 or pts.shape[0] < 2 or pts.shape[1] != 2:
                 raise CurveError(f"'points' must be a list of [x, y], got shape {pts.shape}")
             for end, corner, which in ((pts[0], p0, "first"), (pts[-1], p1, "last")):
@@ -109,9 +156,9 @@ def _side(spec: Any, p0: np.ndarray, p1: np.ndarray, name: str, k: int) -> Curve
                     )
             if kind == "polyline":
                 return Polyline(pts)
-            return BSpline(pts, int(spec.get("degree", 3)))
+            return BSpline(pts, _degree(spec.get("degree", 3), len(pts)))
     except CurveError as err:
         raise CurveError(f"{where}: {err}") from err
-    except (TypeError, ValueError) as err:
+    except (TypeError, ValueError, OverflowError, ZeroDivisionError) as err:
         raise CurveError(f"{where}: bad {kind} definition ({err})") from err
     raise CurveError(f"{where}: unknown side kind '{kind}' (known: {', '.join(SIDE_KINDS)})")

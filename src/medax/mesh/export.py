@@ -1,8 +1,8 @@
 """Write quad meshes to Gmsh ``.msh`` 4.1, VTK ``.vtu``, Abaqus ``.inp`` and Nastran ``.bdf``.
 
-Every file is written to a temporary file in the target folder and moved into place with
-``os.replace``, so a failure never leaves a partial file. The format comes from the extension
-unless ``file_format`` overrides it.
+Every file is written through :func:`medax.io_utils.atomic_path` (a temporary file beside
+the target, renamed onto it), so a failure never leaves a partial file. The format comes
+from the extension unless ``file_format`` overrides it.
 
 What each format gets, and the meshio 5.3.5 defects worked around:
 
@@ -26,16 +26,15 @@ What each format gets, and the meshio 5.3.5 defects worked around:
 from __future__ import annotations
 
 import logging
-import os
-import tempfile
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import IO
 
 import numpy as np
 
-from medax.errors import InputError, MeshError
+from medax.errors import InputError, MeshError, OutputError
 from medax.geometry._types import FloatArray, IntArray
+from medax.io_utils import atomic_path
 
 log = logging.getLogger(__name__)
 
@@ -95,32 +94,13 @@ def write_mesh(
             raise MeshError(f"export: cell data '{k}' has shape {v.shape}, want ({q.shape[0]},)")
     target = Path(path)
     writer = _WRITERS[fmt]
-    _atomic_write(target, lambda tmp: writer(tmp, pts, q, data))
+    try:
+        with atomic_path(target) as tmp:
+            writer(tmp, pts, q, data)
+    except OSError as err:
+        raise OutputError(f"{target}: cannot write ({err.strerror or err})") from None
     log.info("wrote %s (%s, %d nodes, %d quads)", target, fmt, len(pts), len(q))
     return target
-
-
-def _atomic_write(target: Path, write: Callable[[Path], None]) -> None:
-    folder = target.parent if str(target.parent) else Path(".")
-    if not folder.is_dir():
-        raise InputError(f"{target}: cannot write, folder {folder} does not exist")
-    if target.is_dir():
-        raise InputError(f"{target}: cannot write, it is a folder")
-    try:
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=target.suffix, dir=folder)
-    except OSError as err:
-        raise InputError(f"{target}: cannot write ({err.strerror})") from err
-    os.close(fd)
-    tmp = Path(tmp_name)
-    try:
-        write(tmp)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, target)
-    except OSError as err:
-        raise InputError(f"{target}: cannot write ({err.strerror or err})") from err
-    finally:
-        if tmp.exists():
-            tmp.unlink()
 
 
 def _pad3(points: FloatArray) -> FloatArray:

@@ -1,25 +1,90 @@
-"""Write a shape to STEP (AP214) atomically: temporary file beside the target, then rename."""
+"""Write a shape as STEP (AP214), IGES (5.3, B-rep faces) or OCCT BRep, atomically.
+
+The format comes from the extension (:data:`SHAPE_SUFFIXES`); each writer writes to a
+temporary file beside the target (:func:`medax.io_utils.atomic_path`), then renames it.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from OCP.BRepTools import BRepTools
 from OCP.IFSelect import IFSelect_RetDone
+from OCP.IGESControl import IGESControl_Writer
 from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
 
-from medax.errors import CadError
+from medax.errors import CadError, InputError
 from medax.io_utils import atomic_path
+
+#: output extension -> format name
+SHAPE_SUFFIXES = {
+    ".step": "step",
+    ".stp": "step",
+    ".iges": "iges",
+    ".igs": "iges",
+    ".brep": "brep",
+    ".brp": "brep",
+}
+
+
+def shape_format(path: str | Path) -> str:
+    """'step', 'iges' or 'brep' by the extension of ``path``; InputError for any other."""
+    suffix = Path(path).suffix.lower()
+    fmt = SHAPE_SUFFIXES.get(suffix)
+    if fmt is None:
+        got = f"'{suffix}'" if suffix else "no extension"
+        raise InputError(
+            f"{path}: cannot write a solid with {got} (use {', '.join(SHAPE_SUFFIXES)})"
+        )
+    return fmt
+
+
+def write_shape(shape: Any, path: str | Path, fmt: str | None = None) -> Path:
+    """Write ``shape`` as ``fmt`` (default: by ``path``'s extension); CadError when OCCT
+    fails (the target is then untouched)."""
+    from medax.cad.reader import quiet_occt
+
+    writer = _WRITERS[fmt or shape_format(path)]
+    with atomic_path(path) as tmp, quiet_occt():
+        writer(shape, tmp, path)
+    return Path(path)
 
 
 def write_step(shape: Any, path: str | Path) -> Path:
-    """Write ``shape`` to ``path``; raises :class:`CadError` when OCCT fails (no file left)."""
+    """Write ``shape`` to ``path`` as STEP, whatever its extension."""
     from medax.cad.reader import quiet_occt
 
     with atomic_path(path) as tmp, quiet_occt():
-        writer = STEPControl_Writer()
-        if writer.Transfer(shape, STEPControl_AsIs) != IFSelect_RetDone:
-            raise CadError(f"{path}: the shape could not be transferred to STEP")
-        if writer.Write(str(tmp)) != IFSelect_RetDone:
-            raise CadError(f"{path}: writing the STEP file failed")
+        _step(shape, tmp, path)
     return Path(path)
+
+
+def _step(shape: Any, tmp: Path, path: str | Path) -> None:
+    writer = STEPControl_Writer()
+    if writer.Transfer(shape, STEPControl_AsIs) != IFSelect_RetDone:
+        raise CadError(f"{path}: the shape could not be transferred to STEP")
+    if writer.Write(str(tmp)) != IFSelect_RetDone:
+        raise CadError(f"{path}: writing the STEP file failed")
+
+
+def _iges(shape: Any, tmp: Path, path: str | Path) -> None:
+    writer = IGESControl_Writer("MM", 1)  # mode 1: faces as B-rep entities (type 186)
+    if not writer.AddShape(shape):
+        raise CadError(f"{path}: the shape could not be transferred to IGES")
+    writer.ComputeModel()
+    if not writer.Write(str(tmp)):
+        raise CadError(f"{path}: writing the IGES file failed")
+
+
+def _brep(shape: Any, tmp: Path, path: str | Path) -> None:
+    if not BRepTools.Write_s(shape, str(tmp)):
+        raise CadError(f"{path}: writing the BRep file failed")
+
+
+_WRITERS: dict[str, Callable[[Any, Path, str | Path], None]] = {
+    "step": _step,
+    "iges": _iges,
+    "brep": _brep,
+}
