@@ -141,3 +141,14 @@ def test_two_solids_each_simplified(tmp_path, capsys):
     assert main(["simplify", str(src), "-o", str(out)]) == 0
     lines = capsys.readouterr().out
     assert "solid 0: faces 10 -> 6" in lines and "solid 1: faces 6 -> 6" in lines
+
+
+def test_brep_with_a_trailing_integer_line_is_whole(files, tmp_path):
+    """7 of the 34 BRep files of the Analysis Situs blend corpus end with one more integer
+    line after the root shape ('+1 0 ', '0'); OCCT reads them, so must the framing check."""
+    p = tmp_path / "box.brep"
+    p.write_bytes(files["brep"].rstrip() + b"\n0\n\n")
+    check_cad_file(p, "brep")
+    p.write_bytes(files["brep"].rstrip() + b"\n0\n7\n")  # two lines: not a BRep ending
+    with pytest.raises(CadError, match="root shape"):
+        check_cad_file(p, "brep")
