@@ -103,3 +103,29 @@ def test_fillets_meeting_a_kept_blend_still_go(corner_kept):
     # the kept corner blend is a face of the result as it was
     assert any(g.whole == (corner.face,) and not g.halves for g in r.face_groups)
     assert_same_solid(part.shape, r, 6, 6)
+
+
+def test_report_names_each_kept_blend_and_the_picture_marks_it(corner_kept):
+    from medax.cli.simplify import colour_keys
+
+    _, corner, r = corner_kept
+    rep = r.report()
+    assert rep["blends_found"] == 4
+    assert rep["blends_kept"] == [
+        {"face": corner.face, "radius": None, "reason": "kept by the caller"}
+    ]
+    assert rep["kept_reasons"] == {"kept by the caller": 1}
+    before, after = colour_keys(rep, r.faces_before)
+    assert before[corner.face] == -3 and after.count(-3) == 1
+    assert all(before[f] == -2 for f in corner.fillets)
+
+
+def test_reason_kinds_group_numbers():
+    from medax.cad.simplify.pipeline import reason_counts
+
+    reasons = ["supporting face 4: fitted error 1.2e-02 above 4e-06", "meets fillet 7 in a mitre"]
+    reasons.append("supporting face 12: fitted error 3.77e-02 above 4.12e-06")
+    assert reason_counts(reasons) == {
+        "supporting face N: fitted error N above N": 2,
+        "meets fillet N in a mitre": 1,
+    }

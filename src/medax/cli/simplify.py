@@ -42,9 +42,14 @@ def colour_keys(report: dict[str, Any], n_before: int) -> tuple[list[int], list[
     after = [-1] * report["faces_after"]
     for f in report["blends_removed"]:
         before[f] = -2
+    kept = {b["face"] for b in report["blends_kept"]}
+    for f in kept:
+        before[f] = -3
     k = 0
     for g in report["face_groups"]:
         if not g["fillet_halves"]:
+            if set(g["original_faces"]) & kept:
+                after[g["new_face"]] = -3
             continue
         after[g["new_face"]] = k
         for f in g["original_faces"]:
@@ -107,6 +112,8 @@ def _combine(reports: list[dict[str, Any]]) -> dict[str, Any]:
     """One report: the solid's own for one solid; for several, totals (faces, time), the
     worst values (validity, volume and area change, deviation) and each solid's report in
     ``solids`` (face indices are per solid)."""
+    from medax.cad.simplify.pipeline import reason_counts
+
     if len(reports) == 1:
         return dict(reports[0])
     worst_dv = max((r["volume_rel_change"] for r in reports), key=abs)
@@ -116,7 +123,9 @@ def _combine(reports: list[dict[str, Any]]) -> dict[str, Any]:
         "faces_before": sum(r["faces_before"] for r in reports),
         "faces_after": sum(r["faces_after"] for r in reports),
         "blends_removed": [[k, f] for k, r in enumerate(reports) for f in r["blends_removed"]],
+        "blends_found": sum(r["blends_found"] for r in reports),
         "blends_kept": [dict(b, solid=k) for k, r in enumerate(reports) for b in r["blends_kept"]],
+        "kept_reasons": reason_counts(b["reason"] for r in reports for b in r["blends_kept"]),
         "valid": all(r["valid"] for r in reports),
         "volume_rel_change": worst_dv,
         "area_rel_change": worst_da,

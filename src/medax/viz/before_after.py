@@ -1,9 +1,10 @@
 """Before/after picture of a fillet simplification: two shaded 3-D views side by side.
 
 Faces come as triangle arrays ``(m, 3, 3)`` per face (``medax.cad.simplify.tessellate``).
-Before: fillets in red, the faces that absorb fillet halves each in its own colour, the rest
-grey. After: each merged face in the colour of its supporting face, the rest grey, so the
-merged faces are visible. Rendered off-screen with matplotlib (Agg).
+Before: fillets removed in red, blends kept in black, the faces that absorb fillet halves each
+in its own colour, the rest grey. After: each merged face in the colour of its supporting
+face, the kept blends black, the rest grey, so both the merged faces and what stayed are
+visible. Rendered off-screen with matplotlib (Agg).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from numpy.typing import NDArray
 
 GREY = (0.78, 0.78, 0.8)
 FILLET = (0.85, 0.2, 0.2)
+KEPT = (0.12, 0.12, 0.12)
 
 
 def _shade(tris: NDArray[np.float64], rgb: tuple[float, float, float]) -> NDArray[np.float64]:
@@ -54,8 +56,8 @@ def plot_before_after(
     """Write the PNG ``path``.
 
     ``before_colour[i]``/``after_colour[j]``: colour key of each face, ``-1`` grey, ``-2``
-    fillet red, ``k >= 0`` the ``k``-th colour of the qualitative map (same key = same new
-    face).
+    fillet removed (red), ``-3`` blend kept (black), ``k >= 0`` the ``k``-th colour of the
+    qualitative map (same key = same new face).
     """
     import matplotlib
 
@@ -76,7 +78,8 @@ def plot_before_after(
         for tris, key in zip(faces, keys, strict=True):
             if not tris.size:
                 continue
-            rgb = GREY if key == -1 else FILLET if key == -2 else cmap(key % 20)[:3]
+            fixed = {-1: GREY, -2: FILLET, -3: KEPT}
+            rgb = fixed[key] if key < 0 else cmap(key % 20)[:3]
             fine = refine(tris, 2 * half / 25)
             polys.append(fine)
             colours.append(_shade(fine, rgb))
@@ -88,7 +91,10 @@ def plot_before_after(
         ax.set_box_aspect((1, 1, 1))
         ax.view_init(elev=28, azim=-58)
         ax.set_axis_off()
-        ax.set_title(f"{label}: {len(faces)} faces")
+        n_kept = sum(1 for key in keys if key == -3)
+        ax.set_title(
+            f"{label}: {len(faces)} faces" + (f", {n_kept} blends kept (black)" if n_kept else "")
+        )
     if title:
         fig.suptitle(title)
     fig.tight_layout()

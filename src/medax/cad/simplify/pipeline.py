@@ -12,8 +12,10 @@ never returned: at worst the result is the input itself with every fillet kept.
 from __future__ import annotations
 
 import logging
+import re
 import time
-from collections.abc import Callable
+from collections import Counter
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -103,6 +105,7 @@ class SimplifyResult:
     fit_volume_rel_change: float = 0.0
     area_rel_change: float = 0.0
     notes: list[str] = field(default_factory=list)
+    radii: dict[int, float | None] = field(default_factory=dict)
 
     @property
     def volume_rel_change(self) -> float:
@@ -115,7 +118,12 @@ class SimplifyResult:
             "faces_before": self.faces_before,
             "faces_after": self.faces_after,
             "blends_removed": sorted(self.blends_removed),
-            "blends_kept": [{"face": f, "reason": r} for f, r in sorted(self.blends_kept)],
+            "blends_found": len(self.blends_removed) + len(self.blends_kept),
+            "blends_kept": [
+                {"face": f, "radius": self.radii.get(f), "reason": r}
+                for f, r in sorted(self.blends_kept)
+            ],
+            "kept_reasons": reason_counts(r for _, r in self.blends_kept),
             "valid": self.valid,
             "volume_before": self.volume_before,
             "volume_after": self.volume_after,
@@ -145,6 +153,18 @@ class SimplifyResult:
             "notes": self.notes,
             "time_s": self.time_s,
         }
+
+
+def reason_kind(why: str) -> str:
+    """A kept blend's reason with its numbers (face indices, measures) replaced by ``N``:
+    the key under which the report groups reasons."""
+    return re.sub(r"[-+]?\d+(\.\d+)?(e[-+]?\d+)?", "N", why)
+
+
+def reason_counts(reasons: Iterable[str]) -> dict[str, int]:
+    """How many kept blends have each :func:`reason_kind`, most frequent first."""
+    counts = Counter(reason_kind(r) for r in reasons)
+    return dict(counts.most_common())
 
 
 @dataclass
@@ -301,6 +321,7 @@ def simplify(
         fit_volume_rel_change=result.fit_dv if result is not None else 0.0,
         area_rel_change=result.area_change if result is not None else 0.0,
         notes=notes,
+        radii={spec.face: spec.radius for spec in blends.fillets},
     )
 
 
