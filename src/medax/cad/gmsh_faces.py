@@ -18,9 +18,8 @@ parameters); nodes on gmsh points to the part's vertex nodes by position.
 
 from __future__ import annotations
 
-import contextlib
 import tempfile
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -30,6 +29,7 @@ from OCP.BRepTools import BRepTools
 
 from medax.errors import MeshError
 from medax.geometry._types import FloatArray, IntArray
+from medax.mesh.gmsh_session import gmsh_session
 
 #: gmsh element types
 _QUAD, _TRIANGLE = 3, 2
@@ -51,23 +51,6 @@ class GmshFace:
     quads: IntArray
     node_id: IntArray
     subdivided: bool
-
-
-@contextlib.contextmanager
-def gmsh_session() -> Iterator[Any]:
-    """gmsh initialised (quiet, no signal handlers) for the duration, finalised after unless
-    it was already running."""
-    import gmsh  # noqa: PLC0415
-
-    mine = not gmsh.isInitialized()
-    if mine:
-        gmsh.initialize(readConfigFiles=False, interruptible=False)
-    gmsh.option.setNumber("General.Terminal", 0)
-    try:
-        yield gmsh
-    finally:
-        if mine:
-            gmsh.finalize()
 
 
 def mesh_face(

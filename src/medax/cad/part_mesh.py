@@ -39,12 +39,13 @@ from OCP.TopoDS import TopoDS
 from medax.cad.edge_counts import division_counts
 from medax.cad.edge_nodes import edge_curve, equal_arc_nodes
 from medax.cad.face_region import face_sides, side_region, surface_embedding
-from medax.cad.gmsh_faces import GmshFace, gmsh_session, mesh_face
+from medax.cad.gmsh_faces import GmshFace, mesh_face
 from medax.cad.topology import build_topology
 from medax.errors import CadError, InputError, MedaxError, MeshError
 from medax.geometry._types import FloatArray, IntArray
 from medax.geometry.region import Region
 from medax.mesh.grid import boundary_indices, structured_quads
+from medax.mesh.gmsh_session import gmsh_session
 from medax.mesh.mesher import mesh_region
 
 log = logging.getLogger(__name__)
