@@ -44,8 +44,8 @@ from medax.cad.topology import build_topology
 from medax.errors import CadError, InputError, MedaxError, MeshError
 from medax.geometry._types import FloatArray, IntArray
 from medax.geometry.region import Region
-from medax.mesh.grid import boundary_indices, structured_quads
 from medax.mesh.gmsh_session import gmsh_session
+from medax.mesh.grid import boundary_indices, structured_quads
 from medax.mesh.mesher import mesh_region
 
 log = logging.getLogger(__name__)
