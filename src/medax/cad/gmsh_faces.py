@@ -4,9 +4,11 @@ Each face is written alone to a BRep file and meshed in its own gmsh model (so a
 names its face): every curve is made transfinite with the part's division count of its
 edge, then Frontal-Delaunay for quads and blossom recombination (``Mesh.Algorithm = 8``,
 ``Mesh.RecombineAll``). The counts are even, so each face has an even number of boundary
-edges; where blossom still leaves triangles the face is meshed again with half the counts
+edges; where blossom still leaves triangles, or the caller's check refuses the quads (one
+inverted or flat against the face normal), the face is meshed again (:data:`ATTEMPTS`):
+quasi-structured quads, Frontal-Delaunay, and both Frontal-Delaunays with half the counts
 and every element split into quads (``Mesh.SubdivisionAlgorithm = 1``), which doubles the
-boundary divisions back to the part's counts.
+boundary divisions back to the part's counts (quasi-structured splits by itself).
 
 Node sharing is exact by construction: gmsh's nodes on a curve are matched, in order along
 it, to the part's nodes of that edge (:mod:`medax.cad.edge_nodes`, equal arc length) and
@@ -33,9 +35,12 @@ from medax.mesh.gmsh_session import gmsh_session
 
 #: gmsh element types
 _QUAD, _TRIANGLE = 3, 2
-#: gmsh's tries, in order: (2-D algorithm, split every element into quads): Frontal-Delaunay
-#: for quads, then Frontal-Delaunay, each recombined, then the same with the subdivision
-ATTEMPTS = ((8, False), (6, False), (8, True), (6, True))
+#: gmsh's tries, in order: (2-D algorithm, half the counts then every element split into
+#: quads): Frontal-Delaunay for quads recombined, quasi-structured quads (11, which splits
+#: itself), Frontal-Delaunay recombined, then both Frontal-Delaunays split
+ATTEMPTS = ((8, False), (11, True), (6, False), (8, True), (6, True))
+#: seconds one gmsh attempt on one face may take (run in a forked child, killed after)
+ATTEMPT_TIMEOUT = 60.0
 #: a gmsh node on a curve may be this share of the local spacing away from the part's node
 _MATCH_SHARE = 0.3
 
@@ -78,26 +83,66 @@ def mesh_face(
             raise MeshError(f"face {index}: could not write it for gmsh")
         last = "triangles left by the recombination"
         for algorithm, subdivide in ATTEMPTS:
-            gmsh.model.add(f"medax-face-{index}-{algorithm}-{int(subdivide)}")
-            try:
-                out = _mesh(
-                    gmsh, path, index, edge_mid, edge_ids, edge_pts, size, tol, algorithm,
-                    subdivide,
-                )  # fmt: skip
-                if out is None:
-                    continue
-                _vertices(gmsh, out, vertex_pts, vertex_ids, tol, index)
-                problem = None if check is None else check(out)
-                if problem is None:
-                    return out
-                last = problem
-            except MeshError:
-                raise
-            except Exception as err:  # gmsh raises plain Exceptions
-                last = f"gmsh: {err}"
-            finally:
-                gmsh.model.remove()
+
+            def attempt(algorithm: int = algorithm, subdivide: bool = subdivide) -> Any:
+                gmsh.model.add(f"medax-face-{index}-{algorithm}-{int(subdivide)}")
+                try:
+                    out = _mesh(
+                        gmsh, path, index, edge_mid, edge_ids, edge_pts, size, tol, algorithm,
+                        subdivide,
+                    )  # fmt: skip
+                    if out is None:
+                        return "triangles left by the recombination"
+                    _vertices(gmsh, out, vertex_pts, vertex_ids, tol, index)
+                    problem = None if check is None else check(out)
+                    return out if problem is None else problem
+                except MeshError as err:  # (counts not kept, nodes off the edge: try again)
+                    return str(err).removeprefix(f"face {index}: ")
+                except Exception as err:  # gmsh raises plain Exceptions
+                    return f"gmsh: {err}"
+                finally:
+                    gmsh.model.remove()
+
+            result = _with_timeout(attempt, ATTEMPT_TIMEOUT)
+            if isinstance(result, GmshFace):
+                return result
+            last = result
         raise MeshError(f"face {index}: gmsh could not mesh it with valid quads only ({last})")
+
+
+def _with_timeout(work: Callable[[], Any], seconds: float) -> Any:
+    """``work()`` run in a forked child (it inherits gmsh's state), its result sent back;
+    the child is killed after ``seconds`` (gmsh's quasi-structured quads were seen to hang)
+    and a message returned instead. Without ``fork`` (not POSIX) it runs here, unbounded."""
+    import multiprocessing as mp  # noqa: PLC0415
+
+    if "fork" not in mp.get_all_start_methods():  # pragma: no cover
+        return work()
+    ctx = mp.get_context("fork")
+    recv, send = ctx.Pipe(duplex=False)
+
+    def child() -> None:
+        try:
+            send.send(work())
+        except BaseException as err:  # (anything, as a message: the parent goes on)
+            send.send(f"{type(err).__name__}: {err}")
+        finally:
+            send.close()
+
+    proc = ctx.Process(target=child, daemon=True)
+    proc.start()
+    send.close()
+    try:
+        if recv.poll(seconds):
+            return recv.recv()
+        return f"gmsh took more than {seconds:g} s"
+    except EOFError:
+        return f"gmsh's process ended without a result (exit code {proc.exitcode})"
+    finally:
+        if proc.is_alive():
+            proc.kill()
+        proc.join()
+        recv.close()
 
 
 def _mesh(
@@ -138,7 +183,8 @@ def _mesh(
     gmsh.option.setNumber("Mesh.Algorithm", algorithm)
     gmsh.option.setNumber("Mesh.RecombineAll", 1)
     gmsh.option.setNumber("Mesh.RecombinationAlgorithm", 1)
-    gmsh.option.setNumber("Mesh.SubdivisionAlgorithm", 1 if subdivide else 0)
+    # (quasi-structured, 11, splits every element itself)
+    gmsh.option.setNumber("Mesh.SubdivisionAlgorithm", 1 if subdivide and algorithm != 11 else 0)
     gmsh.option.setNumber("Mesh.MeshSizeMax", (2.0 if subdivide else 1.0) * size)
     gmsh.option.setNumber("Mesh.MeshSizeMin", 0.0)
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)

@@ -38,9 +38,10 @@ from OCP.TopoDS import TopoDS
 
 from medax.cad.edge_counts import division_counts
 from medax.cad.edge_nodes import edge_curve, equal_arc_nodes
+from medax.cad.face_geometry import surface_type
 from medax.cad.face_region import face_sides, side_region, surface_embedding
 from medax.cad.gmsh_faces import GmshFace, mesh_face
-from medax.cad.topology import build_topology
+from medax.cad.topology import build_topology, face_normals
 from medax.errors import CadError, InputError, MedaxError, MeshError
 from medax.geometry._types import FloatArray, IntArray
 from medax.geometry.region import Region
@@ -52,6 +53,9 @@ log = logging.getLogger(__name__)
 
 #: structured boundary nodes may differ from the edge nodes by this much (x diagonal)
 BOUNDARY_MATCH = 1e-5
+#: surface kinds whose numpy copy (:func:`~medax.cad.face_region.surface_embedding`) keeps
+#: OCCT's parameters; faces on other kinds are meshed by gmsh
+NATIVE_SURFACES = ("plane", "cylinder", "cone", "sphere", "torus", "bspline", "bezier")
 #: points closer than this (x diagonal) are the same point when matching gmsh's entities
 MATCH_TOL = 1e-6
 
@@ -161,6 +165,10 @@ def mesh_part(
         f = topo.face(i)
         if not structured:
             why[i] = "structured grid not asked for"
+            continue
+        kind = surface_type(f)
+        if kind not in NATIVE_SURFACES:
+            why[i] = f"a {kind} surface (its B-spline copy may not keep OCCT's parameters)"
             continue
         try:
             sides = face_sides(f)
@@ -378,10 +386,7 @@ def _oriented(face: Any, i: int, q: IntArray, uv: FloatArray, pts: FloatArray) -
 
 def _orient(face: Any, q: IntArray, uv: FloatArray, pts: FloatArray) -> tuple[IntArray, str | None]:
     """``q`` turned to the outward normal, and what is wrong with it (or None)."""
-    emb = surface_embedding(face)
-    normal = emb.normal(uv) if hasattr(emb, "normal") else np.tile([0.0, 0.0, 1.0], (len(uv), 1))
-    if face.Orientation() == TopAbs_REVERSED:
-        normal = -normal
+    normal = _outward_normals(face, uv)
     area = _corner_areas(pts, q, normal)
     if np.nansum(area) < 0.0:
         q = q[:, ::-1]
@@ -391,6 +396,16 @@ def _orient(face: Any, q: IntArray, uv: FloatArray, pts: FloatArray) -> tuple[In
         at = np.round(pts[q[bad[0]]].mean(axis=0), 6).tolist()
         return q, f"{bad.size} quads inverted or flat against the face normal (first at {at})"
     return q, None
+
+
+def _outward_normals(face: Any, uv: FloatArray) -> FloatArray:
+    """Outward unit normals (n, 3) at OCCT parameters ``uv`` (n, 2): from the numpy copy of
+    the surface where it keeps OCCT's parameters, else from OCCT point by point."""
+    if surface_type(face) not in NATIVE_SURFACES:
+        return face_normals(face, uv)
+    emb = surface_embedding(face)
+    normal = np.asarray(emb.normal(uv)) if hasattr(emb, "normal") else np.zeros((len(uv), 3))
+    return -normal if face.Orientation() == TopAbs_REVERSED else normal
 
 
 def _corner_areas(pts: FloatArray, q: IntArray, normal: FloatArray) -> FloatArray:
