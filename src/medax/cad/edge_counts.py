@@ -69,16 +69,20 @@ def division_counts(
     meshed: Sequence[int],
     four_sided: Mapping[int, Sides],
     size: float,
+    minimum: IntArray | None = None,
 ) -> EdgeCounts:
     """Counts for the edges ``meshed`` of lengths ``lengths`` (n_edges,), for faces
     ``four_sided`` (face -> its four sides as edge chains, in order) meant to be
-    structured, at target edge length ``size``."""
+    structured, at target edge length ``size``; ``minimum`` (n_edges,) even lower bounds
+    (e.g. for closed edges, which one or two segments would collapse)."""
     if not (math.isfinite(size) and size > 0.0):
         raise InputError(f"size must be positive, got {size}")
     n = len(lengths)
     base = np.zeros(n, dtype=np.int64)
     for j in meshed:
         base[j] = size_count(float(lengths[j]), size)
+    if minimum is not None:
+        base = np.where(base > 0, np.maximum(base, minimum), 0)
     if base.max(initial=0) > MAX_COUNT:
         raise InputError(
             f"size {size:g} gives {int(base.max())} divisions on one edge (limit {MAX_COUNT})"

@@ -36,9 +36,20 @@ from medax.mesh.gmsh_session import gmsh_session
 #: gmsh element types
 _QUAD, _TRIANGLE = 3, 2
 #: gmsh's tries, in order: (2-D algorithm, half the counts then every element split into
-#: quads): Frontal-Delaunay for quads recombined, quasi-structured quads (11, which splits
-#: itself), Frontal-Delaunay recombined, then both Frontal-Delaunays split
-ATTEMPTS = ((8, False), (11, True), (6, False), (8, True), (6, True))
+#: quads, inside size / size): Frontal-Delaunay for quads recombined, quasi-structured quads
+#: (11, which splits itself), Frontal-Delaunay recombined, then both Frontal-Delaunays split;
+#: then finer inside than on the boundary (room to turn where edges are coarse)
+ATTEMPTS = (
+    (8, False, 1.0),
+    (11, True, 1.0),
+    (6, False, 1.0),
+    (8, True, 1.0),
+    (6, True, 1.0),
+    (8, False, 0.5),
+    (6, False, 0.5),
+    (8, True, 0.5),
+    (8, False, 0.25),
+)
 #: seconds one gmsh attempt on one face may take (run in a forked child, killed after)
 ATTEMPT_TIMEOUT = 60.0
 #: a gmsh node on a curve may be this share of the local spacing away from the part's node
@@ -82,14 +93,15 @@ def mesh_face(
         if not BRepTools.Write_s(face, str(path)):
             raise MeshError(f"face {index}: could not write it for gmsh")
         last = "triangles left by the recombination"
-        for algorithm, subdivide in ATTEMPTS:
+        for algorithm, subdivide, inner in ATTEMPTS:
 
-            def attempt(algorithm: int = algorithm, subdivide: bool = subdivide) -> Any:
-                gmsh.model.add(f"medax-face-{index}-{algorithm}-{int(subdivide)}")
+            def attempt(algorithm: int = algorithm, subdivide: bool = subdivide,
+                        inner: float = inner) -> Any:  # fmt: skip
+                gmsh.model.add(f"medax-face-{index}-{algorithm}-{int(subdivide)}-{inner}")
                 try:
                     out = _mesh(
-                        gmsh, path, index, edge_mid, edge_ids, edge_pts, size, tol, algorithm,
-                        subdivide,
+                        gmsh, path, index, edge_mid, edge_ids, edge_pts, inner * size, tol,
+                        algorithm, subdivide,
                     )  # fmt: skip
                     if out is None:
                         return "triangles left by the recombination"

@@ -53,6 +53,9 @@ log = logging.getLogger(__name__)
 
 #: structured boundary nodes may differ from the edge nodes by this much (x diagonal)
 BOUNDARY_MATCH = 1e-5
+#: fewest divisions of a closed edge (a full circle): halved for gmsh's subdivision it still
+#: has 3 segments
+MIN_CLOSED_COUNT = 6
 #: surface kinds whose numpy copy (:func:`~medax.cad.face_region.surface_embedding`) keeps
 #: OCCT's parameters; faces on other kinds are meshed by gmsh
 NATIVE_SURFACES = ("plane", "cylinder", "cone", "sphere", "torus", "bspline", "bezier")
@@ -190,7 +193,9 @@ def mesh_part(
         i: [[topo.edge_index(e) for e in side] for side in sides]
         for i, (_, sides) in regions.items()
     }
-    counts = division_counts(lengths, list(curves), four, size)
+    closed = np.array([len(v) == 1 for v in topo.edge_vertices], dtype=bool)
+    minimum = np.where(closed, MIN_CLOSED_COUNT, 2).astype(np.int64)
+    counts = division_counts(lengths, list(curves), four, size, minimum)
     for i, reason in counts.conflicts.items():
         why[i] = f"division counts conflict: {reason}"
         regions.pop(i)
@@ -238,7 +243,11 @@ def mesh_part(
                     q, uv, pts, gid, divisions = _structured(
                         regions[i], topo, counts.counts, edge_ids, edge_pts, lengths, diag
                     )
+                    problem = _orient(f, q, uv, pts)[1]
+                    if problem is not None:
+                        raise MeshError(problem)
                 except MedaxError as err:
+                    q, divisions = None, None
                     why[i] = f"structured grid failed: {err}"
                     say(f"face {i}: {why[i]}; meshed by gmsh")
             if q is None:
