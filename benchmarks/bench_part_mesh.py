@@ -3,7 +3,7 @@ others) against gmsh's best all-quad surface mesh at the same size, in one run.
 
 gmsh alone: the part imported by gmsh's OCC kernel, ``setTransfiniteAutomatic`` (transfinite
 where a face allows it) then quasi-structured quads (``Mesh.Algorithm = 11``) elsewhere,
-recombined; size ``--size`` (default 1/40 of the diagonal). medax: ``mesh_part`` at the same
+recombined; size ``--size`` (default the diagonal / ``--per``, 40). medax: ``mesh_part`` at the same
 size, on the part as read and on the part after fillet simplification (its time without the
 simplification's, printed apart). gmsh runs in a child process (its quasi-structured
 meshing was seen to hang; it is stopped after ``--timeout`` seconds).
@@ -12,7 +12,8 @@ Per part and mesher: elements, the share of quads, the 5th percentile and minimu
 Verdict's scaled Jacobian (on the quads), the smallest angle (degrees), the time (wall,
 seconds) and, for medax, faces structured / all.
 
-    .venv/bin/python benchmarks/bench_part_mesh.py [PART.step ...] [--size H] [--no-simplify]
+    .venv/bin/python benchmarks/bench_part_mesh.py [PART.step ...] [--size H | --per N]
+        [--no-simplify]
 """
 
 from __future__ import annotations
@@ -163,7 +164,8 @@ def _row(part: str, who: str, r: dict[str, Any]) -> str:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("parts", nargs="*", help="STEP/IGES/BRep files (default: shared + built)")
-    ap.add_argument("--size", type=float, help="edge length (default: diagonal / 40)")
+    ap.add_argument("--size", type=float, help="edge length (default: diagonal / --per)")
+    ap.add_argument("--per", type=float, default=40.0, help="edges per diagonal (40)")
     ap.add_argument("--timeout", type=float, default=600.0, help="gmsh's limit, seconds")
     ap.add_argument("--no-simplify", action="store_true", help="skip medax after simplify")
     args = ap.parse_args()
@@ -176,7 +178,7 @@ def main() -> int:
     print(head)
     print("-" * len(head))
     for name, shape in _parts(args.parts):
-        size = args.size or _diagonal(shape) / 40.0
+        size = args.size or _diagonal(shape) / args.per
         label = f"{name} h={size:.3g}"
         with tempfile.TemporaryDirectory() as tmp:
             brep = Path(tmp) / "part.brep"
