@@ -314,3 +314,28 @@ def test_cli_part_face_failure_writes_nothing(tmp_path, capsys, monkeypatch):
     last = capsys.readouterr().err.strip().splitlines()[-1]  # (progress lines before it)
     assert last.startswith("medax mesh: error: face 0: gmsh could not mesh it")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bracket.brep"]
+
+
+def test_orientation_turns_and_refuses():
+    """On the top face of a box (outward +z): clockwise quads are turned over; a quad with a
+    reflex corner, or with a corner of 180 degrees, is refused, naming the face."""
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+
+    from medax.cad.quad_orientation import orient, oriented
+    from medax.errors import MeshError
+
+    topo = build_topology(BRepPrimAPI_MakeBox(2.0, 2.0, 1.0).Shape())
+    heights = [BRepAdaptor_Surface(topo.face(i)).Plane().Location().Z() for i in range(6)]
+    top = next(i for i, z in enumerate(heights) if abs(z - 1.0) < 1e-12)
+    face = topo.face(top)
+    xy = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.5, 0.3], [2.0, 0.0]])
+    pts = np.column_stack((xy, np.ones(len(xy))))
+    uv = np.zeros((len(xy), 2))  # (a plane: the normal is the same everywhere)
+    q, problem = orient(face, np.array([[0, 3, 2, 1]]), uv, pts)
+    assert problem is None and q.tolist() == [[1, 2, 3, 0]]
+    dart = np.array([[0, 1, 2, 3], [0, 1, 4, 3]])  # node 4 (0.5, 0.3): a reflex corner
+    _, problem = orient(face, dart, uv, pts)
+    assert problem is not None and problem.startswith("1 quads inverted or flat")
+    flat = np.array([[0, 1, 5, 2]])  # 0, 1, 5 on a line: a corner of 180 degrees at 1
+    with pytest.raises(MeshError, match="face 7: 1 quads inverted or flat"):
+        oriented(face, 7, flat, uv, pts)

@@ -16,7 +16,8 @@ Steps (:func:`mesh_part`):
    checked). A face the medial grid cannot mesh is handed to gmsh, with the reason kept.
 5. Other faces: gmsh, on the same edge nodes (:mod:`medax.cad.gmsh_faces`).
 6. Every face's quads are turned to the outward normal of the face and checked corner by
-   corner against it; an inverted quad fails the run with the face's index.
+   corner against it (:mod:`medax.cad.quad_orientation`); an inverted quad fails the run with
+   the face's index.
 
 The result holds the quads with their CAD face, and each edge's nodes as line elements
 with their CAD edge, for the named groups of the writers (:mod:`medax.mesh.grouped_export`).
@@ -39,9 +40,10 @@ from OCP.TopoDS import TopoDS
 from medax.cad.edge_counts import division_counts
 from medax.cad.edge_nodes import edge_curve, equal_arc_nodes
 from medax.cad.face_geometry import surface_type
-from medax.cad.face_region import face_sides, side_region, surface_embedding
+from medax.cad.face_region import face_sides, side_region
 from medax.cad.gmsh_faces import GmshFace, mesh_face
-from medax.cad.topology import build_topology, face_normals
+from medax.cad.quad_orientation import NATIVE_SURFACES, orient, oriented
+from medax.cad.topology import build_topology
 from medax.errors import CadError, InputError, MedaxError, MeshError
 from medax.geometry._types import FloatArray, IntArray
 from medax.geometry.region import Region
@@ -56,9 +58,6 @@ BOUNDARY_MATCH = 1e-5
 #: fewest divisions of a closed edge (a full circle): halved for gmsh's subdivision it still
 #: has 3 segments
 MIN_CLOSED_COUNT = 6
-#: surface kinds whose numpy copy (:func:`~medax.cad.face_region.surface_embedding`) keeps
-#: OCCT's parameters; faces on other kinds are meshed by gmsh
-NATIVE_SURFACES = ("plane", "cylinder", "cone", "sphere", "torus", "bspline", "bezier")
 #: points closer than this (x diagonal) are the same point when matching gmsh's entities
 MATCH_TOL = 1e-6
 
@@ -243,7 +242,7 @@ def mesh_part(
                     q, uv, pts, gid, divisions = _structured(
                         regions[i], topo, counts.counts, edge_ids, edge_pts, lengths, diag
                     )
-                    problem = _orient(f, q, uv, pts)[1]
+                    problem = orient(f, q, uv, pts)[1]
                     if problem is not None:
                         raise MeshError(problem)
                 except MedaxError as err:
@@ -254,7 +253,7 @@ def mesh_part(
                 gm = _gmsh_face(f, i, topo, edge_mid, edge_ids, edge_pts, vert_pts, vert_ids,
                                 size, MATCH_TOL * diag)  # fmt: skip
                 q, uv, pts, gid = gm.quads, gm.uv, gm.points, gm.node_id
-            q = _oriented(f, i, q, uv, pts)
+            q = oriented(f, i, q, uv, pts)
             inner = gid < 0
             gid = gid.copy()
             gid[inner] = nodes.add(pts[inner])
@@ -367,7 +366,7 @@ def _gmsh_face(
     own = [j for j in topo.face_edges[i] if j in edge_ids]
 
     def check(m: GmshFace) -> str | None:
-        return _orient(face, m.quads, m.uv, m.points)[1]
+        return orient(face, m.quads, m.uv, m.points)[1]
 
     vs = sorted({k for j in topo.face_edges[i] for k in topo.edge_vertices[j]})
     return mesh_face(
@@ -382,47 +381,6 @@ def _gmsh_face(
         tol,
         check,
     )
-
-
-def _oriented(face: Any, i: int, q: IntArray, uv: FloatArray, pts: FloatArray) -> IntArray:
-    """``q`` turned counter-clockwise about the face's outward normal; :class:`MeshError`
-    if a quad corner still turns the other way or is flat (an inverted quad)."""
-    q, problem = _orient(face, q, uv, pts)
-    if problem is not None:
-        raise MeshError(f"face {i}: {problem}")
-    return q
-
-
-def _orient(face: Any, q: IntArray, uv: FloatArray, pts: FloatArray) -> tuple[IntArray, str | None]:
-    """``q`` turned to the outward normal, and what is wrong with it (or None)."""
-    normal = _outward_normals(face, uv)
-    area = _corner_areas(pts, q, normal)
-    if np.nansum(area) < 0.0:
-        q = q[:, ::-1]
-        area = _corner_areas(pts, q, normal)
-    bad = np.flatnonzero(np.any(area <= 0.0, axis=1))
-    if bad.size:
-        at = np.round(pts[q[bad[0]]].mean(axis=0), 6).tolist()
-        return q, f"{bad.size} quads inverted or flat against the face normal (first at {at})"
-    return q, None
-
-
-def _outward_normals(face: Any, uv: FloatArray) -> FloatArray:
-    """Outward unit normals (n, 3) at OCCT parameters ``uv`` (n, 2): from the numpy copy of
-    the surface where it keeps OCCT's parameters, else from OCCT point by point."""
-    if surface_type(face) not in NATIVE_SURFACES:
-        return face_normals(face, uv)
-    emb = surface_embedding(face)
-    normal = np.asarray(emb.normal(uv)) if hasattr(emb, "normal") else np.zeros((len(uv), 3))
-    return -normal if face.Orientation() == TopAbs_REVERSED else normal
-
-
-def _corner_areas(pts: FloatArray, q: IntArray, normal: FloatArray) -> FloatArray:
-    """``n_k . (L_{k-1} x L_k)`` (m, 4) at each quad corner, NaN where the normal is."""
-    p = pts[q]
-    e = np.roll(p, -1, axis=1) - p
-    c = np.cross(np.roll(e, 1, axis=1), e)
-    return np.asarray(np.einsum("mkd,mkd->mk", c, normal[q]))
 
 
 def _check(mesh: PartMesh) -> None:
