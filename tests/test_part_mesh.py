@@ -339,3 +339,17 @@ def test_orientation_turns_and_refuses():
     flat = np.array([[0, 1, 5, 2]])  # 0, 1, 5 on a line: a corner of 180 degrees at 1
     with pytest.raises(MeshError, match="face 7: 1 quads inverted or flat"):
         oriented(face, 7, flat, uv, pts)
+
+
+def test_demo_part_mesh(tmp_path):
+    """The demo meshes the 12-fillet box after --simplify (6 of 6 faces medial) and the
+    L-bracket (8 of 11), with reports and pictures."""
+    from medax.cli.demo_part_mesh import demo
+
+    written = demo(tmp_path)
+    assert sorted(p.suffix for p in written) == [".json", ".json", ".msh", ".msh", ".png",
+                                                 ".png", ".step", ".step"]  # fmt: skip
+    box = json.loads((tmp_path / "part-mesh-box-12-edges.json").read_text())
+    assert (box["n_faces"], box["n_structured_faces"], box["open_mesh_edges"]) == (6, 6, 0)
+    bracket = json.loads((tmp_path / "part-mesh-l-bracket.json").read_text())
+    assert (bracket["n_faces"], bracket["n_structured_faces"]) == (11, 8)
