@@ -36,7 +36,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "equal on opposite sides across the part, and gmsh's quads (Frontal-Delaunay for "
         "quads, recombined) on the other faces on the same edge nodes. Groups: a physical "
         "surface per CAD face (face_I) and a physical curve per CAD edge (edge_J); region "
-        "meshes get one per side (S0..S3).",
+        "meshes get one per side (S0..S3). Parts print progress on stderr; their report "
+        "gives, per face and over the part, Verdict's and gmsh's scaled Jacobian, the angles "
+        "and whether each face got the medial grid (or why not).",
         epilog="examples: medax mesh regions.json --region wavy --divisions 16,16 -o wavy.vtu "
         "--report quality.json --plot wavy.png; "
         "medax mesh part.step --size 2 --simplify -o part.msh --report part.json "
