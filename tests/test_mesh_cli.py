@@ -20,7 +20,7 @@ def test_mesh_vtu_report_plot(tmp_path, capsys):
                  "--report", str(rep), "--plot", str(png)])  # fmt: skip
     assert code == 0
     m = meshio.read(out)
-    assert len(m.points) == 8 * 13 and m.cells[0].data.shape == (84, 4)
+    assert len(m.points) == 8 * 13 and m.cells_dict["quad"].shape == (84, 4)
     r = json.loads(rep.read_text())
     assert r["n_nodes"] == 104 and r["n_quads"] == 84 and r["time_s"] > 0
     assert r["n_inverted"] == 0 and 0 < r["scaled_jacobian"]["min"] <= r["scaled_jacobian"]["p5"]
@@ -36,7 +36,7 @@ def test_mesh_other_formats_and_size(tmp_path, ext):
     out = tmp_path / f"m{ext}"
     assert main(["mesh", REGIONS, "--region", "trapezoid", "--size", "1.0", "-o", str(out)]) == 0
     m = meshio.read(out)
-    assert m.cells[0].data.shape == (70, 4)  # 10 x 7: longest sides 10 and 6.5
+    assert m.cells_dict["quad"].shape == (70, 4)  # 10 x 7: longest sides 10 and 6.5
 
 
 def test_format_override(tmp_path):

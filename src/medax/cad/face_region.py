@@ -1,15 +1,19 @@
-"""A fillet face as a 4-sided :class:`~medax.geometry.Region` on its surface, and its axis.
+"""A 4-sided CAD face as a :class:`~medax.geometry.Region` on its surface, and a fillet's axis.
 
-The region's sides are the face's pcurves in ``(u, v)`` (side 0 = smooth side 0, side 1 =
-cross edge 0, side 2 = smooth side 1, side 3 = cross edge 1, in outer-wire order), its
-embedding is the face's surface as a numpy :mod:`medax.geometry.surfaces` object, and its
-``space_sides`` are the exact 3-D edge curves (as rational B-splines), so the tracer
-measures distances in space to the true edges. The axis is traced by
-:func:`medax.axis.trace_axis` with constraints (0, 2): no second copy of the tracer.
+A face is 4-sided when its one (outer) wire has four corners once chains of G1 edges are
+joined (:func:`face_sides`). The region's sides are the face's pcurves in ``(u, v)``
+chained per side, its embedding is the face's surface as a numpy
+:mod:`medax.geometry.surfaces` object, and its ``space_sides`` are the exact 3-D edge curves
+(as rational B-splines), so the tracer and the mesher measure distances in space to the true
+edges (:func:`face_region`, :func:`side_region`). A fillet's sides come from its
+classification instead (smooth side 0, cross edge, smooth side 1, cross edge:
+:func:`fillet_region`); its axis is traced by :func:`medax.axis.trace_axis` with
+constraints (0, 2): no second copy of the tracer.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -28,12 +32,16 @@ from OCP.GeomAbs import (
     GeomAbs_Torus,
 )
 from OCP.GeomConvert import GeomConvert, GeomConvert_CompCurveToBSplineCurve
-from OCP.TopAbs import TopAbs_REVERSED
+from OCP.gp import gp_Pnt, gp_Vec
+from OCP.TopAbs import TopAbs_REVERSED, TopAbs_WIRE
+from OCP.TopExp import TopExp_Explorer
+from OCP.TopoDS import TopoDS
 
 from medax import tolerances
 from medax.axis import MedialAxis, trace_axis
 from medax.cad.model import Classification, FilletRecord
 from medax.errors import CadError
+from medax.geometry._types import FloatArray
 from medax.geometry.bspline import BSpline
 from medax.geometry.embedding import Embedding
 from medax.geometry.region import Region
@@ -167,11 +175,107 @@ def _chain(pieces: list[Any], two_d: bool) -> Any:
     )
     for p in pieces[1:]:
         if not comp.Add(p, 1e-7):
-            raise CadError("a fillet side's edges do not chain")
+            raise CadError("a side's edges do not chain")
     return comp.BSplineCurve()
 
 
 # ---- the region ---------------------------------------------------------------------------
+#: Consecutive edges of a wire whose tangents differ by less than this (radians) join into one
+#: side (G1); a larger turn is a corner.
+CORNER_ANGLE = 1e-2
+
+
+def _end_tangents(edge: Any) -> tuple[FloatArray, FloatArray]:
+    """Unit tangents (3,) of ``edge`` at its start and end, in the wire's travel direction."""
+    c = BRepAdaptor_Curve(edge)
+    p, v = gp_Pnt(), gp_Vec()
+    out = []
+    for t in (c.FirstParameter(), c.LastParameter()):
+        c.D1(t, p, v)
+        out.append(np.array([v.X(), v.Y(), v.Z()]))
+    a, b = out
+    if edge.Orientation() == TopAbs_REVERSED:
+        a, b = -b, -a
+    return a / np.linalg.norm(a), b / np.linalg.norm(b)
+
+
+def not_four_sided(face: Any, angle_tol: float = CORNER_ANGLE) -> str | None:
+    """Why ``face`` is not a 4-sided region (inner wires, a seam, a pole, other than four
+    corners), or None when it is: see :func:`face_sides`."""
+    try:
+        sides = face_sides(face, angle_tol)
+    except CadError as err:
+        return str(err)
+    return None if len(sides) == 4 else f"{len(sides)} sides"
+
+
+def face_sides(face: Any, angle_tol: float = CORNER_ANGLE) -> list[list[Any]]:
+    """The outer wire's oriented edges, in wire order, grouped into sides: consecutive
+    edges whose tangents turn by less than ``angle_tol`` (radians, in space) form one side.
+    Raises :class:`CadError` for a face with inner wires, a seam or degenerate edge (no
+    corner structure), or a wire with no corner."""
+    wires = TopExp_Explorer(face, TopAbs_WIRE)
+    n_wires = 0
+    while wires.More():
+        n_wires += 1
+        wires.Next()
+    if n_wires != 1:
+        raise CadError(f"{n_wires - 1} inner wires")
+    edges: list[Any] = []
+    exp = BRepTools_WireExplorer(BRepTools.OuterWire_s(face), face)
+    while exp.More():
+        e = exp.Current()
+        exp.Next()
+        if BRep_Tool.Degenerated_s(e):
+            raise CadError("a degenerate edge (pole)")
+        if BRep_Tool.IsClosed_s(e, face):
+            raise CadError("a seam edge (closed surface)")
+        edges.append(e)
+    tangents = [_end_tangents(e) for e in edges]
+    cos = np.cos(angle_tol)
+    corner = [float(tangents[k - 1][1] @ tangents[k][0]) < cos for k in range(len(edges))]
+    if not any(corner):
+        raise CadError("no corner in the outer wire")
+    k0 = corner.index(True)
+    sides: list[list[Any]] = []
+    for k in range(k0, k0 + len(edges)):
+        if corner[k % len(edges)]:
+            sides.append([])
+        sides[-1].append(edges[k % len(edges)])
+    return sides
+
+
+def side_region(face: Any, sides: list[list[Any]], name: str) -> tuple[Region, list[list[Any]]]:
+    """The Region of ``face`` with the given four sides (oriented edges in wire order):
+    pcurve sides, the face's surface as embedding, the exact 3-D edge curves as space
+    sides; and the oriented edges of each region side in the side's direction (the region
+    may be reoriented counter-clockwise, see :meth:`Region.build`)."""
+    try:
+        sides2d = [_to_bspline(_chain([_pcurve(e, face) for e in s], True), 2) for s in sides]
+        sides3d = [_to_bspline(_chain([_curve3d(e) for e in s], False), 3) for s in sides]
+        emb = surface_embedding(face)
+    except CadError as err:
+        raise CadError(f"{name}: {err}") from err
+    except Exception as err:
+        raise CadError(f"{name}: OCCT ({err})") from err
+    region = Region.build(sides2d, name=name, embedding=emb, space_sides=sides3d)
+    if region.reoriented:  # sides (0, 3, 2, 1), each reversed
+        sides = [[TopoDS.Edge(e.Reversed()) for e in reversed(sides[k])] for k in (0, 3, 2, 1)]
+    return region, sides
+
+
+def face_region(face: Any, name: str = "face", angle_tol: float = CORNER_ANGLE) -> Region:
+    """A 4-sided CAD ``face`` (see :func:`face_sides`) as a Region on its surface: pcurve
+    sides, exact 3-D space sides; :class:`CadError` when the face is not 4-sided."""
+    try:
+        sides = face_sides(face, angle_tol)
+    except CadError as err:
+        raise CadError(f"{name} is not 4-sided: {err}") from err
+    if len(sides) != 4:
+        raise CadError(f"{name} is not 4-sided: {len(sides)} sides")
+    return side_region(face, sides, name)[0]
+
+
 def fillet_sides(c: Classification, rec: FilletRecord) -> list[list[Any]]:
     """The oriented edges of each of the 4 sides of fillet ``rec``, in outer-wire order
     (smooth side 0, a cross edge, smooth side 1, the other cross edge)."""
@@ -203,18 +307,15 @@ def fillet_sides(c: Classification, rec: FilletRecord) -> list[list[Any]]:
 
 
 def fillet_region(c: Classification, rec: FilletRecord) -> Region:
-    """Fillet ``rec`` as a Region on its surface: pcurve sides, exact 3-D space sides."""
-    face = c.face(rec.face)
+    """Fillet ``rec`` as a Region on its surface: pcurve sides, exact 3-D space sides (its
+    sides by the classification's smooth edges, not by corners: see :func:`side_region`)."""
+    where = f"{c.source or 'shape'}: fillet face {rec.face}"
     try:
         sides = fillet_sides(c, rec)
-        sides2d = [_to_bspline(_chain([_pcurve(e, face) for e in s], True), 2) for s in sides]
-        sides3d = [_to_bspline(_chain([_curve3d(e) for e in s], False), 3) for s in sides]
-        emb = surface_embedding(face)
     except CadError as err:
-        raise CadError(f"{c.source or 'shape'}: fillet face {rec.face}: {err}") from err
-    except Exception as err:
-        raise CadError(f"{c.source or 'shape'}: fillet face {rec.face}: OCCT ({err})") from err
-    return Region.build(sides2d, name=f"face {rec.face}", embedding=emb, space_sides=sides3d)
+        raise CadError(f"{where}: {err}") from err
+    region = side_region(c.face(rec.face), sides, where)[0]
+    return replace(region, name=f"face {rec.face}")
 
 
 def fillet_axis(

@@ -12,7 +12,7 @@ import sys
 import time
 from pathlib import Path
 
-DEMO_PARTS = ("demo_axis", "demo_mesh", "demo_cad", "demo_simplify")
+DEMO_PARTS = ("demo_axis", "demo_mesh", "demo_cad", "demo_simplify", "demo_part_mesh")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

@@ -1,10 +1,12 @@
-"""``medax mesh``: structured quad mesh of a region from a regions JSON file."""
+"""``medax mesh``: structured quad mesh of a region from a regions JSON file, or one
+conforming quad mesh of a CAD part (STEP, IGES, BRep: :mod:`medax.cli.mesh_part`)."""
 
 from __future__ import annotations
 
 import argparse
 import logging
 import math
+from pathlib import Path
 from typing import Any
 
 from medax import tolerances
@@ -13,12 +15,14 @@ from medax.cli.outputs import JSON_SUFFIXES, PLOT_SUFFIXES, Output, check_output
 from medax.errors import InputError, MeshError
 
 log = logging.getLogger(__name__)
+#: inputs meshed as CAD parts (the extensions of :mod:`medax.cad.reader`)
+CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs", ".brep", ".brp")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "mesh",
-        help="structured quad mesh of a 4-sided region",
+        help="structured quad mesh of a 4-sided region, or quad mesh of a CAD part",
         description="Mesh a 4-sided region with quads whose node lines follow the distance "
         "ratio between opposite sides, blended from its values at boundary nodes at equal arc "
         "length (with --boundary ratio: curves of constant ratio, the middle one the medial "
@@ -27,15 +31,33 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "gets the exact polar grid), angle-weighted ratio curves on all line/arc pairs "
         "(angle), or the paper's recursive medial axes (paper). "
         "Writes .msh (Gmsh 4.1), .vtu, .inp (Abaqus) or .bdf (Nastran), a quality "
-        "report and a plot.",
-        epilog="example: medax mesh regions.json --region wavy --divisions 16,16 -o wavy.vtu "
-        "--report quality.json --plot wavy.png",
+        "report and a plot. "
+        "A CAD part (.step .stp .iges .igs .brep) is meshed as one conforming quad surface "
+        "mesh: the medial grid on every 4-sided face (its outer wire has four corners once "
+        "G1 edges are joined; no holes, no seam), with division counts from --size made "
+        "equal on opposite sides across the part, and gmsh's quads (Frontal-Delaunay for "
+        "quads, recombined) on the other faces on the same edge nodes. Groups: a physical "
+        "surface per CAD face (face_I) and a physical curve per CAD edge (edge_J); region "
+        "meshes get one per side (S0..S3). Parts print progress on stderr; their report "
+        "gives, per face and over the part, Verdict's and gmsh's scaled Jacobian, the angles "
+        "and whether each face got the medial grid (or why not).",
+        epilog="examples: medax mesh regions.json --region wavy --divisions 16,16 -o wavy.vtu "
+        "--report quality.json --plot wavy.png; "
+        "medax mesh part.step --size 2 --simplify -o part.msh --report part.json "
+        "--plot part.png",
     )
-    p.add_argument("regions", help="regions JSON file (format: see medax/data/regions.json)")
+    p.add_argument(
+        "regions",
+        metavar="INPUT",
+        help="regions JSON file (format: see medax/data/regions.json) or a CAD part "
+        "(.step .stp .iges .igs .brep)",
+    )
     p.add_argument("--region", help="name of the region in the file (default: the only one)")
-    g = p.add_mutually_exclusive_group(required=True)
-    g.add_argument("--size", type=float, help="target edge length (region units)")
-    g.add_argument("--divisions", help="quads along S0 and along S1: N1,N2 (or N for both)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--size", type=float, help="target edge length (region or model units)")
+    g.add_argument(
+        "--divisions", help="quads along S0 and along S1: N1,N2 (or N for both; regions only)"
+    )
     p.add_argument("--method", choices=("ratio", "angle", "paper"), default="ratio", help="(ratio)")
     p.add_argument(
         "--boundary",
@@ -52,6 +74,22 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="node tolerance x diagonal (ratio, angle: 1e-6; interior nodes on free-form "
         "sides are interpolated where that is estimated within it, 0 solves every node; "
         "paper: the traced splines' tolerance, 1e-9)",
+    )
+    p.add_argument(
+        "--faces",
+        default="all",
+        help="parts: the faces to mesh, 'all' or indices I,J,K (OCCT's face order, as in "
+        "'medax classify'); default all",
+    )
+    p.add_argument(
+        "--simplify",
+        action="store_true",
+        help="parts: simplify the fillets first (as 'medax simplify'), then mesh the result",
+    )
+    p.add_argument(
+        "--all-gmsh",
+        action="store_true",
+        help="parts: mesh every face with gmsh (no medial grids), for comparison",
     )
     p.add_argument("-o", "--output", required=True, help="mesh file: .msh .vtu .inp .bdf")
     p.add_argument("--format", help="override the format: msh, vtu, abaqus, nastran")
@@ -112,9 +150,14 @@ def run(args: argparse.Namespace) -> int:
     from medax.geometry.region_io import read_region
     from medax.geometry.resolution import coordinate_resolution, resolution_note
     from medax.io_utils import staged_outputs, write_json
-    from medax.mesh.export import format_from_path, write_mesh
+    from medax.mesh.export import format_from_path
+    from medax.mesh.grouped_export import region_groups, write_grouped_mesh
     from medax.mesh.mesher import mesh_region
 
+    if Path(args.regions).suffix.lower() in CAD_SUFFIXES:
+        from medax.cli.mesh_part import run_part
+
+        return run_part(args)
     # validate everything before any work, so bad input leaves no file behind
     check_outputs(
         [
@@ -124,6 +167,10 @@ def run(args: argparse.Namespace) -> int:
         ],
         {"regions file": args.regions},
     )
+    if args.size is None and args.divisions is None:
+        raise InputError("give --size or --divisions")
+    if args.simplify or args.all_gmsh or args.faces != "all":
+        raise InputError("--simplify, --all-gmsh and --faces apply to CAD parts, not regions")
     fmt = format_from_path(args.output, args.format)
     divisions = parse_divisions(args.divisions) if args.divisions is not None else None
     if args.size is not None and not (math.isfinite(args.size) and args.size > 0.0):
@@ -160,8 +207,10 @@ def run(args: argparse.Namespace) -> int:
             "(scaled Jacobian <= 0); nothing written (--allow-inverted writes it anyway)"
         )
     with staged_outputs() as out:  # all outputs or none
-        write_mesh(out.path(args.output, "-o"), mesh.points, mesh.quads,
-                   mesh.quality().as_dict(), fmt)  # fmt: skip
+        groups = region_groups(mesh.n1, mesh.n2)
+        quality = mesh.quality().as_dict()
+        target = out.path(args.output, "-o")
+        write_grouped_mesh(target, mesh.points, mesh.quads, groups, quality, fmt)
         if args.report is not None:
             write_json(out.path(args.report, "--report"), rep, "--report")
         if args.plot is not None:

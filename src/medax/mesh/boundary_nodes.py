@@ -11,6 +11,7 @@ Two rules (:data:`RULES`):
 from __future__ import annotations
 
 import logging
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -42,14 +43,26 @@ def side_params(
     tol: float,
     kinds: tuple[str, str],
     rule: str = "arclength",
+    fractions: Sequence[FloatArray] | None = None,
 ) -> list[list[tuple[FloatArray, FloatArray]]]:
     """Per level ``(n1, n2)``, per side, the parameters (in the side's direction) of the
     boundary nodes and the ratio of the crossing pair at them (each (n + 1,)); the nodes of
-    all levels on one side are found together."""
+    all levels on one side are found together. ``fractions`` (rule ``"arclength"``, one
+    level only): per side the arc-length fractions (n + 1,) of its nodes, increasing from 0
+    to 1, instead of ``k / n``."""
     out: list[list[tuple[FloatArray, FloatArray]]] = [[] for _ in levels]
+    if fractions is not None and (rule != "arclength" or len(levels) != 1):
+        raise ValueError("boundary fractions need the arclength rule and one level")
     for side, a, b, kind in _SIDE_PAIRS:
         counts = [lev[side % 2] for lev in levels]
-        fr = np.concatenate([np.arange(n + 1) / n for n in counts])
+        if fractions is not None:
+            fr = np.asarray(fractions[side], dtype=np.float64)
+            if fr.shape != (counts[0] + 1,) or fr[0] != 0.0 or fr[-1] != 1.0:
+                raise ValueError(
+                    f"side {side}: fractions must run from 0 to 1 in {counts[0]} steps"
+                )
+        else:
+            fr = np.concatenate([np.arange(n + 1) / n for n in counts])
         if rule == "arclength":
             curve = region.sides[side]
             if not region.embedding.is_identity:

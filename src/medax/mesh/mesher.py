@@ -27,11 +27,13 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections.abc import Sequence
 
 import numpy as np
 
 from medax import tolerances
 from medax.errors import InputError, MeshError
+from medax.geometry._types import FloatArray
 from medax.geometry.region import Region, normalised_region
 from medax.mesh.boundary_nodes import RULES as BOUNDARY_RULES
 from medax.mesh.crossings import family_crossings
@@ -75,6 +77,7 @@ def mesh_region(
     method: str = "ratio",
     tol: float | None = None,
     boundary: str = "arclength",
+    fractions: Sequence[FloatArray] | None = None,
 ) -> QuadMesh:
     """A structured quad mesh of ``region`` with ``divisions = (n1, n2)`` (along S0, along S1)
     or edges of about ``size`` (region units). ``tol`` (relative to the diagonal) bounds the
@@ -86,13 +89,20 @@ def mesh_region(
     ``"paper"`` (default :data:`PAPER_TOL`) it is the traced splines' error. ``boundary``
     (``"ratio"`` and ``"angle"`` methods): boundary nodes at equal arc length
     (``"arclength"``) or at the ends of the curves of constant ratio (``"ratio"``), see
-    :mod:`medax.mesh.boundary_nodes`."""
+    :mod:`medax.mesh.boundary_nodes`. ``fractions`` (``"ratio"`` and ``"angle"``, rule
+    ``"arclength"``, with ``divisions``): per side the arc-length fractions (n + 1,) of its
+    boundary nodes, from 0 to 1 in the side's direction (default ``k / n``), e.g. to put
+    nodes on the vertices inside a side made of several CAD edges."""
     if method not in METHODS:
         raise InputError(f"unknown mesh method '{method}' (known: {', '.join(METHODS)})")
     if boundary not in BOUNDARY_RULES:
         raise InputError(f"unknown boundary rule '{boundary}' (known: {', '.join(BOUNDARY_RULES)})")
     if (divisions is None) == (size is None):
         raise InputError("give exactly one of divisions and size")
+    if fractions is not None and (
+        method == "paper" or boundary != "arclength" or divisions is None
+    ):
+        raise InputError("boundary fractions need divisions, the arclength rule and no 'paper'")
     if divisions is not None:
         n1, n2 = (int(d) for d in divisions)
         if n1 < 1 or n2 < 1:
@@ -116,7 +126,9 @@ def mesh_region(
         # tolerance (down to 1e-13 x diagonal) is still above round-off
         work, offset, scale = normalised_region(region)
         point_tol = min(tol or tolerances.POINT_TOL, tolerances.POINT_TOL)
-        params, info = ratio_grid(work, n1, n2, point_tol, weighting, boundary, node_tol=tol)
+        params, info = ratio_grid(
+            work, n1, n2, point_tol, weighting, boundary, node_tol=tol, fractions=fractions
+        )
         params = params * scale + offset
     else:
         params, n1, n2 = _paper_grid(region, n1, n2, size, tol)

@@ -25,6 +25,7 @@ global feet.
 from __future__ import annotations
 
 import logging
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -72,6 +73,7 @@ def ratio_grid(
     weighting: str = "auto",
     boundary: str = "arclength",
     node_tol: float = 0.0,
+    fractions: Sequence[FloatArray] | None = None,
 ) -> tuple[FloatArray, dict[str, float]]:
     """Parameter-plane nodes (``(n1 + 1) * (n2 + 1)``, 2) of the ratio grid; and counts.
     ``boundary`` places the boundary nodes (:data:`~medax.mesh.boundary_nodes.RULES`).
@@ -79,15 +81,17 @@ def ratio_grid(
     sides to ``_NEWTON_SHARE * node_tol`` if that is larger); with ``node_tol > 0``
     (x diagonal) interior nodes on free-form sides whose interpolation from the coarser
     level is estimated within it keep the interpolated position
-    (:func:`~medax.mesh.coarse_start.hard_nodes` picks the others)."""
+    (:func:`~medax.mesh.coarse_start.hard_nodes` picks the others). ``fractions``: per side
+    the arc-length fractions (n + 1,) of the boundary nodes (default ``k / n``); the grid is
+    then solved without a coarse start."""
     if weighting not in WEIGHTINGS:
         raise ValueError(f"unknown weighting '{weighting}'")
     if boundary not in RULES:
         raise ValueError(f"unknown boundary rule '{boundary}'")
     kinds = (pair_weighting(region, 0, 2, weighting), pair_weighting(region, 1, 3, weighting))
     tol = point_tol * region.diagonal
-    levels = _levels(n1, n2)
-    sides = side_params(region, levels, tol, kinds, boundary)
+    levels = _levels(n1, n2) if fractions is None else [(n1, n2)]
+    sides = side_params(region, levels, tol, kinds, boundary, fractions)
     level = _grid(region, levels, sides, tol, kinds, node_tol * region.diagonal, False)
     counts = level.counts
     counts["max_residual"] /= region.diagonal

@@ -1,0 +1,265 @@
+"""Quad meshes of the faces that are not structured, by gmsh, on the part's edge nodes.
+
+Each face is written alone to a BRep file and meshed in its own gmsh model (so a failure
+names its face): every curve is made transfinite with the part's division count of its
+edge, then Frontal-Delaunay for quads and blossom recombination (``Mesh.Algorithm = 8``,
+``Mesh.RecombineAll``). The counts are even, so each face has an even number of boundary
+edges; where blossom still leaves triangles, or the caller's check refuses the quads (one
+inverted or flat against the face normal), the face is meshed again (:data:`ATTEMPTS`):
+quasi-structured quads, Frontal-Delaunay, and both Frontal-Delaunays with half the counts
+and every element split into quads (``Mesh.SubdivisionAlgorithm = 1``), which doubles the
+boundary divisions back to the part's counts (quasi-structured splits by itself).
+
+Node sharing is exact by construction: gmsh's nodes on a curve are matched, in order along
+it, to the part's nodes of that edge (:mod:`medax.cad.edge_nodes`, equal arc length) and
+replaced by them (ids and coordinates; gmsh's own transfinite nodes differ from them by its
+arc-length quadrature only, checked against a fraction of the spacing). Curves are matched
+to the part's edges by their points at the middle parameter (gmsh keeps OCCT's curve
+parameters); nodes on gmsh points to the part's vertex nodes by position.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from OCP.BRepTools import BRepTools
+
+from medax.errors import MeshError
+from medax.geometry._types import FloatArray, IntArray
+from medax.mesh.gmsh_session import gmsh_session
+
+#: gmsh element types
+_QUAD, _TRIANGLE = 3, 2
+#: gmsh's tries, in order: (2-D algorithm, half the counts then every element split into
+#: quads, inside size / size): Frontal-Delaunay for quads recombined, quasi-structured quads
+#: (11, which splits itself), Frontal-Delaunay recombined, then both Frontal-Delaunays split;
+#: then finer inside than on the boundary (room to turn where edges are coarse)
+ATTEMPTS = (
+    (8, False, 1.0),
+    (11, True, 1.0),
+    (6, False, 1.0),
+    (8, True, 1.0),
+    (6, True, 1.0),
+    (8, False, 0.5),
+    (6, False, 0.5),
+    (8, True, 0.5),
+    (8, False, 0.25),
+)
+#: seconds one gmsh attempt on one face may take (run in a forked child, killed after)
+ATTEMPT_TIMEOUT = 60.0
+#: a gmsh node on a curve may be this share of the local spacing away from the part's node
+_MATCH_SHARE = 0.3
+
+
+@dataclass(frozen=True)
+class GmshFace:
+    """A face's gmsh mesh: ``points`` (k, 3), surface parameters ``uv`` (k, 2), local quads
+    (m, 4) and ``node_id`` (k,): the part's node id of each boundary node, -1 inside;
+    ``subdivided``: whether the all-quad subdivision was needed."""
+
+    points: FloatArray
+    uv: FloatArray
+    quads: IntArray
+    node_id: IntArray
+    subdivided: bool
+
+
+def mesh_face(
+    face: Any,
+    index: int,
+    edge_mid: Mapping[int, FloatArray],
+    edge_ids: Mapping[int, IntArray],
+    edge_pts: Mapping[int, FloatArray],
+    vertex_pts: FloatArray,
+    vertex_ids: IntArray,
+    size: float,
+    tol: float,
+    check: Callable[[GmshFace], str | None] | None = None,
+) -> GmshFace:
+    """Mesh CAD ``face`` (face ``index`` of the part) with quads whose boundary nodes are the
+    part's: ``edge_mid[j]`` the middle point (3,) of each of its edges ``j``,
+    ``edge_ids[j]`` / ``edge_pts[j]`` the part's node ids (n + 1,) and points (n + 1, 3)
+    along it, ``vertex_pts`` / ``vertex_ids`` the vertex nodes; ``tol`` the length below
+    which points match; ``check`` says what is wrong with a mesh (e.g. a quad inverted
+    against the face normal), which is then tried again (:data:`ATTEMPTS`). Raises
+    :class:`MeshError` naming the face."""
+    with gmsh_session() as gmsh, tempfile.TemporaryDirectory(prefix="medax-") as tmp:
+        path = Path(tmp) / f"face{index}.brep"
+        if not BRepTools.Write_s(face, str(path)):
+            raise MeshError(f"face {index}: could not write it for gmsh")
+        last = "triangles left by the recombination"
+        for algorithm, subdivide, inner in ATTEMPTS:
+
+            def attempt(algorithm: int = algorithm, subdivide: bool = subdivide,
+                        inner: float = inner) -> Any:  # fmt: skip
+                gmsh.model.add(f"medax-face-{index}-{algorithm}-{int(subdivide)}-{inner}")
+                try:
+                    out = _mesh(
+                        gmsh, path, index, edge_mid, edge_ids, edge_pts, inner * size, tol,
+                        algorithm, subdivide,
+                    )  # fmt: skip
+                    if out is None:
+                        return "triangles left by the recombination"
+                    _vertices(gmsh, out, vertex_pts, vertex_ids, tol, index)
+                    problem = None if check is None else check(out)
+                    return out if problem is None else problem
+                except MeshError as err:  # (counts not kept, nodes off the edge: try again)
+                    return str(err).removeprefix(f"face {index}: ")
+                except Exception as err:  # gmsh raises plain Exceptions
+                    return f"gmsh: {err}"
+                finally:
+                    gmsh.model.remove()
+
+            result = _with_timeout(attempt, ATTEMPT_TIMEOUT)
+            if isinstance(result, GmshFace):
+                return result
+            last = result
+        raise MeshError(f"face {index}: gmsh could not mesh it with valid quads only ({last})")
+
+
+def _with_timeout(work: Callable[[], Any], seconds: float) -> Any:
+    """``work()`` run in a forked child (it inherits gmsh's state), its result sent back;
+    the child is killed after ``seconds`` (gmsh's quasi-structured quads were seen to hang)
+    and a message returned instead. Without ``fork`` (not POSIX) it runs here, unbounded."""
+    import multiprocessing as mp  # noqa: PLC0415
+
+    if "fork" not in mp.get_all_start_methods():  # pragma: no cover
+        return work()
+    ctx = mp.get_context("fork")
+    recv, send = ctx.Pipe(duplex=False)
+
+    def child() -> None:
+        try:
+            send.send(work())
+        except BaseException as err:  # (anything, as a message: the parent goes on)
+            send.send(f"{type(err).__name__}: {err}")
+        finally:
+            send.close()
+
+    proc = ctx.Process(target=child, daemon=True)
+    proc.start()
+    send.close()
+    try:
+        if recv.poll(seconds):
+            return recv.recv()
+        return f"gmsh took more than {seconds:g} s"
+    except EOFError:
+        return f"gmsh's process ended without a result (exit code {proc.exitcode})"
+    finally:
+        if proc.is_alive():
+            proc.kill()
+        proc.join()
+        recv.close()
+
+
+def _mesh(
+    gmsh: Any,
+    path: Path,
+    index: int,
+    edge_mid: Mapping[int, FloatArray],
+    edge_ids: Mapping[int, IntArray],
+    edge_pts: Mapping[int, FloatArray],
+    size: float,
+    tol: float,
+    algorithm: int,
+    subdivide: bool,
+) -> GmshFace | None:
+    """One attempt; None when triangles remain."""
+    gmsh.model.occ.importShapes(str(path), highestDimOnly=True)
+    gmsh.model.occ.synchronize()
+    surfaces = gmsh.model.getEntities(2)
+    if len(surfaces) != 1:
+        raise MeshError(f"face {index}: gmsh read {len(surfaces)} surfaces from it")
+    tag = surfaces[0][1]
+    curve_edge: dict[int, int] = {}
+    mids = {j: np.asarray(m) for j, m in edge_mid.items()}
+    for _, c in gmsh.model.getEntities(1):
+        lo, hi = gmsh.model.getParametrizationBounds(1, c)
+        ends = np.asarray(gmsh.model.getValue(1, c, [lo[0], 0.5 * (lo[0] + hi[0]), hi[0]]))
+        p = ends.reshape(3, 3)[1]
+        if np.ptp(ends.reshape(3, 3), axis=0).max() <= tol:
+            continue  # a degenerate edge (a pole): its one node is the vertex's
+        j, d = min(((j, float(np.linalg.norm(m - p))) for j, m in mids.items()), key=lambda x: x[1])
+        if d > tol:
+            raise MeshError(f"face {index}: a gmsh curve matches none of its edges ({d:.3g} off)")
+        curve_edge[c] = j
+        n = len(edge_ids[j]) - 1
+        if n < 1:
+            continue
+        gmsh.model.mesh.setTransfiniteCurve(c, (n // 2 if subdivide else n) + 1)
+    gmsh.option.setNumber("Mesh.Algorithm", algorithm)
+    gmsh.option.setNumber("Mesh.RecombineAll", 1)
+    gmsh.option.setNumber("Mesh.RecombinationAlgorithm", 1)
+    # (quasi-structured, 11, splits every element itself)
+    gmsh.option.setNumber("Mesh.SubdivisionAlgorithm", 1 if subdivide and algorithm != 11 else 0)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", (2.0 if subdivide else 1.0) * size)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", 0.0)
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 1)
+    gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+    gmsh.model.mesh.generate(2)
+    types, _, conn = gmsh.model.mesh.getElements(2, tag)
+    if any(int(t) != _QUAD for t in types) or not len(types):
+        return None
+    quads_tags = np.asarray(conn[0], dtype=np.int64).reshape(-1, 4)
+    tags, coord, _ = gmsh.model.mesh.getNodes(2, tag, True, False)
+    # (nodes on a seam are listed twice)
+    tags, first = np.unique(np.asarray(tags, dtype=np.int64), return_index=True)
+    pts = np.asarray(coord, dtype=np.float64).reshape(-1, 3)[first]
+    local = np.full(int(tags.max()) + 1, -1, dtype=np.int64)
+    local[tags] = np.arange(tags.size)
+    # surface parameters of every node (gmsh does not keep them on all inner nodes)
+    par = gmsh.model.getParametrization(2, tag, pts.ravel().tolist())
+    uv = np.asarray(par, dtype=np.float64).reshape(-1, 2)
+    node_id = np.full(tags.size, -1, dtype=np.int64)
+    for c, j in curve_edge.items():
+        ids, ours = edge_ids[j], edge_pts[j]
+        ctags, ccoord, cpar = gmsh.model.mesh.getNodes(1, c, False, True)
+        if len(ids) < 3 and len(ctags) == 0:
+            continue
+        order = np.argsort(np.asarray(cpar))
+        ct = np.asarray(ctags, dtype=np.int64)[order]
+        cp = np.asarray(ccoord, dtype=np.float64).reshape(-1, 3)[order]
+        inner_ids, inner_pts = ids[1:-1], ours[1:-1]
+        if len(ct) != len(inner_ids):
+            raise MeshError(
+                f"face {index}: gmsh put {len(ct)} nodes inside edge {j}, not {len(inner_ids)}"
+            )
+        if np.linalg.norm(cp[0] - inner_pts[-1]) < np.linalg.norm(cp[0] - inner_pts[0]):
+            inner_ids, inner_pts = inner_ids[::-1], inner_pts[::-1]
+        spacing = float(np.min(np.linalg.norm(np.diff(ours, axis=0), axis=1)))
+        off = float(np.max(np.linalg.norm(cp - inner_pts, axis=1)))
+        if off > _MATCH_SHARE * spacing:
+            raise MeshError(
+                f"face {index}: gmsh's nodes on edge {j} are {off:.3g} from the part's "
+                f"(spacing {spacing:.3g})"
+            )
+        rows = local[ct]
+        node_id[rows] = inner_ids
+        pts[rows] = inner_pts
+    return GmshFace(pts, uv, local[quads_tags], node_id, subdivide)
+
+
+def _vertices(
+    gmsh: Any, m: GmshFace, vertex_pts: FloatArray, vertex_ids: IntArray, tol: float, index: int
+) -> None:
+    """The nodes on gmsh's points (the face's corners) take the part's vertex nodes."""
+    tags, coord, _ = gmsh.model.mesh.getNodes(2, gmsh.model.getEntities(2)[0][1], True, False)
+    row = {int(t): k for k, t in enumerate(np.unique(np.asarray(tags, dtype=np.int64)))}
+    for _, ptag in gmsh.model.getEntities(0):
+        ptags, pcoord, _ = gmsh.model.mesh.getNodes(0, ptag)
+        if len(ptags) == 0 or int(ptags[0]) not in row:
+            continue
+        p = np.asarray(pcoord[:3], dtype=np.float64)
+        d = np.linalg.norm(vertex_pts - p, axis=1)
+        k = int(np.argmin(d)) if len(d) else -1
+        if k < 0 or d[k] > tol:
+            raise MeshError(f"face {index}: a gmsh point matches none of its vertices")
+        r = row[int(ptags[0])]
+        m.node_id[r] = vertex_ids[k]
+        m.points[r] = vertex_pts[k]

@@ -1,0 +1,399 @@
+"""One conforming quad surface mesh of a CAD solid: the medial grid on its 4-sided faces,
+gmsh's quads on the others, the part's edge nodes shared by both.
+
+Steps (:func:`mesh_part`):
+
+1. Each face is 4-sided or not (:func:`~medax.cad.face_region.face_sides`); 4-sided ones
+   become Regions on their surfaces (:func:`~medax.cad.face_region.side_region`).
+2. Division counts per edge from the size, equal on opposite sides of every structured face
+   across the part (:mod:`medax.cad.edge_counts`); faces where they conflict are meshed by
+   gmsh instead.
+3. Nodes of every edge at equal arc length on its exact curve, one node per vertex
+   (:mod:`medax.cad.edge_nodes`): the only nodes any face puts on an edge.
+4. Structured faces: :func:`~medax.mesh.mesher.mesh_region` with those counts (and, on sides
+   made of several edges, boundary fractions that put nodes on the vertices inside them);
+   its boundary nodes are replaced by the edge nodes (they agree to the mesher's tolerance,
+   checked). A face the medial grid cannot mesh is handed to gmsh, with the reason kept.
+5. Other faces: gmsh, on the same edge nodes (:mod:`medax.cad.gmsh_faces`).
+6. Every face's quads are turned to the outward normal of the face and checked corner by
+   corner against it (:mod:`medax.cad.quad_orientation`); an inverted quad fails the run with
+   the face's index.
+
+The result holds the quads with their CAD face, and each edge's nodes as line elements
+with their CAD edge, for the named groups of the writers (:mod:`medax.mesh.grouped_export`).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from OCP.BRep import BRep_Tool
+from OCP.TopAbs import TopAbs_FORWARD, TopAbs_REVERSED
+from OCP.TopExp import TopExp
+from OCP.TopoDS import TopoDS
+
+from medax.cad.edge_counts import division_counts
+from medax.cad.edge_nodes import edge_curve, equal_arc_nodes
+from medax.cad.face_geometry import surface_type
+from medax.cad.face_region import face_sides, side_region
+from medax.cad.gmsh_faces import GmshFace, mesh_face
+from medax.cad.quad_orientation import NATIVE_SURFACES, orient, oriented
+from medax.cad.topology import build_topology
+from medax.errors import CadError, InputError, MedaxError, MeshError
+from medax.geometry._types import FloatArray, IntArray
+from medax.geometry.region import Region
+from medax.mesh.gmsh_session import gmsh_session
+from medax.mesh.grid import boundary_indices, structured_quads
+from medax.mesh.mesher import mesh_region
+
+log = logging.getLogger(__name__)
+
+#: structured boundary nodes may differ from the edge nodes by this much (x diagonal)
+BOUNDARY_MATCH = 1e-5
+#: fewest divisions of a closed edge (a full circle): halved for gmsh's subdivision it still
+#: has 3 segments
+MIN_CLOSED_COUNT = 6
+#: points closer than this (x diagonal) are the same point when matching gmsh's entities
+MATCH_TOL = 1e-6
+
+
+@dataclass(frozen=True)
+class FaceMeshInfo:
+    """How face ``face`` was meshed: ``kind`` ``"structured"`` (``divisions`` = (n1, n2))
+    or ``"gmsh"`` (``why``: the reason it is not structured), its quads' index range
+    ``[start, stop)`` in the part mesh and the time in seconds."""
+
+    face: int
+    kind: str
+    start: int
+    stop: int
+    time_s: float
+    divisions: tuple[int, int] | None = None
+    why: str = ""
+
+
+@dataclass(frozen=True)
+class PartMesh:
+    """A conforming quad mesh of a part's faces.
+
+    ``points`` (n, 3); ``quads`` (m, 4) node indices, counter-clockwise about the outward
+    normal; ``quad_face`` (m,) the CAD face of each quad; ``lines`` (k, 2) the edge
+    segments and ``line_edge`` (k,) their CAD edge; ``edge_counts`` per CAD edge (0: not
+    meshed); ``faces`` how each face was meshed; ``diagonal`` the part's bounding-box
+    diagonal; ``conflicts`` face -> why its counts did not allow the structured grid.
+    """
+
+    points: FloatArray
+    quads: IntArray
+    quad_face: IntArray
+    lines: IntArray
+    line_edge: IntArray
+    edge_counts: IntArray
+    faces: tuple[FaceMeshInfo, ...]
+    diagonal: float
+    conflicts: dict[int, str] = field(default_factory=dict)
+    time_s: float = 0.0
+
+    @property
+    def structured_faces(self) -> tuple[int, ...]:
+        return tuple(f.face for f in self.faces if f.kind == "structured")
+
+    @property
+    def gmsh_faces(self) -> tuple[int, ...]:
+        return tuple(f.face for f in self.faces if f.kind == "gmsh")
+
+
+class _Nodes:
+    """The growing node table."""
+
+    def __init__(self) -> None:
+        self.blocks: list[FloatArray] = []
+        self.n = 0
+
+    def add(self, pts: FloatArray) -> IntArray:
+        ids = np.arange(self.n, self.n + len(pts), dtype=np.int64)
+        self.blocks.append(np.asarray(pts, dtype=np.float64).reshape(-1, 3))
+        self.n += len(pts)
+        return ids
+
+    def array(self) -> FloatArray:
+        return np.concatenate(self.blocks) if self.blocks else np.zeros((0, 3))
+
+
+def part_diagonal(shape: Any) -> float:
+    """The diagonal of ``shape``'s bounding box (model units)."""
+    from OCP.Bnd import Bnd_Box  # noqa: PLC0415
+    from OCP.BRepBndLib import BRepBndLib  # noqa: PLC0415
+
+    box = Bnd_Box()
+    BRepBndLib.Add_s(shape, box, False)
+    lo, hi = box.CornerMin(), box.CornerMax()
+    return float(np.linalg.norm([hi.X() - lo.X(), hi.Y() - lo.Y(), hi.Z() - lo.Z()]))
+
+
+def mesh_part(
+    shape: Any,
+    size: float,
+    faces: Sequence[int] | None = None,
+    structured: bool = True,
+    progress: Callable[[str], None] | None = None,
+) -> PartMesh:
+    """Mesh the faces of ``shape`` (all, or the indices ``faces`` in OCCT's face map order)
+    with quads of edge about ``size`` (model units). ``structured=False`` meshes every face
+    with gmsh (for comparison). Raises :class:`MeshError` naming the face that cannot be
+    meshed; never returns a partial mesh."""
+    t0 = time.perf_counter()
+    say = progress or (lambda msg: log.info(msg))
+    topo = build_topology(shape)
+    diag = part_diagonal(shape)
+    if not (np.isfinite(size) and size > 0.0):
+        raise InputError(f"size must be positive, got {size}")
+    sel = list(range(topo.n_faces)) if faces is None else sorted(set(faces))
+    bad = [i for i in sel if not 0 <= i < topo.n_faces]
+    if bad:
+        raise InputError(f"face {bad[0]} does not exist (the part has {topo.n_faces} faces)")
+    if size < 1e-6 * diag:
+        raise InputError(f"size {size:g} is below 1e-6 x the part's diagonal ({diag:.4g})")
+
+    # 1. 4-sided faces and their regions
+    regions: dict[int, tuple[Region, list[list[Any]]]] = {}
+    why: dict[int, str] = {}
+    for i in sel:
+        f = topo.face(i)
+        if not structured:
+            why[i] = "structured grid not asked for"
+            continue
+        kind = surface_type(f)
+        if kind not in NATIVE_SURFACES:
+            why[i] = f"a {kind} surface (its B-spline copy may not keep OCCT's parameters)"
+            continue
+        try:
+            sides = face_sides(f)
+            if len(sides) != 4:
+                why[i] = f"{len(sides)} sides"
+                continue
+            regions[i] = side_region(f, sides, f"face {i}")
+        except CadError as err:
+            why[i] = str(err)
+    say(f"{len(sel)} faces, {len(regions)} 4-sided")
+
+    # 2. counts
+    edges = sorted({j for i in sel for j in topo.face_edges[i]})
+    curves = {j: edge_curve(topo.edge(j)) for j in edges if not topo.degenerate[j]}
+    lengths = np.zeros(topo.n_edges)
+    for j, c in curves.items():
+        lengths[j] = c.length()
+    four = {
+        i: [[topo.edge_index(e) for e in side] for side in sides]
+        for i, (_, sides) in regions.items()
+    }
+    closed = np.array([len(v) == 1 for v in topo.edge_vertices], dtype=bool)
+    minimum = np.where(closed, MIN_CLOSED_COUNT, 2).astype(np.int64)
+    counts = division_counts(lengths, list(curves), four, size, minimum)
+    for i, reason in counts.conflicts.items():
+        why[i] = f"division counts conflict: {reason}"
+        regions.pop(i)
+    if counts.conflicts:
+        say(f"{len(counts.conflicts)} faces with conflicting counts meshed by gmsh")
+
+    # 3. vertex and edge nodes
+    nodes = _Nodes()
+    vmap = topo.vertex_map
+    vert_ids = np.full(vmap.Extent(), -1, dtype=np.int64)
+    vert_pts = np.zeros((vmap.Extent(), 3))
+    used_v = sorted({k for j in edges for k in topo.edge_vertices[j]})
+    for k in used_v:
+        p = BRep_Tool.Pnt_s(TopoDS.Vertex(vmap.FindKey(k + 1)))
+        vert_pts[k] = (p.X(), p.Y(), p.Z())
+    vert_ids[used_v] = nodes.add(vert_pts[used_v])
+    edge_ids: dict[int, IntArray] = {}
+    edge_pts: dict[int, FloatArray] = {}
+    edge_mid: dict[int, FloatArray] = {}
+    for j, c in curves.items():
+        e = TopoDS.Edge(topo.edge(j).Oriented(TopAbs_FORWARD))
+        v0 = topo.vertex_map.FindIndex(TopExp.FirstVertex_s(e, True)) - 1
+        v1 = topo.vertex_map.FindIndex(TopExp.LastVertex_s(e, True)) - 1
+        n = int(counts.counts[j])
+        pts = equal_arc_nodes(c, n)
+        pts[0], pts[-1] = vert_pts[v0], vert_pts[v1]
+        edge_pts[j] = pts
+        edge_ids[j] = np.concatenate(([vert_ids[v0]], nodes.add(pts[1:-1]), [vert_ids[v1]]))
+        edge_mid[j] = np.asarray(c.evaluate(np.array([0.5])))[0]
+    say(f"{len(curves)} edges, {int(counts.counts.sum())} divisions")
+
+    # 4-5. faces
+    quads: list[IntArray] = []
+    quad_face: list[IntArray] = []
+    infos: list[FaceMeshInfo] = []
+    n_quads = 0
+    with gmsh_session():
+        for k, i in enumerate(sel):
+            tf = time.perf_counter()
+            f = topo.face(i)
+            q: IntArray | None = None
+            divisions = None
+            if i in regions:
+                try:
+                    q, uv, pts, gid, divisions = _structured(
+                        regions[i], topo, counts.counts, edge_ids, edge_pts, lengths, diag
+                    )
+                    problem = orient(f, q, uv, pts)[1]
+                    if problem is not None:
+                        raise MeshError(problem)
+                except MedaxError as err:
+                    q, divisions = None, None
+                    why[i] = f"structured grid failed: {err}"
+                    say(f"face {i}: {why[i]}; meshed by gmsh")
+            if q is None:
+                gm = _gmsh_face(f, i, topo, edge_mid, edge_ids, edge_pts, vert_pts, vert_ids,
+                                size, MATCH_TOL * diag)  # fmt: skip
+                q, uv, pts, gid = gm.quads, gm.uv, gm.points, gm.node_id
+            q = oriented(f, i, q, uv, pts)
+            inner = gid < 0
+            gid = gid.copy()
+            gid[inner] = nodes.add(pts[inner])
+            gq = gid[q]
+            quads.append(gq)
+            quad_face.append(np.full(len(gq), i, dtype=np.int64))
+            kind = "structured" if divisions is not None else "gmsh"
+            dt = time.perf_counter() - tf
+            infos.append(
+                FaceMeshInfo(i, kind, n_quads, n_quads + len(gq), dt, divisions, why.get(i, ""))
+            )
+            n_quads += len(gq)
+            if k % 10 == 9 or dt > 2.0:
+                say(f"face {k + 1}/{len(sel)} ({i}: {kind}, {len(gq)} quads, {dt:.2f} s)")
+
+    points = nodes.array()
+    lines = [np.column_stack((ids[:-1], ids[1:])) for ids in edge_ids.values()]
+    line_edge = [np.full(len(ids) - 1, j, dtype=np.int64) for j, ids in edge_ids.items()]
+    mesh = PartMesh(
+        points,
+        np.concatenate(quads) if quads else np.zeros((0, 4), dtype=np.int64),
+        np.concatenate(quad_face) if quad_face else np.zeros(0, dtype=np.int64),
+        np.concatenate(lines) if lines else np.zeros((0, 2), dtype=np.int64),
+        np.concatenate(line_edge) if line_edge else np.zeros(0, dtype=np.int64),
+        counts.counts,
+        tuple(infos),
+        diag,
+        dict(counts.conflicts),
+        time.perf_counter() - t0,
+    )
+    _check(mesh)
+    s = len(mesh.structured_faces)
+    say(f"{len(mesh.quads)} quads, {len(points)} nodes; {s} faces structured, "
+        f"{len(sel) - s} by gmsh; {mesh.time_s:.2f} s")  # fmt: skip
+    return mesh
+
+
+def _side_ids(
+    side: list[Any],
+    topo: Any,
+    edge_ids: dict[int, IntArray],
+    edge_pts: dict[int, FloatArray],
+    lengths: FloatArray,
+) -> tuple[IntArray, FloatArray, FloatArray]:
+    """Node ids and points along a side (its edges in the side's direction, joints once),
+    and the arc-length fractions of its nodes (each edge in equal arc lengths)."""
+    ids: list[IntArray] = []
+    pts: list[FloatArray] = []
+    lens: list[FloatArray] = []
+    for e in side:
+        j = topo.edge_index(e)
+        a, p = edge_ids[j], edge_pts[j]
+        if e.Orientation() == TopAbs_REVERSED:
+            a, p = a[::-1], p[::-1]
+        lens.append(np.full(len(a) - 1, lengths[j] / (len(a) - 1)))
+        ids.append(a if not ids else a[1:])
+        pts.append(p if not pts else p[1:])
+    step = np.concatenate(lens)
+    fr = np.concatenate(([0.0], np.cumsum(step)))
+    fr /= fr[-1]
+    fr[-1] = 1.0
+    return np.concatenate(ids), np.concatenate(pts), fr
+
+
+def _structured(
+    rs: tuple[Region, list[list[Any]]],
+    topo: Any,
+    counts: IntArray,
+    edge_ids: dict[int, IntArray],
+    edge_pts: dict[int, FloatArray],
+    lengths: FloatArray,
+    diag: float,
+) -> tuple[IntArray, FloatArray, FloatArray, IntArray, tuple[int, int]]:
+    """The medial grid of a 4-sided face on the part's edge nodes: local quads, parameters,
+    points, part node ids of the boundary nodes (-1 inside) and the divisions."""
+    region, sides = rs
+    per_side = [_side_ids(s, topo, edge_ids, edge_pts, lengths) for s in sides]
+    n1, n2 = len(per_side[0][0]) - 1, len(per_side[1][0]) - 1
+    if (len(per_side[2][0]) - 1, len(per_side[3][0]) - 1) != (n1, n2):
+        raise MeshError(f"{region.name}: opposite sides have different counts")  # pragma: no cover
+    chained = any(len(s) > 1 for s in sides)
+    fractions = [p[2] for p in per_side] if chained else None
+    mesh = mesh_region(region, divisions=(n1, n2), fractions=fractions)
+    pts = np.array(mesh.points, dtype=np.float64)
+    gid = np.full(len(pts), -1, dtype=np.int64)
+    for k, idx in enumerate(boundary_indices(n1, n2)):
+        ids, ours, _ = per_side[k]
+        off = float(np.max(np.linalg.norm(pts[idx] - ours, axis=1)))
+        if off > BOUNDARY_MATCH * diag:
+            raise MeshError(
+                f"{region.name}: its grid's nodes on side {k} are {off:.3g} from the edge nodes"
+            )
+        gid[idx] = ids
+        pts[idx] = ours
+    return structured_quads(n1, n2), mesh.params, pts, gid, (n1, n2)
+
+
+def _gmsh_face(
+    face: Any,
+    i: int,
+    topo: Any,
+    edge_mid: dict[int, FloatArray],
+    edge_ids: dict[int, IntArray],
+    edge_pts: dict[int, FloatArray],
+    vert_pts: FloatArray,
+    vert_ids: IntArray,
+    size: float,
+    tol: float,
+) -> GmshFace:
+    own = [j for j in topo.face_edges[i] if j in edge_ids]
+
+    def check(m: GmshFace) -> str | None:
+        return orient(face, m.quads, m.uv, m.points)[1]
+
+    vs = sorted({k for j in topo.face_edges[i] for k in topo.edge_vertices[j]})
+    return mesh_face(
+        face,
+        i,
+        {j: edge_mid[j] for j in own},
+        {j: edge_ids[j] for j in own},
+        {j: edge_pts[j] for j in own},
+        vert_pts[vs],
+        vert_ids[vs],
+        size,
+        tol,
+        check,
+    )
+
+
+def _check(mesh: PartMesh) -> None:
+    """No NaN, no two nodes within 1e-9 x diagonal, no node left out."""
+    from scipy.spatial import cKDTree  # noqa: PLC0415
+
+    if not np.all(np.isfinite(mesh.points)):
+        raise MeshError("part mesh: a node is not finite")  # pragma: no cover
+    pairs = cKDTree(mesh.points).query_pairs(1e-9 * mesh.diagonal, output_type="ndarray")
+    if len(pairs):
+        a = mesh.points[pairs[0, 0]]
+        raise MeshError(f"part mesh: {len(pairs)} pairs of duplicate nodes (first at {a.tolist()})")
+    used = np.zeros(len(mesh.points), dtype=bool)
+    used[mesh.quads.ravel()] = True
+    if not used.all():
+        raise MeshError(f"part mesh: {int((~used).sum())} nodes in no quad")  # pragma: no cover
