@@ -129,3 +129,24 @@ def test_reason_kinds_group_numbers():
         "supporting face N: fitted error N above N": 2,
         "meets fillet N in a mitre": 1,
     }
+
+
+def test_fillet_merged_whole_where_one_face_has_no_surface_for_its_half():
+    """A corpus part (Analysis Situs blend corpus, 3boxesblend_01): the fillet's half on one
+    supporting plane cannot merge (that plane continues past the fillet's end beside it: no
+    smooth surface follows the step), so the whole fillet goes into the other plane, on an
+    exact extrusion of a line and the whole quarter circle; the shape is the same."""
+    from pathlib import Path
+
+    from medax.cad.classify import classify_file
+
+    (cls,) = classify_file(str(Path(__file__).parent / "data" / "3boxesblend_01.brep"))
+    specs = specs_from_classification(cls)
+    (fillet,) = specs.fillets
+    r = simplify(cls.shape, specs)
+    assert r.blends_removed == [fillet.face] and r.blends_kept == []
+    assert (r.faces_before, r.faces_after) == (19, 18)
+    (group,) = [g for g in r.face_groups if g.halves]
+    assert group.halves == (fillet.face,) and group.surface == "extrusion"
+    assert any(f"fillet {fillet.face} merged whole" in n for n in r.notes)
+    assert_same_solid(cls.shape, r, 6, 6, volume_tol=1e-9, deviation_tol=1e-9)

@@ -75,16 +75,17 @@ def _ancestors(shape: Any, sub: Any, anc: Any) -> Any:
 
 def build_groups(
     split: SplitResult,
-    fillets: dict[int, tuple[int, int]],
+    fillets: dict[int, tuple[int, ...]],
     corners: dict[int, tuple[int, ...]] | None = None,
 ) -> list[Group]:
     """Groups of the split solid.
 
     ``fillets`` maps each simplified fillet (original face index) to its two supporting
-    faces (original indices); a supporting face may itself be a simplified fillet (a fillet
-    on a fillet, split by a bridge): each piece then joins the one half of it that it
-    touches. ``corners`` maps each split corner blend to its supporting faces (each piece
-    goes to the one whose normal is nearest to the piece's own). Raises
+    faces (original indices), or to the one it merges into whole; a supporting face may
+    itself be a simplified fillet (a fillet on a fillet, split by a bridge): each piece then
+    joins the one half of it that it touches. ``corners`` maps each split corner blend to its
+    supporting faces (each piece goes to the one whose normal is nearest to the piece's
+    own). Raises
     :class:`CadError` when a half does not touch exactly one supporting face or a boundary
     cannot be chained.
     """

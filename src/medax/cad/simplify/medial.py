@@ -39,13 +39,15 @@ class Medial:
     """Medial curve of a fillet: ``edge`` (the splitter tool), the iso direction (``"u"``
     when the curve is ``u = mid``; ``TRACED`` when it is no iso-line, then ``mid`` is nan),
     the mid parameter, the measured equidistance error
-    ``error`` (length unit) and the blend ``radius``."""
+    ``error`` (length unit), the blend ``radius`` and ``cross``, the cross parameters of the
+    two smooth edges (side 0, side 1; nan on a traced curve)."""
 
     edge: Any
     iso: str
     mid: float
     error: float
     radius: float
+    cross: tuple[float, float] = (float("nan"), float("nan"))
 
 
 def _uv(surface: Any, p: np.ndarray) -> tuple[float, float]:
@@ -196,4 +198,4 @@ def medial_curve(
         return Medial(traced[0], TRACED, float("nan"), traced[1], float(radius))
     if err > accept:
         return f"mid iso-line not equidistant ({err:.2e} > {accept / radius:.2g} x radius)"
-    return Medial(edge, iso, float(mid), float(err), float(radius))
+    return Medial(edge, iso, float(mid), float(err), float(radius), (float(c1), float(c2)))

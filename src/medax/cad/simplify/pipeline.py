@@ -16,7 +16,7 @@ import re
 import time
 from collections import Counter
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from OCP.BRepAdaptor import BRepAdaptor_Surface
@@ -29,7 +29,7 @@ from medax.cad.simplify.bridge import bridge_edge
 from medax.cad.simplify.corner import corner_arcs, plane_normal
 from medax.cad.simplify.fitted import FittedSurface, graph_surface
 from medax.cad.simplify.groups import Group, build_groups
-from medax.cad.simplify.medial import Medial, medial_curve
+from medax.cad.simplify.medial import TRACED, Medial, medial_curve
 from medax.cad.simplify.mitre import mitre_keeps, mitre_pairs
 from medax.cad.simplify.occ import count, diagonal, shape_map
 from medax.cad.simplify.rebuild import build_solid
@@ -206,6 +206,7 @@ class _Job:
     cache: dict[tuple[int, ...], FittedSurface | str] = field(default_factory=dict)
     exact: dict[tuple[Any, ...], MergedSurface | str] = field(default_factory=dict)
     area0: float | None = None  # the input's boundary area (measured at the first attempt)
+    whole: dict[int, int] = field(default_factory=dict)  # fillet -> face it merges into whole
 
     @property
     def btol(self) -> float:
@@ -272,6 +273,7 @@ def simplify(
 
     if n_fit:
         _fit_pass(job)
+    _one_sided(job, blends)
     specs, corners = job.specs, job.corners
     first = attempt(specs) if specs else None
     result: _Attempt | None
@@ -301,6 +303,11 @@ def simplify(
         final, dev, vol1, valid = result.shape, result.deviation, result.volume, True
         groups_out = _face_groups(result)
     notes = [] if removed else ["no fillet simplified: output equals input"]
+    notes += [
+        f"fillet {f} merged whole into face {s}: its other face has no surface for a half"
+        for f, s in sorted(job.whole.items())
+        if f in removed
+    ]
     if not blends.fillets and not blends.refused:
         notes = ["no fillets found: output equals input"]
     return SimplifyResult(
@@ -343,7 +350,7 @@ def _corners(job: _Job, blends: BlendInput) -> None:
         if len(normals) != len(cs.supporting):
             job.kept[cs.face] = "corner blend between faces that are not planes (not supported)"
             continue
-        pairs = [by_face[f].supporting for f in cs.fillets]
+        pairs = [(by_face[f].supporting[0], by_face[f].supporting[1]) for f in cs.fillets]
         r = corner_arcs(job.face(cs.face), pairs, normals)
         if isinstance(r, str):
             job.kept[cs.face] = r
@@ -441,7 +448,9 @@ def _surfaces_for(
     for sup, hs in _halves_of(specs).items():
         if sup in specs:  # a simplified fillet: its riders' pieces go to its supports
             continue
-        key = (sup, sup in with_corner, *sorted(hs))
+        # a fillet merged whole (see :func:`_one_sided`) has the same (fillet, edge) as its
+        # half: the medial parameter tells them apart
+        key = (sup, sup in with_corner, *sorted((f, e, job.medials[f].mid) for f, e in hs))
         if key not in job.exact:
             job.exact[key] = _surface_of(job, sup, hs, sup in with_corner)
         ms = job.exact[key]
@@ -476,6 +485,45 @@ def _surface_of(
             f"only (this one is a {kind})"
         )
     return ms
+
+
+#: How a kept fillet's reason names the supporting face that has no surface for its half
+#: (written by :func:`_surfaces_for` and :func:`_fit_round`).
+_FAILED_SUPPORT = re.compile(r"^supporting face (\d+): ")
+
+
+def _one_sided(job: _Job, blends: BlendInput) -> None:
+    """Fillets kept because one supporting face has no surface for their half are merged
+    whole into the other supporting face, where that face then has an exact surface (an
+    extrusion or revolution whose profile runs across the whole fillet): the face that had
+    none is left as it was, the fillet still goes and the shape is the same. Not for
+    fillets meeting corner blends, riding on or ridden by fillets, or traced ones."""
+    by_face = {s.face: s for s in blends.fillets}
+    linked = {f for cs in blends.corners for f in cs.fillets}
+    linked |= {b for s in blends.fillets for b in s.supporting if b in by_face}
+    linked |= {s.face for s in blends.fillets if set(s.supporting) & set(by_face)}
+    for f, why in sorted(job.kept.items()):
+        hit = _FAILED_SUPPORT.match(why)
+        spec, m = by_face.get(f), job.medials.get(f)
+        if hit is None or spec is None or m is None or f in linked or m.iso == TRACED:
+            continue
+        bad = int(hit.group(1))
+        if bad not in spec.supporting or any(bad in s.supporting for s in job.specs.values()):
+            continue  # the failing face keeps other fillets' halves: it is tried with them
+        k = 1 - spec.supporting.index(bad)  # the side whose face takes the whole fillet
+        whole = replace(
+            spec, smooth_edges=(spec.smooth_edges[k],), supporting=(spec.supporting[k],)
+        )
+        trial = {**job.specs, f: whole}
+        job.medials[f] = replace(m, mid=m.cross[1 - k])  # the profile runs to the far edge
+        surfaces, failed = _surfaces_for(job, trial, job.corners)
+        if failed or not isinstance(surfaces.get(spec.supporting[k]), MergedSurface):
+            job.medials[f] = m
+            continue
+        job.specs, job.surfaces = trial, surfaces
+        job.whole[f] = spec.supporting[k]
+        job.kept.pop(f)
+        job.say(f"fillet {f} merged whole into face {spec.supporting[k]} ({why[:60]}...)")
 
 
 def _fitted(job: _Job, split: Any, g: Group, probe: bool = False) -> FittedSurface | str:
@@ -519,7 +567,8 @@ def _ring_applies(why: str) -> bool:
 def _split(job: _Job, sel: dict[int, FilletSpec], csel: dict[int, CornerSpec]) -> Any:
     """The working solid split along the medial curves of ``sel`` and the arcs of ``csel``,
     and its groups."""
-    tools = [job.medials[f].edge for f in sel] + [e for c in csel for e in job.arcs[c]]
+    tools = [job.medials[f].edge for f in sel if f not in job.whole]
+    tools += [e for c in csel for e in job.arcs[c]]
     tools += [e for (f, base), e in job.bridges.items() if f in sel and base in sel]
     split = split_along(job.work, tools)
     groups = build_groups(

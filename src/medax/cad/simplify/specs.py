@@ -36,8 +36,8 @@ class FilletSpec:
     them, ``supporting`` (same order). ``radius`` where constant (length unit), else None."""
 
     face: int
-    smooth_edges: tuple[int, int]
-    supporting: tuple[int, int]
+    smooth_edges: tuple[int, ...]  # two; one for a fillet merged whole into one face
+    supporting: tuple[int, ...]
     radius: float | None = None
     #: Every edge of each constraint side where a side is a chain of several edges
     #: (``smooth_edges`` holds the first of each); None when each side is one edge.

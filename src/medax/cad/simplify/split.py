@@ -34,6 +34,9 @@ class SplitResult:
 
 def split_along(shape: Any, tools: Sequence[Any], fuzzy: float = 0.0) -> SplitResult:
     """Split ``shape`` by the edges ``tools``; raises :class:`CadError` when OCCT fails."""
+    if not tools:  # nothing to split (every fillet merged whole): the shape as it is
+        fmap = shape_map(shape, TopAbs_FACE)
+        return SplitResult(shape, fmap, tuple(range(fmap.Size())))
     args = List_TopoDS_Shape()
     args.Append(shape)
     tl = List_TopoDS_Shape()
