@@ -36,7 +36,14 @@ def _start(part: Path, out: Path, rep: Path) -> subprocess.Popen[str]:
         stderr=subprocess.PIPE,
         text=True,
         env=env,
+        # a shell starting a background job (CI under `cmd &`, nohup) hands it SIGINT
+        # ignored, and Python keeps it so: the child is given the default, as at a terminal
+        preexec_fn=_default_sigint,
     )
+
+
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 @pytest.mark.parametrize(
