@@ -18,7 +18,7 @@ from medax.cad.classify import classify_solid
 from medax.cad.reader import heal
 from medax.cad.simplify import simplify, specs_from_classification
 from medax.cad.simplify.occ import count, edges_of, faces_of
-from medax.cad.simplify.pipeline import _isolate
+from medax.cad.simplify.search import isolate
 from medax.cad.simplify.specs import BlendInput, FilletSpec
 from medax.cad.simplify.split import split_along
 from truth import assert_same_solid
@@ -41,7 +41,7 @@ def test_isolation_keeps_exactly_the_failing_fillets(bad):
         return f"fillet {hit[0]} fails" if hit else ("ok", frozenset(sel))
 
     kept: dict[int, str] = {}
-    best, accepted = _isolate(specs, attempt, kept, lambda m: None, math.inf, "first failed")
+    best, accepted = isolate(specs, attempt, kept, lambda m: None, math.inf, "first failed")
     assert set(kept) == bad
     assert all(kept[f] == f"rebuild failed: fillet {f} fails" for f in bad)
     assert set(accepted) == set(specs) - bad
@@ -54,7 +54,7 @@ def test_isolation_keeps_exactly_the_failing_fillets(bad):
 def test_isolation_out_of_time_keeps_the_rest_with_the_reason():
     specs = _chain(6)
     kept: dict[int, str] = {}
-    best, accepted = _isolate(specs, lambda sel: "fails", kept, lambda m: None, -1.0, "x")
+    best, accepted = isolate(specs, lambda sel: "fails", kept, lambda m: None, -1.0, "x")
     assert best is None and accepted == {}
     assert set(kept) == set(specs)
     assert all("time for finding the failing fillets ran out" in why for why in kept.values())
@@ -121,7 +121,7 @@ def test_report_names_each_kept_blend_and_the_picture_marks_it(corner_kept):
 
 
 def test_reason_kinds_group_numbers():
-    from medax.cad.simplify.pipeline import reason_counts
+    from medax.cad.simplify.reasons import reason_counts
 
     reasons = ["supporting face 4: fitted error 1.2e-02 above 4e-06", "meets fillet 7 in a mitre"]
     reasons.append("supporting face 12: fitted error 3.77e-02 above 4.12e-06")

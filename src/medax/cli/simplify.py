@@ -112,7 +112,7 @@ def _combine(reports: list[dict[str, Any]]) -> dict[str, Any]:
     """One report: the solid's own for one solid; for several, totals (faces, time), the
     worst values (validity, volume and area change, deviation) and each solid's report in
     ``solids`` (face indices are per solid)."""
-    from medax.cad.simplify.pipeline import reason_counts
+    from medax.cad.simplify.reasons import reason_counts
 
     if len(reports) == 1:
         return dict(reports[0])

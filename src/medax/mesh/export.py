@@ -82,6 +82,23 @@ def write_mesh(
     cannot be written; nothing is left behind on failure.
     """
     fmt = format_from_path(path, file_format)
+    pts, q, data = checked_mesh(points, quads, cell_data)
+    target = Path(path)
+    writer = _WRITERS[fmt]
+    try:
+        with atomic_path(target) as tmp:
+            writer(tmp, pts, q, data)
+    except OSError as err:
+        raise OutputError(f"{target}: cannot write ({err.strerror or err})") from None
+    log.info("wrote %s (%s, %d nodes, %d quads)", target, fmt, len(pts), len(q))
+    return target
+
+
+def checked_mesh(
+    points: FloatArray, quads: IntArray, cell_data: Mapping[str, FloatArray] | None
+) -> tuple[FloatArray, IntArray, dict[str, FloatArray]]:
+    """``points`` (n, 2|3) finite, ``quads`` (m, 4) indices into them and each cell data
+    array (m,), as float / int arrays; :class:`MeshError` naming what is wrong."""
     pts = np.asarray(points, dtype=np.float64)
     q = np.asarray(quads, dtype=np.int64)
     if pts.ndim != 2 or pts.shape[1] not in (2, 3) or not np.all(np.isfinite(pts)):
@@ -92,15 +109,7 @@ def write_mesh(
     for k, v in data.items():
         if v.shape != (q.shape[0],):
             raise MeshError(f"export: cell data '{k}' has shape {v.shape}, want ({q.shape[0]},)")
-    target = Path(path)
-    writer = _WRITERS[fmt]
-    try:
-        with atomic_path(target) as tmp:
-            writer(tmp, pts, q, data)
-    except OSError as err:
-        raise OutputError(f"{target}: cannot write ({err.strerror or err})") from None
-    log.info("wrote %s (%s, %d nodes, %d quads)", target, fmt, len(pts), len(q))
-    return target
+    return pts, q, data
 
 
 def _pad3(points: FloatArray) -> FloatArray:

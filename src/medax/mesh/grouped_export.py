@@ -34,6 +34,7 @@ from medax.mesh.export import (
     ABAQUS_PLANE_QUAD,
     ABAQUS_SHELL_QUAD,
     _pad3,
+    checked_mesh,
     format_from_path,
     nastran_real,
 )
@@ -103,17 +104,8 @@ def write_grouped_mesh(
 ) -> Path:
     """Write ``quads`` (m, 4) over ``points`` (n, 2|3) with ``groups`` to ``path``."""
     fmt = format_from_path(path, file_format)
-    pts = np.asarray(points, dtype=np.float64)
-    q = np.asarray(quads, dtype=np.int64)
-    if pts.ndim != 2 or pts.shape[1] not in (2, 3) or not np.all(np.isfinite(pts)):
-        raise MeshError(f"export: points must be finite (n, 2|3), got shape {pts.shape}")
-    if q.ndim != 2 or q.shape[1] != 4 or (q.size and (q.min() < 0 or q.max() >= len(pts))):
-        raise MeshError(f"export: quads must be (m, 4) indices into {len(pts)} points")
+    pts, q, data = checked_mesh(points, quads, cell_data)
     groups.check(len(pts), len(q))
-    data = {k: np.asarray(v, dtype=np.float64) for k, v in (cell_data or {}).items()}
-    for k, v in data.items():
-        if v.shape != (q.shape[0],):
-            raise MeshError(f"export: cell data '{k}' has shape {v.shape}, want ({q.shape[0]},)")
     target = Path(path)
     writer = {
         "msh": _msh,

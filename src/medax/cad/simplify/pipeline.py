@@ -14,8 +14,7 @@ from __future__ import annotations
 import logging
 import re
 import time
-from collections import Counter
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -32,8 +31,10 @@ from medax.cad.simplify.groups import Group, build_groups
 from medax.cad.simplify.medial import TRACED, Medial, medial_curve
 from medax.cad.simplify.mitre import mitre_keeps, mitre_pairs
 from medax.cad.simplify.occ import count, diagonal, shape_map
+from medax.cad.simplify.reasons import reason_counts
 from medax.cad.simplify.rebuild import build_solid
 from medax.cad.simplify.ring import NOT_A_RING, ring_surface
+from medax.cad.simplify.search import halves_of, isolate, riders
 from medax.cad.simplify.specs import BlendInput, CornerSpec, FilletSpec
 from medax.cad.simplify.split import split_along
 from medax.cad.simplify.surfaces import Half, MergedSurface, merged_surface
@@ -155,18 +156,6 @@ class SimplifyResult:
         }
 
 
-def reason_kind(why: str) -> str:
-    """A kept blend's reason with its numbers (face indices, measures) replaced by ``N``:
-    the key under which the report groups reasons."""
-    return re.sub(r"[-+]?\d+(\.\d+)?(e[-+]?\d+)?", "N", why)
-
-
-def reason_counts(reasons: Iterable[str]) -> dict[str, int]:
-    """How many kept blends have each :func:`reason_kind`, most frequent first."""
-    counts = Counter(reason_kind(r) for r in reasons)
-    return dict(counts.most_common())
-
-
 @dataclass
 class _Attempt:
     shape: Any
@@ -280,7 +269,7 @@ def simplify(
     if isinstance(first, str):
         say(f"rebuild with all fillets failed ({first}); isolating the failing fillets")
         deadline = time.perf_counter() + time_budget
-        result, specs = _isolate(specs, attempt, kept, say, deadline, first)
+        result, specs = isolate(specs, attempt, kept, say, deadline, first)
     else:
         result = first
     used_corners = (
@@ -382,16 +371,6 @@ def _bridges(job: _Job, blends: BlendInput) -> None:
             job.bridges[(spec.face, base)] = r[0]
 
 
-def _riders(specs: dict[int, FilletSpec]) -> dict[int, list[int]]:
-    """Simplified fillet -> the simplified fillets that ride on it (have it as support)."""
-    out: dict[int, list[int]] = {}
-    for s in specs.values():
-        for base in s.supporting:
-            if base in specs:
-                out.setdefault(base, []).append(s.face)
-    return out
-
-
 def _cascade(specs: dict[int, FilletSpec], corners: dict[int, CornerSpec], kept) -> None:  # type: ignore[no-untyped-def]
     """A corner blend goes only with all its fillets, and a fillet only with its corners:
     drop both ways until nothing changes."""
@@ -408,15 +387,6 @@ def _cascade(specs: dict[int, FilletSpec], corners: dict[int, CornerSpec], kept)
                         specs.pop(f)
                         kept.setdefault(f, f"meets corner blend {c}, which is kept")
                 changed = True
-
-
-def _halves_of(specs: dict[int, FilletSpec]) -> dict[int, list[tuple[int, int]]]:
-    """supporting face -> [(fillet face, smooth edge index)]."""
-    out: dict[int, list[tuple[int, int]]] = {}
-    for s in specs.values():
-        for e, sup in zip(s.smooth_edges, s.supporting, strict=True):
-            out.setdefault(sup, []).append((s.face, e))
-    return out
 
 
 def _refresh_surfaces(job: _Job) -> None:
@@ -443,9 +413,9 @@ def _surfaces_for(
     blends ``corners`` (``FITTED`` where a fitted route serves), and the fillets of the
     first face that has none, each with the reason (empty when every face has one)."""
     with_corner = {s for cs in corners.values() for s in cs.supporting}
-    with_corner |= {s for base in _riders(specs) for s in specs[base].supporting}
+    with_corner |= {s for base in riders(specs) for s in specs[base].supporting}
     surfaces: dict[int, MergedSurface | str] = {}
-    for sup, hs in _halves_of(specs).items():
+    for sup, hs in halves_of(specs).items():
         if sup in specs:  # a simplified fillet: its riders' pieces go to its supports
             continue
         # a fillet merged whole (see :func:`_one_sided`) has the same (fillet, edge) as its
@@ -712,77 +682,6 @@ def _validated(
     if dev > tol * diag:
         return f"surface deviation {dev / diag:.2e} x diagonal (> {tol:g})"
     return dv, da, dev, kinds
-
-
-def _clusters(specs: dict[int, FilletSpec]) -> list[list[int]]:
-    """Fillets linked through shared supporting faces (they must be merged together)."""
-    by_sup = _halves_of(specs)
-    seen: set[int] = set()
-    out = []
-    for f in specs:
-        if f in seen:
-            continue
-        stack, comp = [f], []
-        while stack:
-            x = stack.pop()
-            if x in seen:
-                continue
-            seen.add(x)
-            comp.append(x)
-            for sup in specs[x].supporting:
-                stack.extend(y for y, _ in by_sup[sup])
-                if sup in specs:  # x rides on fillet sup
-                    stack.append(sup)
-            stack.extend(y for y, _ in by_sup.get(x, []))  # fillets riding on x
-        out.append(comp)
-    return out
-
-
-def _isolate(
-    specs: dict[int, FilletSpec],
-    attempt: Callable[[dict[int, FilletSpec]], _Attempt | str],
-    kept: dict[int, str],
-    say: Callable[[str], None],
-    deadline: float,
-    why: str,
-) -> tuple[_Attempt | None, dict[int, FilletSpec]]:
-    """The fillets that rebuild together after the rebuild with all of ``specs`` failed
-    (for the reason ``why``), and their (last successful) attempt.
-
-    Fillets are taken in cluster order (linked fillets next to each other) and added in
-    halves to the accepted set: a half that rebuilds with everything accepted so far is
-    accepted, one that fails is halved again, down to the single fillet, which is kept with
-    the reason of its failure. So one failing fillet costs about 2 log2(n) rebuilds and its
-    neighbours still go, and the result is always an attempt that passed as a whole."""
-    order = [f for c in _clusters(specs) for f in c]
-    accepted: dict[int, FilletSpec] = {}
-    best: _Attempt | None = None
-
-    def rec(fillets: list[int]) -> None:
-        nonlocal best
-        if not fillets:
-            return
-        if time.perf_counter() > deadline:
-            for f in fillets:
-                kept[f] = "not tried alone: the time for finding the failing fillets ran out"
-            return
-        r = attempt({**accepted, **{f: specs[f] for f in fillets}})
-        if not isinstance(r, str):
-            accepted.update({f: specs[f] for f in fillets})
-            best = r
-        elif len(fillets) == 1:
-            kept[fillets[0]] = f"rebuild failed: {r}"
-            say(f"fillet {fillets[0]} kept: {r}")
-        else:
-            rec(fillets[: len(fillets) // 2])
-            rec(fillets[len(fillets) // 2 :])
-
-    if len(order) == 1:  # the failed rebuild with all of them tried this one alone
-        kept[order[0]] = f"rebuild failed: {why}"
-        return None, {}
-    rec(order[: len(order) // 2])
-    rec(order[len(order) // 2 :])
-    return best, accepted
 
 
 def _identity_groups(n: int) -> list[FaceGroup]:

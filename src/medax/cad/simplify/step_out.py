@@ -15,18 +15,12 @@ from OCP.IFSelect import IFSelect_RetDone
 from OCP.IGESControl import IGESControl_Writer
 from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
 
+from medax.cad.reader import EXTENSIONS
 from medax.errors import CadError, InputError
 from medax.io_utils import atomic_path
 
-#: output extension -> format name
-SHAPE_SUFFIXES = {
-    ".step": "step",
-    ".stp": "step",
-    ".iges": "iges",
-    ".igs": "iges",
-    ".brep": "brep",
-    ".brp": "brep",
-}
+#: output extension -> format name: the extensions the reader takes
+SHAPE_SUFFIXES = EXTENSIONS
 
 
 def shape_format(path: str | Path) -> str:

@@ -1,0 +1,108 @@
+"""The search for the fillets that rebuild together, and the fillet relations it uses.
+
+When the rebuild with every fillet fails, :func:`isolate` finds the failing fillets
+themselves by bisection: halves of the fillets, in cluster order, are added to what already
+rebuilds; a half that fails is halved again down to the single fillet, which is kept with
+its own reason. Bookkeeping over face indices only: the rebuild is the caller's ``attempt``.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import TypeVar
+
+from medax.cad.simplify.specs import FilletSpec
+
+#: What a successful ``attempt`` returns (the pipeline's rebuilt and validated solid).
+A = TypeVar("A")
+
+
+def riders(specs: dict[int, FilletSpec]) -> dict[int, list[int]]:
+    """Simplified fillet -> the simplified fillets that ride on it (have it as support)."""
+    out: dict[int, list[int]] = {}
+    for s in specs.values():
+        for base in s.supporting:
+            if base in specs:
+                out.setdefault(base, []).append(s.face)
+    return out
+
+
+def halves_of(specs: dict[int, FilletSpec]) -> dict[int, list[tuple[int, int]]]:
+    """supporting face -> [(fillet face, smooth edge index)]."""
+    out: dict[int, list[tuple[int, int]]] = {}
+    for s in specs.values():
+        for e, sup in zip(s.smooth_edges, s.supporting, strict=True):
+            out.setdefault(sup, []).append((s.face, e))
+    return out
+
+
+def clusters(specs: dict[int, FilletSpec]) -> list[list[int]]:
+    """Fillets linked through shared supporting faces (they must be merged together)."""
+    by_sup = halves_of(specs)
+    seen: set[int] = set()
+    out = []
+    for f in specs:
+        if f in seen:
+            continue
+        stack, comp = [f], []
+        while stack:
+            x = stack.pop()
+            if x in seen:
+                continue
+            seen.add(x)
+            comp.append(x)
+            for sup in specs[x].supporting:
+                stack.extend(y for y, _ in by_sup[sup])
+                if sup in specs:  # x rides on fillet sup
+                    stack.append(sup)
+            stack.extend(y for y, _ in by_sup.get(x, []))  # fillets riding on x
+        out.append(comp)
+    return out
+
+
+def isolate(
+    specs: dict[int, FilletSpec],
+    attempt: Callable[[dict[int, FilletSpec]], A | str],
+    kept: dict[int, str],
+    say: Callable[[str], None],
+    deadline: float,
+    why: str,
+) -> tuple[A | None, dict[int, FilletSpec]]:
+    """The fillets that rebuild together after the rebuild with all of ``specs`` failed
+    (for the reason ``why``), and their (last successful) attempt.
+
+    Fillets are taken in cluster order (linked fillets next to each other) and added in
+    halves to the accepted set: a half that rebuilds with everything accepted so far is
+    accepted, one that fails is halved again, down to the single fillet, which is kept with
+    the reason of its failure. So one failing fillet costs about 2 log2(n) rebuilds and its
+    neighbours still go, and the result is always an attempt that passed as a whole."""
+    order = [f for c in clusters(specs) for f in c]
+    accepted: dict[int, FilletSpec] = {}
+    best: A | None = None
+
+    def rec(fillets: list[int]) -> None:
+        nonlocal best
+        if not fillets:
+            return
+        if time.perf_counter() > deadline:
+            for f in fillets:
+                kept[f] = "not tried alone: the time for finding the failing fillets ran out"
+            return
+        r = attempt({**accepted, **{f: specs[f] for f in fillets}})
+        if not isinstance(r, str):
+            accepted.update({f: specs[f] for f in fillets})
+            best = r
+        elif len(fillets) == 1:
+            kept[fillets[0]] = f"rebuild failed: {r}"
+            say(f"fillet {fillets[0]} kept: {r}")
+        else:
+            rec(fillets[: len(fillets) // 2])
+            rec(fillets[len(fillets) // 2 :])
+
+    if len(order) == 1:  # the failed rebuild with all of them tried this one alone
+        kept[order[0]] = f"rebuild failed: {why}"
+        return None, {}
+    rec(order[: len(order) // 2])
+    rec(order[len(order) // 2 :])
+    return best, accepted
