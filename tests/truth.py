@@ -199,3 +199,35 @@ def assert_same_solid(
     assert abs(r.volume_rel_change) <= volume_tol  # type: ignore[attr-defined]
     old_to_new, new_to_old = boundary_distances(before, r.shape, n_old, n_new)  # type: ignore[attr-defined]
     assert max(old_to_new, new_to_old) <= deviation_tol * r.diagonal  # type: ignore[attr-defined]
+
+
+def face_neighbours(shape: object) -> list[set[int]]:
+    """For each face of ``shape`` (0-based, indexed-map order), the faces it shares an
+    edge with."""
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
+
+    from medax.cad.simplify.occ import shape_map
+    from medax.cad.simplify.specs import edge_face_map
+
+    fmap, emap, e2f = (
+        shape_map(shape, TopAbs_FACE),
+        shape_map(shape, TopAbs_EDGE),
+        edge_face_map(shape),
+    )
+    out: list[set[int]] = [set() for _ in range(fmap.Size())]
+    for i in range(1, emap.Size() + 1):
+        owners = {fmap.FindIndex(f) - 1 for f in e2f.FindFromKey(emap.FindKey(i))}
+        for f in owners:
+            out[f] |= owners - {f}
+    return out
+
+
+def default_volume(shape: object) -> float:
+    """Volume by OCCT's default mass properties (``BRepGProp.VolumeProperties_s`` without
+    a tolerance: fixed-order Gauss), what FreeCAD and CadQuery report."""
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+
+    props = GProp_GProps()
+    BRepGProp.VolumeProperties_s(shape, props)
+    return float(props.Mass())

@@ -37,7 +37,7 @@ def run_part(args: argparse.Namespace) -> int:
     from medax.cad.part_mesh import mesh_part
     from medax.cad.part_report import part_report
     from medax.cli.outputs import JSON_SUFFIXES, Output, check_outputs
-    from medax.io_utils import atomic_path, write_json
+    from medax.io_utils import staged_outputs, write_json
     from medax.mesh.export import format_from_path
     from medax.mesh.grouped_export import MeshGroups, write_grouped_mesh
     from medax.mesh.quality import quad_quality
@@ -82,7 +82,6 @@ def run_part(args: argparse.Namespace) -> int:
     reports = [part_report(m, str(args.regions), args.size) for m in meshes]
     rep: dict[str, Any] = reports[0] if len(reports) == 1 else {"solids": reports}
     total = time.perf_counter() - t0
-    write_grouped_mesh(args.output, points, quads, groups, quality.as_dict(), fmt)
     sj = quality.scaled_jacobian
     n_struct = sum(len(m.structured_faces) for m in meshes)
     n_faces = sum(len(m.faces) for m in meshes)
@@ -91,18 +90,22 @@ def run_part(args: argparse.Namespace) -> int:
         f"structured, {total:.2f} s; scaled Jacobian min {sj.min():.3f} "
         f"p5 {np.percentile(sj, 5):.3f}"
     )
-    print(f"wrote {args.output}")
-    if args.report:
-        rep["total_time_s"] = total
-        write_json(args.report, rep)
-        print(f"wrote {args.report}")
-    if args.plot:
-        from medax.viz.part_plot import plot_part_mesh
+    with staged_outputs() as out:  # all outputs or none
+        target = out.path(args.output, "-o")
+        write_grouped_mesh(target, points, quads, groups, quality.as_dict(), fmt)
+        if args.report:
+            rep["total_time_s"] = total
+            write_json(out.path(args.report, "--report"), rep, "--report")
+        if args.plot:
+            from medax.viz.part_plot import plot_part_mesh
 
-        title = f"{Path(args.regions).name}: {len(quads)} quads, {n_struct}/{n_faces} faces medial"
-        with atomic_path(args.plot) as tmp:
-            plot_part_mesh(points, quads, sj, tmp, title)
-        print(f"wrote {args.plot}")
+            title = (
+                f"{Path(args.regions).name}: {len(quads)} quads, {n_struct}/{n_faces} faces medial"
+            )
+            plot_part_mesh(points, quads, sj, out.path(args.plot, "--plot"), title)
+    for path in (args.output, args.report, args.plot):
+        if path:
+            print(f"wrote {path}")
     return 0
 
 

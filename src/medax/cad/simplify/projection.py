@@ -149,25 +149,22 @@ def _frame(ax: Any) -> tuple[Array, Array, Array, Array]:
 
 
 def _extrusion_projection(surf: Any) -> Callable[[Array], tuple[Array, Array]] | None:
-    """:func:`batch_projection` for a (trimmed) linear extrusion of a B-spline profile in a
-    plane normal to its direction: the points moved along ``d`` into that plane, their
-    global closest points on the profile (:meth:`medax.geometry.curve.Curve.closest`)."""
-    from OCP.Geom import (
-        Geom_BSplineCurve,
-        Geom_RectangularTrimmedSurface,
-        Geom_SurfaceOfLinearExtrusion,
-    )
+    """:func:`batch_projection` for a linear extrusion of a B-spline profile in a plane
+    normal to its direction: a (trimmed) ``Geom_SurfaceOfLinearExtrusion`` (profile in
+    ``u``) or its exact B-spline with the straight direction in ``u``
+    (:func:`.surfaces.extruded_bspline`, the merged faces). The points are moved along ``d``
+    into the profile's plane and their global closest points on the profile found
+    (:meth:`medax.geometry.curve.Curve.closest`)."""
+    from OCP.Geom import Geom_RectangularTrimmedSurface
 
     from medax.cad.face_region import curve_copy
 
     if isinstance(surf, Geom_RectangularTrimmedSurface):
         surf = surf.BasisSurface()
-    if not isinstance(surf, Geom_SurfaceOfLinearExtrusion):
+    found = extrusion_parts(surf)
+    if found is None:
         return None
-    bc = surf.BasisCurve()
-    if not isinstance(bc, Geom_BSplineCurve):
-        return None
-    d = xyz(surf.Direction())
+    bc, d, along_u = found
     curve = curve_copy(bc)
     k0, k1 = bc.FirstParameter(), bc.LastParameter()
     ends = curve.evaluate(np.array([0.0, 0.5, 1.0]))
@@ -178,7 +175,43 @@ def _extrusion_projection(surf: Any) -> Callable[[Array], tuple[Array, Array]] |
     def extrusion(p: Array) -> tuple[Array, Array]:
         q = p - np.outer((p - c0) @ d, d)
         c = curve.closest(q)
-        v = (p - c.foot) @ d
-        return np.column_stack((k0 + c.t * (k1 - k0), v)), c.distance
+        a = (p - c.foot) @ d
+        t = k0 + c.t * (k1 - k0)
+        return np.column_stack((a, t) if along_u else (t, a)), c.distance
 
     return extrusion
+
+
+def extrusion_parts(surf: Any) -> tuple[Any, Array, bool] | None:
+    """(profile ``Geom_BSplineCurve`` at offset 0, unit direction (3,), whether the straight
+    direction is ``u``) of a linear extrusion surface, or None."""
+    from OCP.Geom import Geom_BSplineCurve, Geom_BSplineSurface, Geom_SurfaceOfLinearExtrusion
+    from OCP.gp import gp_Vec
+
+    if isinstance(surf, Geom_SurfaceOfLinearExtrusion):
+        bc = surf.BasisCurve()
+        if not isinstance(bc, Geom_BSplineCurve):
+            return None
+        return bc, xyz(surf.Direction()), False
+    if not isinstance(surf, Geom_BSplineSurface) or surf.UDegree() != 1 or surf.NbUPoles() != 2:
+        return None
+    if surf.IsUPeriodic() or surf.IsVPeriodic() or surf.NbUKnots() != 2:
+        return None
+    a0, a1 = surf.UKnot(1), surf.UKnot(2)
+    n = surf.NbVPoles()
+    rows = np.array([[xyz(surf.Pole(i, j)) for j in range(1, n + 1)] for i in (1, 2)])
+    step = rows[1] - rows[0]
+    scale = max(1.0, float(np.abs(rows).max()))
+    if np.abs(step - step[0]).max() > 1e-12 * scale or a1 <= a0:
+        return None
+    if any(surf.Weight(1, j) != surf.Weight(2, j) for j in range(1, n + 1)):
+        return None
+    d = step[0] / (a1 - a0)
+    if abs(float(np.linalg.norm(d)) - 1.0) > 1e-12:
+        return None
+    iso = surf.UIso(a0)
+    bc = Geom_BSplineCurve.DownCast(iso) if not isinstance(iso, Geom_BSplineCurve) else iso
+    if bc is None:
+        return None
+    bc = bc.Translated(gp_Vec(*map(float, -a0 * d)))
+    return bc, d, True

@@ -233,12 +233,24 @@ def volume_change(
     ), f"volume changed by {max(abs(d_gk), abs(d_ad)):.2e} (> {tol:g})"
 
 
+#: A B-spline face with more knot spans than this is "fitted" for the choice of integrators.
+FEW_SPANS = 16
+
+
 def _has_bspline_faces(shape: Any) -> bool:
-    """Whether ``shape`` has a face on a B-spline surface (the fitted merged faces, or
-    freeform faces of the input)."""
+    """Whether ``shape`` has a face on a B-spline surface of many knot spans (the fitted
+    merged faces, or freeform faces of the input), where Gauss-Kronrod is slow. The exact
+    B-splines of extrusions (one span along the extrusion) are not counted."""
     from OCP.GeomAbs import GeomAbs_BSplineSurface
 
-    return any(BRepAdaptor_Surface(f).GetType() == GeomAbs_BSplineSurface for f in faces_of(shape))
+    for f in faces_of(shape):
+        ad = BRepAdaptor_Surface(f)
+        if ad.GetType() != GeomAbs_BSplineSurface:
+            continue
+        b = ad.BSpline()
+        if (b.NbUKnots() - 1) * (b.NbVKnots() - 1) > FEW_SPANS:
+            return True
+    return False
 
 
 def _has_swept_faces(shape: Any) -> bool:
