@@ -61,6 +61,7 @@ def test_box4_volume_matches_closed_form(box4):
     assert abs(r.volume_rel_change) <= 1e-6
     # what FreeCAD and CadQuery report: fixed-order Gauss, exact on the merged faces as written
     assert abs(default_volume(r.shape) - exact) <= 1e-12 * exact
+    assert abs(r.report()["default_integrator_volume_rel_change"]) <= 1e-12
 
 
 def test_box4_new_faces_cover_old_surface(box4):

@@ -42,6 +42,7 @@ from medax.cad.simplify.validate import (
     area,
     area_change,
     check,
+    default_volume,
     deviation,
     volume,
     volume_change,
@@ -105,6 +106,7 @@ class SimplifyResult:
     fit_error: float = 0.0
     fit_volume_rel_change: float = 0.0
     area_rel_change: float = 0.0
+    default_volume_rel_change: float = 0.0
     notes: list[str] = field(default_factory=list)
     radii: dict[int, float | None] = field(default_factory=dict)
 
@@ -130,6 +132,8 @@ class SimplifyResult:
             "volume_after": self.volume_after,
             "volume_rel_change": self.volume_rel_change,
             "area_rel_change": self.area_rel_change,
+            # what FreeCAD and CadQuery would report: OCCT's default (fixed-order) integrator
+            "default_integrator_volume_rel_change": self.default_volume_rel_change,
             "max_deviation": {
                 "absolute": self.max_deviation,
                 "relative_to_diagonal": self.max_deviation / self.diagonal,
@@ -316,6 +320,7 @@ def simplify(
         fit_error=result.fit_error if result is not None else 0.0,
         fit_volume_rel_change=result.fit_dv if result is not None else 0.0,
         area_rel_change=result.area_change if result is not None else 0.0,
+        default_volume_rel_change=default_volume(final) / default_volume(shape) - 1.0,
         notes=notes,
         radii={spec.face: spec.radius for spec in blends.fillets},
     )
