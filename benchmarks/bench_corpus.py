@@ -27,6 +27,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from medax.cad.simplify.reasons import reason_kind
+
 PARTS = (".step", ".stp", ".brep", ".iges", ".igs")
 
 
@@ -173,6 +175,34 @@ def _row(rec: dict[str, Any]) -> list[str]:
     return rows
 
 
+def markdown(records: list[dict[str, Any]]) -> None:
+    """Print the table as Markdown (the one in ``docs/benchmarks.md``)."""
+    print(
+        "| part | faces | found | removed | valid | dV file (default) | dV file (NURBS, GK) "
+        "| deviation | time | defeaturing |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for rec in records:
+        if rec["status"] != "done":
+            print(f"| {rec['part']} | {rec['status'][:70]} | | | | | | | | |")
+            continue
+        for s in rec["solids"]:
+            d = s["defeaturing"]
+            dfe = (
+                f"{d['faces']}, {'valid' if d['valid'] else 'INVALID'}, "
+                f"{d['volume_rel_change']:+.1e}, {d['time_s']:.1f} s"
+                if d["status"] == "done"
+                else d["status"]
+            )
+            ok = "yes" if s["file_valid"] and s["file_shells"] == 1 else "NO"
+            print(
+                f"| {rec['part']} | {s['faces_before']} -> {s['faces_after']} | {s['found']} "
+                f"| {s['removed']} | {ok} "
+                f"| {s['file_dv_default']:+.1e} | {s['file_dv_nurbs']:+.1e} "
+                f"| {s['deviation_rel']:.1e} | {rec['time_s']:.0f} s | {dfe} |"
+            )
+
+
 def report(records: list[dict[str, Any]]) -> None:
     """Print the table, the totals and the kept reasons grouped."""
     print(
@@ -189,9 +219,8 @@ def report(records: list[dict[str, Any]]) -> None:
             found += s["found"]
             removed += s["removed"]
             for _, why in s["kept"]:
-                key = why.split(":")[0] if why.startswith("supporting face") else why
-                key = " ".join(w if not w.strip(",.;()").isdigit() else "N" for w in key.split())
-                reasons[key[:110]] = reasons.get(key[:110], 0) + 1
+                key = reason_kind(why)[:140]
+                reasons[key] = reasons.get(key, 0) + 1
     bad = [r["part"] for r in records if r["status"] != "done"]
     share = removed / found if found else 0.0
     print(f"\n{len(records)} parts, {found} blends found, {removed} removed ({share:.1%})")
@@ -210,6 +239,7 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--timeout", type=float, default=600.0, help="seconds per part (600)")
     ap.add_argument("--records", default="corpus-records", help="folder of per-part records")
     ap.add_argument("--again", action="store_true", help="rerun parts that have a record")
+    ap.add_argument("--markdown", action="store_true", help="also print the table as Markdown")
     args = ap.parse_args(argv)
     parts: list[Path] = []
     for a in map(Path, args.inputs):
@@ -227,6 +257,8 @@ def main(argv: list[str]) -> int:
         path.write_text(json.dumps(rec) + "\n")
         records.append(rec)
     report(records)
+    if args.markdown:
+        markdown(records)
     return 0
 
 
