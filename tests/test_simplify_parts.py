@@ -247,15 +247,17 @@ def test_box4_area_matches_closed_form(box4):
 def test_area_change_keeps_the_fillets(monkeypatch):
     """A rebuilt solid whose boundary area is off (as a pcurve bump between the sampled
     deviations makes it) is not accepted: the fillets are kept, the input is returned."""
-    from medax.cad.simplify import validate
+    from medax.cad.simplify import pipeline, validate
 
     true_area = validate.area
 
     def inflated(shape, nurbs=None):  # every measure of a rebuilt solid 1e-5 too large
         return true_area(shape, nurbs) * (1.0 + 1e-5)
 
-    # (the input's area is measured through the pipeline's own name: unchanged)
+    # (the input's area is measured through the pipeline's own name: unchanged); the
+    # measure on the changed faces alone cannot settle it, the whole solid's decides
     monkeypatch.setattr(validate, "area", inflated)
+    monkeypatch.setattr(pipeline, "local_area_change", lambda *args: None)
     part = P.box_vertical_fillets(40.0, 30.0, 20.0, 5.0)
     r = _run(part)
     assert (r.faces_before, r.faces_after) == (10, 10) and not r.blends_removed
@@ -311,3 +313,28 @@ def test_edge_parameters_unwrapped_across_the_seam():
     arc = np.column_stack((np.linspace(0.0, 1.2 * math.pi, 5), np.full(5, 0.3)))
     out = _unwrapped(arc, ad, bounds)
     assert np.allclose(out[:, 0], arc[:, 0]) and np.allclose(out[:, 1], 0.3)
+
+
+def test_local_measures_match_whole_solids(box4):
+    """The volume and area changes measured on faces alone (one common point for every
+    face's contribution) equal the whole solids' (Gauss-Kronrod) difference; a change
+    above the tolerance is not settled locally (None: the whole solid is measured)."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.gp import gp_Pnt, gp_Trsf
+
+    from medax.cad.simplify import local_measure as L
+    from medax.cad.simplify.validate import volumes
+
+    part, r = box4
+    old, new = list(faces_of(part.shape)), list(faces_of(r.shape))
+    v_old = volumes(part.shape)[0]
+    assert abs(L.volume_delta(new, old) - (volumes(r.shape)[0] - v_old)) <= 1e-9 * v_old
+    assert abs(L.local_volume_change(new, old, v_old, 1e-6)) <= 1e-12
+    assert abs(L.local_area_change(new, old, L._area(old, 1e-9), 5e-6)) <= 1e-9
+    t = gp_Trsf()
+    t.SetScale(gp_Pnt(0.0, 0.0, 0.0), 1.001)
+    big = list(faces_of(BRepBuilderAPI_Transform(r.shape, t, True).Shape()))
+    d = L.volume_delta(big, old) / v_old
+    assert abs(d - (1.001**3 - 1.0)) <= 1e-9
+    assert L.local_volume_change(big, old, v_old, 1e-6) is None
+    assert L.local_area_change(big, old, L._area(old, 1e-9), 5e-6) is None

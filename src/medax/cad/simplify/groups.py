@@ -9,6 +9,7 @@ these two groups meet, form a *run*: one new edge (the paper's joined semi-smoot
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -30,6 +31,15 @@ from medax.cad.simplify.occ import (
 )
 from medax.cad.simplify.split import SplitResult
 from medax.errors import CadError
+
+
+class GroupError(CadError):
+    """A face group that cannot be formed, with the original ``faces`` (blend faces, or the
+    faces the group's pieces come from) that it is traced to."""
+
+    def __init__(self, message: str, faces: Iterable[int]) -> None:
+        super().__init__(message)
+        self.faces = frozenset(faces)
 
 
 @dataclass
@@ -117,12 +127,14 @@ def build_groups(
             touching = [j for j in face_nbrs(k) if split.origin[j] in supports]
             origins = {split.origin[j] for j in touching}
             if len(origins) != 1:
-                raise CadError(
-                    f"fillet face {blend}: a half touches {len(origins)} supporting faces"
+                raise GroupError(
+                    f"fillet face {blend}: a half touches {len(origins)} supporting faces", {blend}
                 )
             (o,) = origins
             if o in fillets and len(touching) != 1:  # riding on a fillet: on one of its halves
-                raise CadError(f"fillet face {blend}: a piece touches both halves of fillet {o}")
+                raise GroupError(
+                    f"fillet face {blend}: a piece touches both halves of fillet {o}", {blend}
+                )
             for j in touching:
                 parent[find(k)] = find(j)
         for s in supports:
@@ -137,7 +149,9 @@ def build_groups(
             s = _nearest_support(fmap, split, k, corner_supports, corner)
             root = find(split.pieces(s)[0])
             if not any(find(j) == root for j in face_nbrs(k)):
-                raise CadError(f"corner blend {corner}: a piece does not touch face {s}'s group")
+                raise GroupError(
+                    f"corner blend {corner}: a piece does not touch face {s}'s group", {corner}
+                )
             parent[find(k)] = find(split.pieces(s)[0])
     roots = sorted({find(k) for k in range(nface)})
     gid = {r: i for i, r in enumerate(roots)}
@@ -172,7 +186,10 @@ def build_groups(
         return vertex_degree.get(vmap.FindIndex(v), 0)
 
     for g in groups:
-        g.loops = _loops(g, group_of, fmap, emap, vmap, edge_faces, inter_group_degree)
+        try:
+            g.loops = _loops(g, group_of, fmap, emap, vmap, edge_faces, inter_group_degree)
+        except CadError as err:
+            raise GroupError(str(err), {split.origin[k] for k in g.members}) from None
     return groups
 
 
@@ -184,7 +201,7 @@ def _nearest_support(
     p = face_inside_point(piece)
     n = None if p is None else face_normal_at(piece, p)
     if p is None or n is None:
-        raise CadError(f"corner blend {corner}: a piece has no inside point")
+        raise GroupError(f"corner blend {corner}: a piece has no inside point", {corner})
     best, pick = -2.0, supports[0]
     for s in supports:
         ns = face_normal_at(TopoDS.Face(fmap.FindKey(split.pieces(s)[0] + 1)), p)

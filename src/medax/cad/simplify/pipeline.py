@@ -20,21 +20,23 @@ from typing import Any
 
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
+from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.GeomAbs import GeomAbs_Cylinder, GeomAbs_Plane
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_SHELL
 from OCP.TopoDS import TopoDS
 
 from medax.cad.simplify.bridge import bridge_edge
 from medax.cad.simplify.corner import corner_arcs, plane_normal
 from medax.cad.simplify.fitted import FittedSurface, graph_surface
-from medax.cad.simplify.groups import Group, build_groups
+from medax.cad.simplify.groups import Group, GroupError, build_groups
+from medax.cad.simplify.local_measure import local_area_change, local_volume_change
 from medax.cad.simplify.medial import TRACED, Medial, medial_curve
 from medax.cad.simplify.mitre import mitre_keeps, mitre_pairs
 from medax.cad.simplify.occ import count, diagonal, shape_map
 from medax.cad.simplify.reasons import reason_counts
 from medax.cad.simplify.rebuild import build_solid
 from medax.cad.simplify.ring import NOT_A_RING, ring_surface
-from medax.cad.simplify.search import halves_of, isolate, riders
+from medax.cad.simplify.search import Failure, halves_of, isolate, riders
 from medax.cad.simplify.specs import BlendInput, CornerSpec, FilletSpec
 from medax.cad.simplify.split import split_along
 from medax.cad.simplify.surfaces import Half, MergedSurface, merged_surface
@@ -44,6 +46,7 @@ from medax.cad.simplify.validate import (
     check,
     default_volume,
     deviation,
+    free_edge_faces,
     volume,
     volume_change,
 )
@@ -599,7 +602,7 @@ def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
     fit_err = 0.0
     surfaces, failed = _surfaces_for(job, sel, csel)
     if failed:
-        return next(iter(failed.values()))
+        return Failure(next(iter(failed.values())), failed)
     try:
         job.say(f"splitting {len(sel)} fillets and {len(csel)} corner blends along medial curves")
         split, groups = _split(job, sel, csel)
@@ -612,7 +615,7 @@ def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
             if isinstance(ms, str):
                 fs = _fitted(job, split, g)
                 if isinstance(fs, str):
-                    return f"face {g.support}: {fs}"
+                    return Failure(f"face {g.support}: {fs}", _fillets_of(split, [g], sel))
                 used[g.support] = fs.surface
                 fit_err = max(fit_err, fs.error)
                 fitted_dv += fs.volume_change
@@ -621,12 +624,15 @@ def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
         expected = fitted_dv / job.vol0 if fit_err > 0 else None
         job.say(f"rebuilding: {len(groups)} faces")
         shape, faces = build_solid(split, groups, used, job.btol)
+    except GroupError as err:  # traced to faces: blame their fillets (a corner's, its own)
+        blamed = {f for c in err.faces if c in csel for f in csel[c].fillets}
+        return Failure(str(err), blamed | (err.faces & set(sel)))
     except CadError as err:
         return str(err)
     except Exception as err:  # OCCT Standard_Failure subclasses, translated here
         return f"OCCT failed while rebuilding ({type(err).__name__}: {err})"
     try:
-        checked = _validated(job, split, groups, faces, shape, surfaces, expected)
+        checked = _validated(job, split, groups, faces, shape, surfaces, expected, sel)
     except Exception as err:  # OCCT failures while measuring: the solid is not accepted
         return f"OCCT failed while validating ({type(err).__name__}: {err})"
     if isinstance(checked, str):
@@ -648,6 +654,11 @@ def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
     )
 
 
+def _fillets_of(split: Any, groups: list[Group], sel: dict[int, FilletSpec]) -> set[int]:
+    """The fillets of ``sel`` with a half (or the whole) in one of ``groups``."""
+    return {split.origin[k] for g in groups for k in g.halves} & set(sel)
+
+
 def _validated(
     job: _Job,
     split: Any,
@@ -656,36 +667,65 @@ def _validated(
     shape: Any,
     surfaces: dict[int, MergedSurface | str],
     expected: float | None,
+    sel: dict[int, FilletSpec],
 ) -> tuple[float, float, float, dict[int, str]] | str:
-    """The checks of a rebuilt ``shape``: (relative volume change, relative area change,
-    largest deviation, surface kind per group), or the reason it fails."""
+    """The checks of a rebuilt ``shape`` with the fillets ``sel``: (relative volume change,
+    relative area change, largest deviation, surface kind per group), or the reason it fails
+    (a :class:`.search.Failure` naming the fillets of the new faces that failed their own
+    check: validity, free edges, deviation; volume and area are the whole solid's)."""
     diag, tol = job.diag, job.tol
     job.say("validating (analyzer, shell, volume, area, deviation both ways)")
+    merged = [(g, f) for g, f in zip(groups, faces, strict=True) if g.support is not None]
     c = check(shape, with_volume=False)
     if not c.valid:
-        return "rebuilt solid not valid (BRepCheck_Analyzer)"
-    if c.shells != 1 or not c.closed:
-        return f"rebuilt solid has {c.shells} shells / free edges"
-    dv, why = volume_change(shape, job.vol0, VOLUME_TOL, expected)
-    if why:
-        return why
-    if job.area0 is None:
-        job.area0 = area(job.work)
-    da, why = area_change(shape, job.area0, AREA_TOL)
-    if why:
-        return why
+        bad = [g for g, f in merged if not BRepCheck_Analyzer(f).IsValid()]
+        return Failure("rebuilt solid not valid (BRepCheck_Analyzer)", _fillets_of(split, bad, sel))
+    shells = count(job.work, TopAbs_SHELL)  # an outer shell and one per cavity
+    if c.shells != shells or not c.closed:
+        open_faces = free_edge_faces(shape)
+        bad = [g for g, f in merged if any(f.IsSame(o) for o in open_faces)]
+        return Failure(
+            f"rebuilt solid has {c.shells} shells (the input {shells}) / free edges",
+            _fillets_of(split, bad, sel),
+        )
     dev = 0.0
     kinds: dict[int, str] = {}
-    for g, face in zip(groups, faces, strict=True):
-        if g.support is None:
-            continue
+    far: list[Group] = []
+    for g, face in merged:
+        assert g.support is not None
         ms = surfaces[g.support]
         kinds[g.id] = FITTED if isinstance(ms, str) else ms.kind
         n = FITTED_DEVIATION_SAMPLES if isinstance(ms, str) else DEVIATION_SAMPLES
         old = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
-        dev = max(dev, *deviation(old, face, n=n, enough=1e-3 * tol * diag))
-    if dev > tol * diag:
-        return f"surface deviation {dev / diag:.2e} x diagonal (> {tol:g})"
+        d = max(deviation(old, face, n=n, enough=1e-3 * tol * diag))
+        if d > tol * diag:
+            far.append(g)
+        dev = max(dev, d)
+    if far:
+        return Failure(
+            f"surface deviation {dev / diag:.2e} x diagonal (> {tol:g})",
+            _fillets_of(split, far, sel),
+        )
+    # volume and area: on the changed faces when that settles it, else on the whole solid
+    changed = [(g, f) for g, f in zip(groups, faces, strict=True) if not g.untouched]
+    new = [f for _, f in changed]
+    old = [TopoDS.Face(split.face_map.FindKey(k + 1)) for g, _ in changed for k in g.members]
+    dv_local = local_volume_change(new, old, job.vol0, VOLUME_TOL)
+    if dv_local is None:
+        dv, why = volume_change(shape, job.vol0, VOLUME_TOL, expected)
+        if why:
+            return why
+    else:
+        dv = dv_local
+    if job.area0 is None:
+        job.area0 = area(job.work)
+    da_local = local_area_change(new, old, job.area0, AREA_TOL)
+    if da_local is None:
+        da, why = area_change(shape, job.area0, AREA_TOL)
+        if why:
+            return why
+    else:
+        da = da_local
     return dv, da, dev, kinds
 
 

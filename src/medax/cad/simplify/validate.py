@@ -297,6 +297,25 @@ def check(shape: Any, with_volume: bool = True) -> Check:
     return Check(valid, shells, closed, volume(shape) if with_volume else float("nan"))
 
 
+def free_edge_faces(shape: Any) -> list[Any]:
+    """The faces of ``shape`` that have an edge no other face shares (excluding seams and
+    degenerated edges)."""
+    from OCP.TopoDS import TopoDS
+
+    from medax.cad.simplify.specs import edge_face_map
+
+    m = edge_face_map(shape)
+    out: list[Any] = []
+    for i in range(1, m.Extent() + 1):
+        edge = TopoDS.Edge(m.FindKey(i))
+        owners = list(m.FindFromIndex(i))
+        if len(owners) == 1 and not BRep_Tool.Degenerated_s(edge):
+            face = TopoDS.Face(owners[0])
+            if not BRep_Tool.IsClosed_s(edge, face):
+                out.append(face)
+    return out
+
+
 def face_samples(face: Any, n: int = 12) -> Array:
     """Points inside ``face`` on an ``n x n`` UV grid (k, 3), k <= n*n."""
     u0, u1, v0, v1 = uv_bounds(face)
