@@ -18,7 +18,7 @@ from medax.cad.classify import classify_solid
 from medax.cad.reader import heal
 from medax.cad.simplify import simplify, specs_from_classification
 from medax.cad.simplify.occ import count, edges_of, faces_of
-from medax.cad.simplify.search import isolate
+from medax.cad.simplify.search import Failure, isolate
 from medax.cad.simplify.specs import BlendInput, FilletSpec
 from medax.cad.simplify.split import split_along
 from truth import assert_same_solid
@@ -49,6 +49,27 @@ def test_isolation_keeps_exactly_the_failing_fillets(bad):
     assert best == ("ok", frozenset(accepted))
     # about 2 log2(n) rebuilds per failing fillet, not one per fillet
     assert len(calls) <= 2 + 2 * max(len(bad), 1) * math.ceil(math.log2(12))
+
+
+def test_isolation_traced_failures_are_not_bisected():
+    """A failure traced to its fillets (a new face that failed its own check): the others
+    go in one attempt, the traced ones are tried on their own."""
+    specs, bad = _chain(12), {2, 7, 9}
+    calls: list[set[int]] = []
+
+    def attempt(sel):
+        calls.append(set(sel))
+        hit = set(sel) & bad
+        return Failure("their faces fail", hit) if hit else ("ok", frozenset(sel))
+
+    kept: dict[int, str] = {}
+    first = Failure("their faces fail", bad)
+    best, accepted = isolate(specs, attempt, kept, lambda m: None, math.inf, first)
+    assert set(kept) == bad and set(accepted) == set(specs) - bad
+    assert best == ("ok", frozenset(accepted))
+    # the 9 others at once, then the 3 traced ones (together, then split): 6 attempts;
+    # bisection alone took 16
+    assert len(calls) == 6
 
 
 def test_isolation_out_of_time_keeps_the_rest_with_the_reason():

@@ -102,7 +102,7 @@ def isolate(
         kept[f] = f"rebuild failed: {why}"
         say(f"fillet {f} kept: {why}")
 
-    def rec(fillets: list[int]) -> None:
+    def rec(fillets: list[int], known: A | str | None = None) -> None:
         nonlocal best
         if not fillets:
             return
@@ -110,7 +110,7 @@ def isolate(
             for f in fillets:
                 kept[f] = "not tried alone: the time for finding the failing fillets ran out"
             return
-        r = attempt({**accepted, **{f: specs[f] for f in fillets}})
+        r = attempt({**accepted, **{f: specs[f] for f in fillets}}) if known is None else known
         if not isinstance(r, str):
             accepted.update({f: specs[f] for f in fillets})
             best = r
@@ -128,9 +128,5 @@ def isolate(
             rec(fillets[: len(fillets) // 2])
             rec(fillets[len(fillets) // 2 :])
 
-    if len(order) == 1:  # the failed rebuild with all of them tried this one alone
-        kept[order[0]] = f"rebuild failed: {why}"
-        return None, {}
-    rec(order[: len(order) // 2])
-    rec(order[len(order) // 2 :])
+    rec(order, why)  # the rebuild with all of them failed for the reason ``why``
     return best, accepted
