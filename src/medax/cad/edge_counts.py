@@ -9,9 +9,9 @@ as gmsh's automatic transfinite propagation does) and each class takes its membe
 count. Sides made of several edges are then evened on the shorter side, two divisions at
 a time on its coarsest edge (fewest divisions per length: the extra divisions go where the
 side is least resolved, which also keeps the nodes of a chain level with those of the
-opposite chain, as a thin curved strip needs); counts only grow, and stay even. A face whose sides still differ after
-:data:`ROUNDS` passes is a conflict: it is reported, treated as unstructured, and the counts
-are made again without it.
+opposite chain, as a thin curved strip needs); counts only grow, and stay even. A face
+whose sides still differ after :data:`ROUNDS` passes is a conflict: it is reported, treated
+as unstructured, and the counts are made again without it.
 """
 
 from __future__ import annotations
