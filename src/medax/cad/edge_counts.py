@@ -123,7 +123,10 @@ def _propagate(
                 short = list(sides[a] if sa < sb else sides[b])
                 need = abs(sa - sb)
                 while need > 0:  # two more divisions on the coarsest edge of the short side
-                    j = min(short, key=lambda e: (value[root[e]] / max(lengths[e], 1e-300), e))
+                    j = min(
+                        short,
+                        key=lambda e: (int(value[root[e]]) / max(float(lengths[e]), 1e-300), e),
+                    )
                     value[root[j]] += 2
                     need -= 2 * sum(1 for e in short if root[e] == root[j])
                 changed = True
