@@ -232,7 +232,7 @@ def test_face_region_sides():
 
 def test_counts_propagate_and_conflict():
     """Union-find over opposite single edges takes each class's largest count; a chain side
-    is evened by its longest edge; a face whose sides cannot agree is a conflict."""
+    is evened on its coarsest edge; a face whose sides cannot agree is a conflict."""
     lengths = np.array([10.0, 4.0, 10.0, 4.0, 21.0, 4.0])
     # face 0: edges 0..3 (10 x 4); face 1 shares edge 2 and has 4 opposite it
     c = division_counts(lengths, range(6), {0: [[0], [1], [2], [3]], 1: [[2], [3], [4], [5]]}, 1.0)
@@ -381,3 +381,161 @@ def test_demo_part_mesh(tmp_path):
     assert (box["n_faces"], box["n_structured_faces"], box["open_mesh_edges"]) == (6, 6, 0)
     bracket = json.loads((tmp_path / "part-mesh-l-bracket.json").read_text())
     assert (bracket["n_faces"], bracket["n_structured_faces"]) == (11, 8)
+
+
+def _area(poly):
+    x, y = poly[:, 0], poly[:, 1]
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+@pytest.mark.parametrize(
+    ("uv", "tris", "area"),
+    [
+        # a flat pair: node 1 halfway along the straight boundary 0-2 (one quad would have
+        # a corner of 180 degrees there)
+        ([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [1.0, 1.0]], [[0, 1, 3], [1, 2, 3]], 1.0),
+        # an arrow-shaped 4-gon (reflex at node 3) split along its outer diagonal 0-2:
+        # one triangle inverted, the two overlapping (seen from gmsh in a narrow gap)
+        ([[0.0, -1.0], [2.0, 0.0], [0.0, 1.0], [1.0, 0.0]], [[0, 1, 2], [0, 2, 3]], 1.0),
+    ],
+)
+def test_pair_triangles_make_valid_quads(uv, tris, area):
+    """Each pair of neighbouring triangles left by a recombination becomes 5 quads that
+    tile the pair's 4-gon: every corner turns counter-clockwise (strictly), the areas add
+    up to the 4-gon's, and each outer edge is used once."""
+    from medax.cad.gmsh_faces import pair_triangles
+
+    uv = np.array(uv)
+    new_uv, quads = pair_triangles(np.array(tris), uv, 1.0)
+    assert new_uv.shape == (4, 2) and quads.shape == (5, 4)
+    allv = np.vstack((uv, new_uv))
+    for q in quads:
+        p = allv[q]
+        e = np.roll(p, -1, axis=0) - p
+        b = np.roll(e, 1, axis=0)
+        sine = (b[:, 0] * e[:, 1] - b[:, 1] * e[:, 0]) / (
+            np.linalg.norm(b, axis=1) * np.linalg.norm(e, axis=1)
+        )
+        assert sine.min() > 0.05, sine
+    assert sum(_area(allv[q]) for q in quads) == pytest.approx(area, rel=1e-12)
+    used = [tuple(sorted(e)) for q in quads.tolist() for e in zip(q, q[1:] + q[:1], strict=True)]
+    for e in ((0, 1), (1, 2), (2, 3), (0, 3)):  # the 4-gon's sides, once each
+        assert used.count(e) == 1
+
+
+def test_pair_triangles_refuses_lone_triangles():
+    from medax.cad.gmsh_faces import pair_triangles
+
+    uv = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [5.0, 5.0], [6.0, 5.0], [5.0, 6.0]])
+    assert pair_triangles(np.array([[0, 1, 2], [3, 4, 5]]), uv, 1.0) is None
+    assert pair_triangles(np.array([[0, 1, 2]]), uv, 1.0) is None
+
+
+def test_face_nothing_meshes_gets_finer_edges(monkeypatch):
+    """A face that gmsh refuses at the part's counts has its edges divided twice finer (the
+    counts propagated), the part is meshed again with the faces whose edges kept their counts
+    kept; the result passes the same checks. Refused at every count: the run fails naming
+    the face."""
+    import medax.cad.part_mesh as pm
+    from medax.errors import MeshError
+
+    shape, first = _meshed("plate_with_boss")
+    topo = build_topology(shape)
+    target = first.gmsh_faces[0]
+    need = 2 * sum(int(first.edge_counts[j]) for j in topo.face_edges[target])
+    real = pm.mesh_face
+    calls: dict[int, int] = {}
+
+    def picky(face, index, edge_mid, edge_ids, *args, **kwargs):
+        calls[index] = calls.get(index, 0) + 1
+        n = sum(len(ids) - 1 for ids in edge_ids.values())
+        if index == target and n < need:
+            raise MeshError(f"face {index}: refused at {n} divisions")
+        return real(face, index, edge_mid, edge_ids, *args, **kwargs)
+
+    monkeypatch.setattr(pm, "mesh_face", picky)
+    m = mesh_part(shape, SIZE)
+    for j in topo.face_edges[target]:
+        assert m.edge_counts[j] >= 2 * first.edge_counts[j]
+    for i in first.gmsh_faces:
+        same = all(m.edge_counts[j] == first.edge_counts[j] for j in topo.face_edges[i])
+        assert calls[i] == 1 if same else calls[i] in (1, 2)  # (1: after the target)
+    assert any(all(m.edge_counts[j] == first.edge_counts[j] for j in topo.face_edges[i])
+               for i in first.gmsh_faces)  # fmt: skip
+    test_shared_nodes_and_closed((shape, m))
+    test_quads_face_outward((shape, m))
+    test_nodes_on_their_faces((shape, m))
+
+    need = 10**9
+    with pytest.raises(MeshError, match=rf"face {target}: refused .*divided 8 times finer"):
+        mesh_part(shape, SIZE)
+
+
+def _u_channel(w=100.0, r=10.0, h=20.0, t=1.0, depth=60.0):
+    """A thin U profile (wall ``t``) in the yz plane, legs ``h``, arcs of radius ``r``
+    inside and ``r + t`` outside, a bottom ``w`` long, extruded ``depth`` along x: its two
+    end faces are thin curved 4-sided strips."""
+    from OCP.BRepBuilderAPI import (
+        BRepBuilderAPI_MakeEdge,
+        BRepBuilderAPI_MakeFace,
+        BRepBuilderAPI_MakeWire,
+    )
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakePrism
+    from OCP.GC import GC_MakeArcOfCircle
+    from OCP.gp import gp_Vec
+
+    a, b, c = w / 2, w / 2 + r, np.sqrt(0.5)
+    wire = BRepBuilderAPI_MakeWire()
+
+    def p(y, z):
+        return gp_Pnt(0.0, y, z)
+
+    def line(y0, z0, y1, z1):
+        wire.Add(BRepBuilderAPI_MakeEdge(p(y0, z0), p(y1, z1)).Edge())
+
+    def arc(y0, z0, ym, zm, y1, z1):
+        wire.Add(BRepBuilderAPI_MakeEdge(GC_MakeArcOfCircle(p(y0, z0), p(ym, zm),
+                                                            p(y1, z1)).Value()).Edge())  # fmt: skip
+
+    ro = r + t
+    line(-b, r + h, -b, r)
+    arc(-b, r, -a - r * c, r - r * c, -a, 0.0)
+    line(-a, 0.0, a, 0.0)
+    arc(a, 0.0, a + r * c, r - r * c, b, r)
+    line(b, r, b, r + h)
+    line(b, r + h, b + t, r + h)
+    line(b + t, r + h, b + t, r)
+    arc(b + t, r, a + ro * c, r - ro * c, a, -t)
+    line(a, -t, -a, -t)
+    arc(-a, -t, -a - ro * c, r - ro * c, -b - t, r)
+    line(-b - t, r, -b - t, r + h)
+    line(-b - t, r + h, -b, r + h)
+    face = BRepBuilderAPI_MakeFace(wire.Wire()).Face()
+    return BRepPrimAPI_MakePrism(face, gp_Vec(depth, 0.0, 0.0)).Shape()
+
+
+def test_thin_curved_strip_structured():
+    """The end faces of a thin U channel (1 mm wall): at size 4.1 the inner arcs' own
+    counts (4) are below the outer arcs' (6). The chains are evened on the coarsest edges
+    (the inner arcs, not the long bottom), so the nodes across the strip stay level and
+    every face takes the medial grid with near-rectangular quads."""
+    shape = _u_channel()
+    m = mesh_part(shape, 4.1)
+    assert len(m.structured_faces) == len(m.faces) == 14 and not m.conflicts
+    assert quad_quality(m.points, m.quads).scaled_jacobian.min() > 0.95
+    test_shared_nodes_and_closed((shape, m))
+    test_quads_face_outward((shape, m))
+    test_nodes_on_their_faces((shape, m))
+
+
+def test_counts_even_chains_on_their_coarsest_edges():
+    """Opposite chains (20, 17.28, 100, 17.28, 20) and (20, 15.71, 100, 15.71, 20) at size
+    4: 6 + 6 + 26 + 6 + 6 against 6 + 4 + 26 + 4 + 6; the two arcs of the short chain (the
+    fewest divisions per length) take the 4 missing divisions, edge for edge like the other
+    chain."""
+    outer = [20.0, 17.28, 100.0, 17.28, 20.0]
+    inner = [20.0, 15.71, 100.0, 15.71, 20.0]
+    lengths = np.array([1.0, *outer, 1.0, *inner])
+    c = division_counts(lengths, range(12), {0: [[0], [1, 2, 3, 4, 5], [6], [11, 10, 9, 8, 7]]},
+                        4.0)  # fmt: skip
+    assert c.counts[1:6].tolist() == c.counts[7:12].tolist() == [6, 6, 26, 6, 6]

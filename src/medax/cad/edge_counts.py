@@ -6,10 +6,12 @@ target size (``2 ceil(L / 2H)``: even, so that every face, whatever its number o
 an even number of boundary edges and can be meshed with quads only). Edges that are whole
 opposite sides of a structured face are joined into classes (union-find over those pairs,
 as gmsh's automatic transfinite propagation does) and each class takes its members' largest
-count. Sides made of several edges are then evened by raising the shorter side's longest
-edge's class (counts only grow, and stay even). A face whose sides still differ after
-:data:`ROUNDS` passes is a conflict: it is reported, treated as unstructured, and the counts
-are made again without it.
+count. Sides made of several edges are then evened on the shorter side, two divisions at
+a time on its coarsest edge (fewest divisions per length: the extra divisions go where the
+side is least resolved, which also keeps the nodes of a chain level with those of the
+opposite chain, as a thin curved strip needs); counts only grow, and stay even. A face
+whose sides still differ after :data:`ROUNDS` passes is a conflict: it is reported, treated
+as unstructured, and the counts are made again without it.
 """
 
 from __future__ import annotations
@@ -118,9 +120,15 @@ def _propagate(
                 sb = int(value[root[list(sides[b])]].sum())
                 if sa == sb:
                     continue
-                short = sides[a] if sa < sb else sides[b]
-                j = max(short, key=lambda e: float(lengths[e]))
-                value[root[j]] += abs(sa - sb)
+                short = list(sides[a] if sa < sb else sides[b])
+                need = abs(sa - sb)
+                while need > 0:  # two more divisions on the coarsest edge of the short side
+                    j = min(
+                        short,
+                        key=lambda e: (int(value[root[e]]) / max(float(lengths[e]), 1e-300), e),
+                    )
+                    value[root[j]] += 2
+                    need -= 2 * sum(1 for e in short if root[e] == root[j])
                 changed = True
         if not changed:
             return value[root], {}

@@ -9,6 +9,10 @@ inverted or flat against the face normal), the face is meshed again (:data:`ATTE
 quasi-structured quads, Frontal-Delaunay, and both Frontal-Delaunays with half the counts
 and every element split into quads (``Mesh.SubdivisionAlgorithm = 1``), which doubles the
 boundary divisions back to the part's counts (quasi-structured splits by itself).
+Triangles the recombination leaves in neighbouring pairs (where the pair's one quad would
+have a flat or reflex corner, or gmsh's two triangles overlap in a narrow gap) become five
+quads each (:func:`pair_triangles`); such a mesh is kept only when no attempt gives quads
+alone.
 
 Node sharing is exact by construction: gmsh's nodes on a curve are matched, in order along
 it, to the part's nodes of that edge (:mod:`medax.cad.edge_nodes`, equal arc length) and
@@ -50,6 +54,12 @@ ATTEMPTS = (
     (8, True, 0.5),
     (8, False, 0.25),
 )
+#: least distance (x the 4-gon's diameter) from the point the 5 quads of a triangle pair
+#: are built about to the 4-gon's edges (:func:`pair_triangles`)
+_KERNEL_MARGIN = 0.02
+#: least sine of the inner quad's corners when it is the 4-gon scaled by half (else its
+#: nodes go on a circle, which makes it convex)
+_INNER_SINE = 0.2
 #: seconds one gmsh attempt on one face may take (run in a forked child, killed after)
 ATTEMPT_TIMEOUT = 60.0
 #: a gmsh node on a curve may be this share of the local spacing away from the part's node
@@ -60,13 +70,15 @@ _MATCH_SHARE = 0.3
 class GmshFace:
     """A face's gmsh mesh: ``points`` (k, 3), surface parameters ``uv`` (k, 2), local quads
     (m, 4) and ``node_id`` (k,): the part's node id of each boundary node, -1 inside;
-    ``subdivided``: whether the all-quad subdivision was needed."""
+    ``subdivided``: whether the all-quad subdivision was needed; ``paired``: the triangle
+    pairs the recombination left that became 5 quads each (:func:`pair_triangles`)."""
 
     points: FloatArray
     uv: FloatArray
     quads: IntArray
     node_id: IntArray
     subdivided: bool
+    paired: int = 0
 
 
 def mesh_face(
@@ -93,6 +105,7 @@ def mesh_face(
         if not BRepTools.Write_s(face, str(path)):
             raise MeshError(f"face {index}: could not write it for gmsh")
         last = "triangles left by the recombination"
+        fallback: GmshFace | None = None  # the first valid mesh with triangle pairs replaced
         for algorithm, subdivide, inner in ATTEMPTS:
 
             def attempt(algorithm: int = algorithm, subdivide: bool = subdivide,
@@ -116,9 +129,14 @@ def mesh_face(
                     gmsh.model.remove()
 
             result = _with_timeout(attempt, ATTEMPT_TIMEOUT)
-            if isinstance(result, GmshFace):
+            if isinstance(result, GmshFace) and not result.paired:
                 return result
-            last = result
+            if isinstance(result, GmshFace):
+                fallback = fallback or result
+            else:
+                last = result
+        if fallback is not None:
+            return fallback
         raise MeshError(f"face {index}: gmsh could not mesh it with valid quads only ({last})")
 
 
@@ -204,9 +222,11 @@ def _mesh(
     gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
     gmsh.model.mesh.generate(2)
     types, _, conn = gmsh.model.mesh.getElements(2, tag)
-    if any(int(t) != _QUAD for t in types) or not len(types):
+    by_type = {int(t): np.asarray(c, dtype=np.int64) for t, c in zip(types, conn, strict=True)}
+    if set(by_type) - {_QUAD, _TRIANGLE} or _QUAD not in by_type:
         return None
-    quads_tags = np.asarray(conn[0], dtype=np.int64).reshape(-1, 4)
+    quads_tags = by_type[_QUAD].reshape(-1, 4)
+    tris_tags = by_type.get(_TRIANGLE, np.zeros(0, dtype=np.int64)).reshape(-1, 3)
     tags, coord, _ = gmsh.model.mesh.getNodes(2, tag, True, False)
     # (nodes on a seam are listed twice)
     tags, first = np.unique(np.asarray(tags, dtype=np.int64), return_index=True)
@@ -216,7 +236,18 @@ def _mesh(
     # surface parameters of every node (gmsh does not keep them on all inner nodes)
     par = gmsh.model.getParametrization(2, tag, pts.ravel().tolist())
     uv = np.asarray(par, dtype=np.float64).reshape(-1, 2)
-    node_id = np.full(tags.size, -1, dtype=np.int64)
+    quads = local[quads_tags]
+    n_pairs = len(tris_tags) // 2
+    if len(tris_tags):  # triangles blossom left: pairs of neighbours become 5 quads each
+        paired = pair_triangles(local[tris_tags], uv, _turn(uv, quads))
+        if paired is None:
+            return None
+        new_uv, new_quads = paired
+        new_pts = gmsh.model.getValue(2, tag, new_uv.ravel().tolist())
+        pts = np.vstack((pts, np.asarray(new_pts, dtype=np.float64).reshape(-1, 3)))
+        uv = np.vstack((uv, new_uv))
+        quads = np.vstack((quads, new_quads))
+    node_id = np.full(len(pts), -1, dtype=np.int64)
     for c, j in curve_edge.items():
         ids, ours = edge_ids[j], edge_pts[j]
         ctags, ccoord, cpar = gmsh.model.mesh.getNodes(1, c, False, True)
@@ -242,7 +273,138 @@ def _mesh(
         rows = local[ct]
         node_id[rows] = inner_ids
         pts[rows] = inner_pts
-    return GmshFace(pts, uv, local[quads_tags], node_id, subdivide)
+    return GmshFace(pts, uv, quads, node_id, subdivide, n_pairs)
+
+
+def pair_triangles(
+    tris: IntArray, uv: FloatArray, turn: float
+) -> tuple[FloatArray, IntArray] | None:
+    """Quads in place of the triangles ``tris`` (t, 3) (node rows into ``uv`` (k, 2)) that
+    a recombination left, when they pair off into neighbours (sharing an edge): each pair's
+    4-gon (its four outer nodes, turned the way ``turn`` (+1 / -1) says the face's quads
+    turn in ``uv``) becomes 5 quads, an inner quad and four trapezoids, with the inner
+    nodes on the rays from the middle of one of its diagonals (one that sees the whole
+    4-gon) to its corners. This stays valid where the one quad of the pair would have a
+    flat or reflex corner (why the recombination left them), and where gmsh's two triangles
+    overlap (split along the outer diagonal of a reflex 4-gon). Returns the new nodes'
+    parameters (4 per pair) and the quads (5 per pair; new node rows from ``len(uv)``), or
+    None when some triangle has no partner or a 4-gon has no such point."""
+    t = len(tris)
+    if t % 2:
+        return None
+    edge_of: dict[tuple[int, int], list[int]] = {}
+    for k, tri in enumerate(tris.tolist()):
+        for a in range(3):
+            key = (min(tri[a], tri[a - 2]), max(tri[a], tri[a - 2]))
+            edge_of.setdefault(key, []).append(k)
+    partners: list[set[int]] = [set() for _ in range(t)]
+    for ks in edge_of.values():
+        if len(ks) == 2:
+            partners[ks[0]].add(ks[1])
+            partners[ks[1]].add(ks[0])
+    mate = _match(partners)
+    if mate is None:
+        return None
+    new_uv: list[FloatArray] = []
+    quads: list[list[int]] = []
+    nxt = len(uv)
+    for k in range(t):
+        m = mate[k]
+        if m < k:
+            continue
+        a, b = tris[k].tolist(), tris[m].tolist()
+        shared = set(a) & set(b)
+        # rotate a to (p, q, r) with (q, r) shared; b runs r -> q -> s
+        while a[0] in shared:
+            a = a[1:] + a[:1]
+        p, q, r = a
+        (s,) = set(b) - shared
+        ring = [p, q, s, r]
+        if _area(uv[ring]) * turn < 0.0:
+            ring = ring[::-1]
+        corner = uv[ring]
+        mids = 0.5 * (corner[:2] + corner[2:])
+        margin = [_margin(corner, c, turn) for c in mids]
+        if max(margin) < _KERNEL_MARGIN:
+            return None
+        mid = mids[int(np.argmax(margin))]
+        inner = mid + 0.5 * (corner - mid)
+        if _least_sine(inner, turn) < _INNER_SINE:  # (a flat or reflex 4-gon): on a circle
+            d = np.linalg.norm(corner - mid, axis=1)
+            inner = mid + (corner - mid) * (0.5 * d.min() / d)[:, None]
+        ids = list(range(nxt, nxt + 4))
+        nxt += 4
+        new_uv.append(inner)
+        quads.append(ids)
+        for i in range(4):
+            quads.append([ring[i], ring[(i + 1) % 4], ids[(i + 1) % 4], ids[i]])
+    return np.concatenate(new_uv), np.asarray(quads, dtype=np.int64)
+
+
+def _match(partners: list[set[int]]) -> list[int] | None:
+    """A perfect matching of the triangles' neighbour graph (few triangles: greedy on the
+    fewest partners first, then augmenting paths), or None."""
+    t = len(partners)
+    mate = [-1] * t
+    for k in sorted(range(t), key=lambda k: len(partners[k])):
+        if mate[k] < 0:
+            free = [m for m in partners[k] if mate[m] < 0]
+            if free:
+                m = min(free, key=lambda m: len(partners[m]))
+                mate[k], mate[m] = m, k
+    for k in range(t):
+        if mate[k] < 0 and not _augment(k, partners, mate, set()):
+            return None
+    return mate
+
+
+def _augment(k: int, partners: list[set[int]], mate: list[int], seen: set[int]) -> bool:
+    """An alternating path from free triangle ``k`` to another free one (bipartite-style
+    search; enough for the few, mostly paired triangles a recombination leaves)."""
+    seen.add(k)
+    for m in partners[k]:
+        if m in seen:
+            continue
+        seen.add(m)
+        if mate[m] < 0 or (mate[m] not in seen and _augment(mate[m], partners, mate, seen)):
+            mate[k], mate[m] = m, k
+            return True
+    return False
+
+
+def _area(poly: FloatArray) -> float:
+    """Signed area of the polygon ``poly`` (n, 2)."""
+    x, y = poly[:, 0], poly[:, 1]
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+def _turn(uv: FloatArray, quads: IntArray) -> float:
+    """+1 when the quads mostly turn counter-clockwise in ``uv``, else -1."""
+    if not len(quads):
+        return 1.0
+    x, y = uv[quads, 0], uv[quads, 1]
+    area = np.sum(x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y)
+    return 1.0 if area >= 0.0 else -1.0
+
+
+def _margin(poly: FloatArray, c: FloatArray, turn: float) -> float:
+    """The least distance from ``c`` (2,) to the lines of the edges of ``poly`` (n, 2),
+    signed (positive on the inner side of every edge for a polygon turning the way ``turn``
+    says: ``c`` then sees the whole polygon), over the polygon's diameter."""
+    e = np.roll(poly, -1, axis=0) - poly
+    w = c - poly
+    dist = turn * (e[:, 0] * w[:, 1] - e[:, 1] * w[:, 0]) / np.linalg.norm(e, axis=1)
+    diameter = float(np.max(np.linalg.norm(poly[:, None] - poly[None], axis=2)))
+    return float(dist.min()) / diameter
+
+
+def _least_sine(poly: FloatArray, turn: float) -> float:
+    """The least sine of the corner angles of ``poly`` (n, 2), negative at a corner that
+    turns against ``turn``."""
+    e = np.roll(poly, -1, axis=0) - poly
+    b = np.roll(e, 1, axis=0)
+    cross = turn * (b[:, 0] * e[:, 1] - b[:, 1] * e[:, 0])
+    return float(np.min(cross / (np.linalg.norm(b, axis=1) * np.linalg.norm(e, axis=1))))
 
 
 def _vertices(

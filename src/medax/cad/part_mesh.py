@@ -16,8 +16,11 @@ Steps (:func:`mesh_part`):
    checked). A face the medial grid cannot mesh is handed to gmsh, with the reason kept.
 5. Other faces: gmsh, on the same edge nodes (:mod:`medax.cad.gmsh_faces`).
 6. Every face's quads are turned to the outward normal of the face and checked corner by
-   corner against it (:mod:`medax.cad.quad_orientation`); an inverted quad fails the run with
-   the face's index.
+   corner against it (:mod:`medax.cad.quad_orientation`).
+7. A face nothing meshes (e.g. its fixed boundary nodes too coarse for a narrow gap between
+   two of its edges) has its edges' counts doubled, as lower bounds propagated like the
+   others, and the part is meshed again; faces whose edges keep their counts keep their
+   meshes. After :data:`REFINE_ROUNDS` such rounds the run fails with the face's index.
 
 The result holds the quads with their CAD face, and each edge's nodes as line elements
 with their CAD edge, for the named groups of the writers (:mod:`medax.mesh.grouped_export`).
@@ -60,6 +63,10 @@ BOUNDARY_MATCH = 1e-5
 MIN_CLOSED_COUNT = 6
 #: points closer than this (x diagonal) are the same point when matching gmsh's entities
 MATCH_TOL = 1e-6
+#: rounds in which a face nothing meshes (e.g. fixed boundary nodes too coarse for a narrow
+#: gap between its edges) has its edges' counts doubled, as lower bounds propagated like the
+#: others, before the run fails
+REFINE_ROUNDS = 3
 
 
 @dataclass(frozen=True)
@@ -182,113 +189,230 @@ def mesh_part(
             why[i] = str(err)
     say(f"{len(sel)} faces, {len(regions)} 4-sided")
 
-    # 2. counts
+    # 2-5, in rounds: a face nothing meshes gets its edges divided twice finer, and the part
+    # is meshed again (the faces whose edges kept their counts keep their meshes)
     edges = sorted({j for i in sel for j in topo.face_edges[i]})
     curves = {j: edge_curve(topo.edge(j)) for j in edges if not topo.degenerate[j]}
     lengths = np.zeros(topo.n_edges)
     for j, c in curves.items():
         lengths[j] = c.length()
-    four = {
-        i: [[topo.edge_index(e) for e in side] for side in sides]
-        for i, (_, sides) in regions.items()
-    }
     closed = np.array([len(v) == 1 for v in topo.edge_vertices], dtype=bool)
-    minimum = np.where(closed, MIN_CLOSED_COUNT, 2).astype(np.int64)
-    counts = division_counts(lengths, list(curves), four, size, minimum)
-    for i, reason in counts.conflicts.items():
-        why[i] = f"division counts conflict: {reason}"
-        regions.pop(i)
-    if counts.conflicts:
-        say(f"{len(counts.conflicts)} faces with conflicting counts meshed by gmsh")
-
-    # 3. vertex and edge nodes
-    nodes = _Nodes()
-    vmap = topo.vertex_map
-    vert_ids = np.full(vmap.Extent(), -1, dtype=np.int64)
-    vert_pts = np.zeros((vmap.Extent(), 3))
-    used_v = sorted({k for j in edges for k in topo.edge_vertices[j]})
-    for k in used_v:
-        p = BRep_Tool.Pnt_s(TopoDS.Vertex(vmap.FindKey(k + 1)))
-        vert_pts[k] = (p.X(), p.Y(), p.Z())
-    vert_ids[used_v] = nodes.add(vert_pts[used_v])
-    edge_ids: dict[int, IntArray] = {}
-    edge_pts: dict[int, FloatArray] = {}
-    edge_mid: dict[int, FloatArray] = {}
-    for j, c in curves.items():
-        e = TopoDS.Edge(topo.edge(j).Oriented(TopAbs_FORWARD))
-        v0 = topo.vertex_map.FindIndex(TopExp.FirstVertex_s(e, True)) - 1
-        v1 = topo.vertex_map.FindIndex(TopExp.LastVertex_s(e, True)) - 1
-        n = int(counts.counts[j])
-        pts = equal_arc_nodes(c, n)
-        pts[0], pts[-1] = vert_pts[v0], vert_pts[v1]
-        edge_pts[j] = pts
-        edge_ids[j] = np.concatenate(([vert_ids[v0]], nodes.add(pts[1:-1]), [vert_ids[v1]]))
-        edge_mid[j] = np.asarray(c.evaluate(np.array([0.5])))[0]
-    say(f"{len(curves)} edges, {int(counts.counts.sum())} divisions")
-
-    # 4-5. faces
-    quads: list[IntArray] = []
-    quad_face: list[IntArray] = []
-    infos: list[FaceMeshInfo] = []
-    n_quads = 0
-    with gmsh_session():
-        for k, i in enumerate(sel):
-            tf = time.perf_counter()
-            f = topo.face(i)
-            q: IntArray | None = None
-            divisions = None
-            if i in regions:
-                try:
-                    q, uv, pts, gid, divisions = _structured(
-                        regions[i], topo, counts.counts, edge_ids, edge_pts, lengths, diag
-                    )
-                    problem = orient(f, q, uv, pts)[1]
-                    if problem is not None:
-                        raise MeshError(problem)
-                except MedaxError as err:
-                    q, divisions = None, None
-                    why[i] = f"structured grid failed: {err}"
-                    say(f"face {i}: {why[i]}; meshed by gmsh")
-            if q is None:
-                gm = _gmsh_face(f, i, topo, edge_mid, edge_ids, edge_pts, vert_pts, vert_ids,
-                                size, MATCH_TOL * diag)  # fmt: skip
-                q, uv, pts, gid = gm.quads, gm.uv, gm.points, gm.node_id
-            q = oriented(f, i, q, uv, pts)
-            inner = gid < 0
-            gid = gid.copy()
-            gid[inner] = nodes.add(pts[inner])
-            gq = gid[q]
-            quads.append(gq)
-            quad_face.append(np.full(len(gq), i, dtype=np.int64))
-            kind = "structured" if divisions is not None else "gmsh"
-            dt = time.perf_counter() - tf
-            infos.append(
-                FaceMeshInfo(i, kind, n_quads, n_quads + len(gq), dt, divisions, why.get(i, ""))
-            )
-            n_quads += len(gq)
-            if k % 10 == 9 or dt > 2.0:
-                say(f"face {k + 1}/{len(sel)} ({i}: {kind}, {len(gq)} quads, {dt:.2f} s)")
-
-    points = nodes.array()
-    lines = [np.column_stack((ids[:-1], ids[1:])) for ids in edge_ids.values()]
-    line_edge = [np.full(len(ids) - 1, j, dtype=np.int64) for j, ids in edge_ids.items()]
-    mesh = PartMesh(
-        points,
-        np.concatenate(quads) if quads else np.zeros((0, 4), dtype=np.int64),
-        np.concatenate(quad_face) if quad_face else np.zeros(0, dtype=np.int64),
-        np.concatenate(lines) if lines else np.zeros((0, 2), dtype=np.int64),
-        np.concatenate(line_edge) if line_edge else np.zeros(0, dtype=np.int64),
-        counts.counts,
-        tuple(infos),
-        diag,
-        dict(counts.conflicts),
-        time.perf_counter() - t0,
-    )
+    floor = np.where(closed, MIN_CLOSED_COUNT, 2).astype(np.int64)
+    part = _Part(topo, sel, edges, curves, lengths, size, diag, say)
+    cache: dict[int, _FaceResult] = {}
+    for rnd in range(REFINE_ROUNDS + 1):
+        try:
+            mesh = part.mesh(dict(regions), dict(why), floor, cache, t0)
+            break
+        except _FaceFailed as err:
+            if rnd == REFINE_ROUNDS:
+                raise MeshError(
+                    f"{err}; also with its edges divided {2**rnd} times finer" if rnd else str(err)
+                ) from None
+            counts = err.counts
+            for j in topo.face_edges[err.face]:
+                if j in curves:
+                    floor[j] = max(int(floor[j]), 2 * int(counts[j]))
+            say(f"{err}; its edges divided twice finer, meshing again")
     _check(mesh)
     s = len(mesh.structured_faces)
-    say(f"{len(mesh.quads)} quads, {len(points)} nodes; {s} faces structured, "
+    say(f"{len(mesh.quads)} quads, {len(mesh.points)} nodes; {s} faces structured, "
         f"{len(sel) - s} by gmsh; {mesh.time_s:.2f} s")  # fmt: skip
     return mesh
+
+
+class _FaceFailed(MeshError):
+    """Nothing meshed face ``face`` at the edge counts ``counts``."""
+
+    def __init__(self, face: int, message: str, counts: IntArray) -> None:
+        super().__init__(message)
+        self.face = face
+        self.counts = counts
+
+
+@dataclass(frozen=True)
+class _FaceResult:
+    """A face's mesh, kept across rounds while its edges keep their counts ``key``: local
+    quads (oriented), points, and for each local node the edge ``edge`` it lies on (-1: a
+    vertex, -2: inside) and its ``pos``ition on that edge (or the vertex index)."""
+
+    key: tuple[int, ...]
+    quads: IntArray
+    points: FloatArray
+    edge: IntArray
+    pos: IntArray
+    kind: str
+    divisions: tuple[int, int] | None
+    why: str
+    time_s: float
+
+
+@dataclass
+class _Part:
+    """What stays the same across the rounds of :func:`mesh_part`."""
+
+    topo: Any
+    sel: list[int]
+    edges: list[int]
+    curves: dict[int, Any]
+    lengths: FloatArray
+    size: float
+    diag: float
+    say: Callable[[str], None]
+
+    def mesh(
+        self,
+        regions: dict[int, tuple[Region, list[list[Any]]]],
+        why: dict[int, str],
+        floor: IntArray,
+        cache: dict[int, _FaceResult],
+        t0: float,
+    ) -> PartMesh:
+        """One round: counts with lower bounds ``floor``, edge nodes, faces (from ``cache``
+        where their edges' counts are the same); :class:`_FaceFailed` for a face nothing
+        meshes."""
+        topo, sel, curves, diag, say = self.topo, self.sel, self.curves, self.diag, self.say
+        # 2. counts
+        four = {
+            i: [[topo.edge_index(e) for e in side] for side in sides]
+            for i, (_, sides) in regions.items()
+        }
+        counts = division_counts(self.lengths, list(curves), four, self.size, floor)
+        for i, reason in counts.conflicts.items():
+            why[i] = f"division counts conflict: {reason}"
+            regions.pop(i)
+        if counts.conflicts:
+            say(f"{len(counts.conflicts)} faces with conflicting counts meshed by gmsh")
+
+        # 3. vertex and edge nodes
+        nodes = _Nodes()
+        vmap = topo.vertex_map
+        vert_ids = np.full(vmap.Extent(), -1, dtype=np.int64)
+        vert_pts = np.zeros((vmap.Extent(), 3))
+        used_v = sorted({k for j in self.edges for k in topo.edge_vertices[j]})
+        for k in used_v:
+            p = BRep_Tool.Pnt_s(TopoDS.Vertex(vmap.FindKey(k + 1)))
+            vert_pts[k] = (p.X(), p.Y(), p.Z())
+        vert_ids[used_v] = nodes.add(vert_pts[used_v])
+        edge_ids: dict[int, IntArray] = {}
+        edge_pts: dict[int, FloatArray] = {}
+        edge_mid: dict[int, FloatArray] = {}
+        for j, c in curves.items():
+            e = TopoDS.Edge(topo.edge(j).Oriented(TopAbs_FORWARD))
+            v0 = vmap.FindIndex(TopExp.FirstVertex_s(e, True)) - 1
+            v1 = vmap.FindIndex(TopExp.LastVertex_s(e, True)) - 1
+            n = int(counts.counts[j])
+            pts = equal_arc_nodes(c, n)
+            pts[0], pts[-1] = vert_pts[v0], vert_pts[v1]
+            edge_pts[j] = pts
+            edge_ids[j] = np.concatenate(([vert_ids[v0]], nodes.add(pts[1:-1]), [vert_ids[v1]]))
+            edge_mid[j] = np.asarray(c.evaluate(np.array([0.5])))[0]
+        say(f"{len(curves)} edges, {int(counts.counts.sum())} divisions")
+        # which edge (-1: vertex) and position each boundary node has
+        owner = np.full(nodes.n, -2, dtype=np.int64)
+        where = np.zeros(nodes.n, dtype=np.int64)
+        owner[vert_ids[used_v]] = -1
+        where[vert_ids[used_v]] = used_v
+        for j, ids in edge_ids.items():
+            owner[ids[1:-1]] = j
+            where[ids[1:-1]] = np.arange(1, len(ids) - 1)
+
+        # 4-5. faces
+        quads: list[IntArray] = []
+        quad_face: list[IntArray] = []
+        infos: list[FaceMeshInfo] = []
+        n_quads = 0
+        with gmsh_session():
+            for k, i in enumerate(sel):
+                key = tuple(int(counts.counts[j]) for j in topo.face_edges[i])
+                res = cache.get(i)
+                if res is None or res.key != key:
+                    res = self._face(i, key, regions, why, counts.counts, edge_ids, edge_pts,
+                                     edge_mid, vert_pts, vert_ids, owner, where)  # fmt: skip
+                    cache[i] = res
+                    if k % 10 == 9 or res.time_s > 2.0:
+                        say(f"face {k + 1}/{len(sel)} ({i}: {res.kind}, {len(res.quads)} quads, "
+                            f"{res.time_s:.2f} s)")  # fmt: skip
+                gid = np.full(len(res.points), -1, dtype=np.int64)
+                on_v, on_e = res.edge == -1, res.edge >= 0
+                gid[on_v] = vert_ids[res.pos[on_v]]
+                for j in np.unique(res.edge[on_e]).tolist():
+                    at = res.edge == j
+                    gid[at] = edge_ids[j][res.pos[at]]
+                inner = res.edge == -2
+                gid[inner] = nodes.add(res.points[inner])
+                gq = gid[res.quads]
+                quads.append(gq)
+                quad_face.append(np.full(len(gq), i, dtype=np.int64))
+                infos.append(FaceMeshInfo(i, res.kind, n_quads, n_quads + len(gq), res.time_s,
+                                          res.divisions, res.why))  # fmt: skip
+                n_quads += len(gq)
+
+        points = nodes.array()
+        lines = [np.column_stack((ids[:-1], ids[1:])) for ids in edge_ids.values()]
+        line_edge = [np.full(len(ids) - 1, j, dtype=np.int64) for j, ids in edge_ids.items()]
+        return PartMesh(
+            points,
+            np.concatenate(quads) if quads else np.zeros((0, 4), dtype=np.int64),
+            np.concatenate(quad_face) if quad_face else np.zeros(0, dtype=np.int64),
+            np.concatenate(lines) if lines else np.zeros((0, 2), dtype=np.int64),
+            np.concatenate(line_edge) if line_edge else np.zeros(0, dtype=np.int64),
+            counts.counts,
+            tuple(infos),
+            diag,
+            dict(counts.conflicts),
+            time.perf_counter() - t0,
+        )
+
+    def _face(
+        self,
+        i: int,
+        key: tuple[int, ...],
+        regions: dict[int, tuple[Region, list[list[Any]]]],
+        why: dict[int, str],
+        counts: IntArray,
+        edge_ids: dict[int, IntArray],
+        edge_pts: dict[int, FloatArray],
+        edge_mid: dict[int, FloatArray],
+        vert_pts: FloatArray,
+        vert_ids: IntArray,
+        owner: IntArray,
+        where: IntArray,
+    ) -> _FaceResult:
+        """Face ``i`` meshed: the medial grid if it is 4-sided (gmsh if that fails), else
+        gmsh; :class:`_FaceFailed` when nothing meshes it."""
+        topo, diag = self.topo, self.diag
+        tf = time.perf_counter()
+        f = topo.face(i)
+        q: IntArray | None = None
+        divisions = None
+        if i in regions:
+            try:
+                q, uv, pts, gid, divisions = _structured(
+                    regions[i], topo, counts, edge_ids, edge_pts, self.lengths, diag
+                )
+                problem = orient(f, q, uv, pts)[1]
+                if problem is not None:
+                    raise MeshError(problem)
+            except MedaxError as err:
+                q, divisions = None, None
+                why[i] = f"structured grid failed: {err}"
+                self.say(f"face {i}: {why[i]}; meshed by gmsh")
+        try:
+            if q is None:
+                gm = _gmsh_face(f, i, topo, edge_mid, edge_ids, edge_pts, vert_pts, vert_ids,
+                                self.size, MATCH_TOL * diag)  # fmt: skip
+                q, uv, pts, gid = gm.quads, gm.uv, gm.points, gm.node_id
+            q = oriented(f, i, q, uv, pts)
+        except MeshError as err:
+            raise _FaceFailed(i, str(err), counts) from None
+        edge = np.full(len(pts), -2, dtype=np.int64)
+        pos = np.zeros(len(pts), dtype=np.int64)
+        on = gid >= 0
+        edge[on], pos[on] = owner[gid[on]], where[gid[on]]
+        kind = "structured" if divisions is not None else "gmsh"
+        dt = time.perf_counter() - tf
+        return _FaceResult(key, q, pts, edge, pos, kind, divisions, why.get(i, ""), dt)
 
 
 def _side_ids(
