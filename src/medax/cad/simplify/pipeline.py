@@ -489,6 +489,8 @@ def _one_sided(job: _Job, blends: BlendInput) -> None:
         if bad not in spec.supporting or any(bad in s.supporting for s in job.specs.values()):
             continue  # the failing face keeps other fillets' halves: it is tried with them
         k = 1 - spec.supporting.index(bad)  # the side whose face takes the whole fillet
+        if not abs(m.cross[1 - k]) < 1e99:  # OCCT's "infinite": the far edge did not project
+            continue
         whole = replace(
             spec, smooth_edges=(spec.smooth_edges[k],), supporting=(spec.supporting[k],)
         )

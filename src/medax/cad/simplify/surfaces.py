@@ -16,6 +16,7 @@ Anything else returns a reason string; the caller keeps those fillets.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -79,10 +80,8 @@ def _half_params(half: Half) -> tuple[float, float, float]:
     cross, along = (u, v) if half.medial.iso == "u" else (v, u)
     mid = half.medial.mid
     # bring the edge parameter within half a period of mid (periodic directions)
-    while cross - mid > np.pi:
-        cross -= 2 * np.pi
-    while mid - cross > np.pi:
-        cross += 2 * np.pi
+    if math.isfinite(cross - mid):
+        cross = mid + math.remainder(cross - mid, 2 * math.pi)
     over = mid + np.sign(mid - cross) * MEDIAL_OVERSHOOT
     return float(cross), float(over), float(along)
 
