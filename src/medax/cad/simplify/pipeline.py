@@ -12,7 +12,6 @@ never returned: at worst the result is the input itself with every fillet kept.
 from __future__ import annotations
 
 import logging
-import re
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -203,6 +202,8 @@ class _Job:
     exact: dict[tuple[Any, ...], MergedSurface | str] = field(default_factory=dict)
     area0: float | None = None  # the input's boundary area (measured at the first attempt)
     whole: dict[int, int] = field(default_factory=dict)  # fillet -> face it merges into whole
+    # fillet -> its supporting face that has no surface for its half (why it was kept)
+    no_surface: dict[int, int] = field(default_factory=dict)
 
     @property
     def btol(self) -> float:
@@ -409,17 +410,20 @@ def _refresh_surfaces(job: _Job) -> None:
         if not failed:
             job.surfaces = surfaces
             return
-        for f, why in failed.items():
-            kept.setdefault(f, why)
+        for f, (sup, why) in failed.items():
+            if f not in kept:
+                kept[f] = why
+                job.no_surface[f] = sup
             specs.pop(f, None)
 
 
 def _surfaces_for(
     job: _Job, specs: dict[int, FilletSpec], corners: dict[int, CornerSpec]
-) -> tuple[dict[int, MergedSurface | str], dict[int, str]]:
+) -> tuple[dict[int, MergedSurface | str], dict[int, tuple[int, str]]]:
     """The merged surface of every supporting face for the fillets ``specs`` and corner
     blends ``corners`` (``FITTED`` where a fitted route serves), and the fillets of the
-    first face that has none, each with the reason (empty when every face has one)."""
+    first face that has none, each with that face and the reason (empty when every face
+    has one)."""
     with_corner = {s for cs in corners.values() for s in cs.supporting}
     with_corner |= {s for base in riders(specs) for s in specs[base].supporting}
     surfaces: dict[int, MergedSurface | str] = {}
@@ -433,7 +437,7 @@ def _surfaces_for(
             job.exact[key] = _surface_of(job, sup, hs, sup in with_corner)
         ms = job.exact[key]
         if isinstance(ms, str) and ms != FITTED:
-            return surfaces, {f: f"supporting face {sup}: {ms}" for f, _ in hs}
+            return surfaces, {f: (sup, f"supporting face {sup}: {ms}") for f, _ in hs}
         surfaces[sup] = ms
     return surfaces, {}
 
@@ -465,11 +469,6 @@ def _surface_of(
     return ms
 
 
-#: How a kept fillet's reason names the supporting face that has no surface for its half
-#: (written by :func:`_surfaces_for` and :func:`_fit_round`).
-_FAILED_SUPPORT = re.compile(r"^supporting face (\d+): ")
-
-
 def _one_sided(job: _Job, blends: BlendInput) -> None:
     """Fillets kept because one supporting face has no surface for their half are merged
     whole into the other supporting face, where that face then has an exact surface (an
@@ -481,11 +480,10 @@ def _one_sided(job: _Job, blends: BlendInput) -> None:
     linked |= {b for s in blends.fillets for b in s.supporting if b in by_face}
     linked |= {s.face for s in blends.fillets if set(s.supporting) & set(by_face)}
     for f, why in sorted(job.kept.items()):
-        hit = _FAILED_SUPPORT.match(why)
+        bad = job.no_surface.get(f)
         spec, m = by_face.get(f), job.medials.get(f)
-        if hit is None or spec is None or m is None or f in linked or m.iso == TRACED:
+        if bad is None or spec is None or m is None or f in linked or m.iso == TRACED:
             continue
-        bad = int(hit.group(1))
         if bad not in spec.supporting or any(bad in s.supporting for s in job.specs.values()):
             continue  # the failing face keeps other fillets' halves: it is tried with them
         k = 1 - spec.supporting.index(bad)  # the side whose face takes the whole fillet
@@ -592,7 +590,9 @@ def _fit_round(job: _Job, probe: bool) -> bool:
         for f, s in list(job.specs.items()):
             if sup in s.supporting:
                 job.specs.pop(f)
-                job.kept.setdefault(f, f"supporting face {sup}: {why}")
+                if f not in job.kept:
+                    job.kept[f] = f"supporting face {sup}: {why}"
+                    job.no_surface[f] = sup
     _cascade(job.specs, job.corners, job.kept)
     return True
 
@@ -604,7 +604,7 @@ def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
     fit_err = 0.0
     surfaces, failed = _surfaces_for(job, sel, csel)
     if failed:
-        return Failure(next(iter(failed.values())), failed)
+        return Failure(next(iter(failed.values()))[1], failed)
     try:
         job.say(f"splitting {len(sel)} fillets and {len(csel)} corner blends along medial curves")
         split, groups = _split(job, sel, csel)
