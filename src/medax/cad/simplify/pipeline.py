@@ -712,7 +712,7 @@ def _validated(
     changed = [(g, f) for g, f in zip(groups, faces, strict=True) if not g.untouched]
     new = [f for _, f in changed]
     old = [TopoDS.Face(split.face_map.FindKey(k + 1)) for g, _ in changed for k in g.members]
-    dv_local = local_volume_change(new, old, job.vol0, VOLUME_TOL)
+    dv_local = local_volume_change(new, old, job.vol0, VOLUME_TOL, expected)
     if dv_local is None:
         dv, why = volume_change(shape, job.vol0, VOLUME_TOL, expected)
         if why:
