@@ -102,7 +102,7 @@ def child(part: str, out_dir: str) -> dict[str, Any]:
     t0 = time.perf_counter()
     classes = classify_file(part)
     rec["classify_s"] = time.perf_counter() - t0
-    solids = []
+    solids: list[dict[str, Any]] = []
     for k, cls in enumerate(classes):
         specs = specs_from_classification(cls)
         r = simplify(cls.shape, specs)
@@ -118,6 +118,9 @@ def child(part: str, out_dir: str) -> dict[str, Any]:
             "deviation_rel": r.max_deviation / r.diagonal,
             "simplify_s": r.time_s,
         }
+        # what simplify did, before the file checks (which can take longer on big parts)
+        partial = {**rec, "solids": [*solids, s], "time_s": time.perf_counter() - t0}
+        print(json.dumps({**partial, "partial": True}), flush=True)
         path = Path(out_dir) / f"{Path(part).stem}.{k}.step"
         write_step(r.shape, path)
         back = read_part(path, unify=False).solids[0]
@@ -145,8 +148,14 @@ def run_part(part: Path, out_dir: Path, timeout: float) -> dict[str, Any]:
             text=True,
             timeout=timeout,
         )
-    except subprocess.TimeoutExpired:
-        return {"part": part.name, "status": f"timeout after {timeout:.0f} s"}
+    except subprocess.TimeoutExpired as err:
+        out = err.stdout.decode() if isinstance(err.stdout, bytes) else (err.stdout or "")
+        partial = [ln for ln in out.splitlines() if ln.startswith("{")]
+        if not partial:
+            return {"part": part.name, "status": f"timeout after {timeout:.0f} s"}
+        rec = json.loads(partial[-1])
+        rec["status"] = f"simplified in {rec['time_s']:.0f} s; file checks past {timeout:.0f} s"
+        return rec
     lines = [ln for ln in p.stdout.splitlines() if ln.startswith("{")]
     if p.returncode != 0 or not lines:
         tail = (p.stderr.strip().splitlines() or ["no output"])[-1]
@@ -186,7 +195,14 @@ def markdown(records: list[dict[str, Any]]) -> None:
     print("|---|---|---|---|---|---|---|---|---|---|")
     for rec in records:
         if rec["status"] != "done":
-            print(f"| {rec['part']} | {rec['status'][:70]} | | | | | | | | |")
+            for s in rec.get("solids", []):  # simplified, the file checks not finished
+                print(
+                    f"| {rec['part']} | {s['faces_before']} -> {s['faces_after']} "
+                    f"| {s['found']} | {s['removed']} | {rec['status']} | | | "
+                    f"{s['deviation_rel']:.1e} | {s['simplify_s']:.0f} s | |"
+                )
+            if not rec.get("solids"):
+                print(f"| {rec['part']} | {rec['status'][:70]} | | | | | | | | |")
             continue
         for s in rec["solids"]:
             d = s["defeaturing"]
@@ -215,6 +231,9 @@ def report(records: list[dict[str, Any]]) -> None:
     found = removed = 0
     reasons: dict[str, int] = {}
     for rec in records:
+        if rec["status"] != "done":  # totals over parts checked to the end
+            print(f"{rec['part'][:40]:40s} {rec['status']}")
+            continue
         for line in _row(rec):
             print(line)
         for s in rec.get("solids", []):
