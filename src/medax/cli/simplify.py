@@ -111,10 +111,11 @@ def run(args: argparse.Namespace) -> int:
             f"deviation {r.max_deviation / r.diagonal:.1e} x diagonal"
         )
     written = report["written_file"]
+    dv_key = "default_integrator_volume_rel_change"
     if written["max_deviation"] > args.tol * diag:
         print(
             f"note: {Path(args.output).name} reads back up to {written['max_deviation']:.2g} "
-            f"from the validated solid (volume {written['volume_rel_change']:+.1e}), within "
+            f"from the validated solid (volume {written[dv_key]:+.1e}), within "
             f"the input's own edge tolerances ({written['allowed_deviation']:.2g} allowed); "
             "a .brep output keeps it exact"
         )
