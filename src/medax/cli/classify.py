@@ -97,8 +97,11 @@ def classify_part(
     for k, s in enumerate(part.solids):
         c = classify_solid(s, angle, source=part.source, unit=part.unit, index=k)
         solids.append(trace_fillet_axes(c, tol) if axes else ClassifiedSolid(c))
+    from medax.schemas import stamp
+
     report = part_report(solids, part.source, part.unit, part.file_unit, part.notes)
-    return report, solids
+    tols = {"tangent_angle_rad": angle, "axis_curve_tol_rel": tol}
+    return stamp("classify-report", report, part.unit, tols, angle="rad"), solids
 
 
 def summary_lines(report: dict[str, Any]) -> list[str]:
