@@ -107,7 +107,9 @@ def run(args: argparse.Namespace) -> int:
             f"valid {r.valid}, volume change {r.volume_rel_change:.1e}, "
             f"deviation {r.max_deviation / r.diagonal:.1e} x diagonal"
         )
-    print(f"wrote {args.output}")
+    for path in (args.output, args.report, args.png):
+        if path is not None:
+            print(f"wrote {path}")
     return 0
 
 
