@@ -91,14 +91,13 @@ def classify_part(
     from medax.cad.classify import classify_solid
     from medax.cad.reader import read_part
     from medax.cad.report import ClassifiedSolid, part_report, trace_fillet_axes
+    from medax.schemas import stamp
 
     part = read_part(path)
     solids = []
     for k, s in enumerate(part.solids):
         c = classify_solid(s, angle, source=part.source, unit=part.unit, index=k)
         solids.append(trace_fillet_axes(c, tol) if axes else ClassifiedSolid(c))
-    from medax.schemas import stamp
-
     report = part_report(solids, part.source, part.unit, part.file_unit, part.notes)
     tols = {"tangent_angle_rad": angle, "axis_curve_tol_rel": tol}
     return stamp("classify-report", report, part.unit, tols, angle="rad"), solids
