@@ -75,10 +75,11 @@ def validation_errors(data: Any, kind: str) -> list[str]:
     """Every way ``data`` breaks the schema of ``kind``, one line each (``[]``: valid).
 
     Needs ``jsonschema`` (``pip install 'medax[dev]'``)."""
+    validator = _validator(kind)  # first: a clear error when jsonschema is missing
     from jsonschema.exceptions import best_match
 
     lines = []
-    for err in _validator(kind).iter_errors(data):
+    for err in validator.iter_errors(data):
         while err.context:  # a oneOf / anyOf: the branch that came closest
             err = best_match(err.context)
         lines.append(f"{err.json_path}: {err.message[:200]}")
