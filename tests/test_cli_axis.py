@@ -9,6 +9,7 @@ import pytest
 
 from medax.cli.main import main
 from medax.geometry.region_io import sample_regions_path
+from medax.schemas import validation_errors
 
 SAMPLE = str(sample_regions_path())
 
@@ -181,6 +182,7 @@ def test_demo_writes_axis_files(tmp_path, capsys):
     assert {"axis-wavy.json", "axis-wavy.png", "axis-annulus_sector.json"} <= names
     recs = json.loads((tmp_path / "axis-wavy.json").read_text())
     assert [r["pair"] for r in recs] == [[0, 2], [1, 3]]
+    assert validation_errors(recs, "axis") == []
 
 
 @pytest.mark.parametrize("pair", ["0,2", "1,3"])

@@ -36,6 +36,7 @@ from medax.cad.topology import build_topology
 from medax.errors import CadError
 from medax.mesh.grouped_export import MeshGroups, write_grouped_mesh
 from medax.mesh.quality import quad_quality
+from medax.schemas import validation_errors
 
 SIZE = 3.0
 
@@ -381,6 +382,8 @@ def test_demo_part_mesh(tmp_path):
     assert (box["n_faces"], box["n_structured_faces"], box["open_mesh_edges"]) == (6, 6, 0)
     bracket = json.loads((tmp_path / "part-mesh-l-bracket.json").read_text())
     assert (bracket["n_faces"], bracket["n_structured_faces"]) == (11, 8)
+    for report in (box, bracket):
+        assert validation_errors(report, "part-mesh-report") == []
 
 
 def _area(poly):

@@ -10,6 +10,7 @@ from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
 from medax.cad.simplify import parts as P
 from medax.cad.simplify.step_out import write_step
 from medax.cli.main import main
+from medax.schemas import validation_errors
 
 KEYS = {
     "faces_before",
@@ -128,6 +129,7 @@ def test_cli_two_solids(tmp_path):
     report = json.loads(rep.read_text())
     assert [(s["faces_before"], s["faces_after"]) for s in report["solids"]] == [(10, 6), (10, 9)]
     assert (report["faces_before"], report["faces_after"]) == (20, 15) and report["valid"]
+    assert validation_errors(report, "simplify-report") == []
 
 
 def test_cli_refuses_a_file_that_reads_back_moved(box_step, tmp_path, monkeypatch, capsys):

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import logging
+from collections.abc import Sequence
+from typing import Any
 
 from medax import tolerances
 from medax.cli.options import check_tol
@@ -47,8 +49,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from medax.axis import trace_axis
-    from medax.axis.export import axis_record
-    from medax.geometry.region_io import read_region
+    from medax.geometry.region_io import length_unit, load_region_file, read_region
     from medax.geometry.resolution import coordinate_resolution, resolution_note
     from medax.io_utils import staged_outputs, write_json
 
@@ -61,6 +62,7 @@ def run(args: argparse.Namespace) -> int:
         {"regions file": args.regions},
     )
     region = read_region(args.regions, args.region)
+    unit = length_unit(load_region_file(args.regions))
     if region.reoriented:
         log.warning("region '%s' was clockwise: sides reversed in place", region.name)
     axes = [trace_axis(region, pr, tol=args.tol, method=args.method) for pr in pairs]
@@ -76,9 +78,8 @@ def run(args: argparse.Namespace) -> int:
         )
     with staged_outputs() as out:  # all outputs or none
         if args.output is not None:
-            records = [axis_record(a) for a in axes]
-            data = records[0] if len(records) == 1 else records
-            write_json(out.path(args.output, "-o"), data, "-o")
+            data = axis_document(axes, unit)
+            write_json(out.path(args.output, "-o"), data[0] if len(data) == 1 else data, "-o")
         if args.plot is not None:
             from medax.viz.axis_plot import plot_axes
 
@@ -87,3 +88,24 @@ def run(args: argparse.Namespace) -> int:
         if path is not None:
             print(f"wrote {path}")
     return 0
+
+
+def axis_document(axes: Sequence[Any], length_unit: str) -> list[dict[str, Any]]:
+    """The ``axis.json`` records of ``axes``, each with the output header
+    (:func:`medax.schemas.stamp`): the file holds one record, or the list of them."""
+    from medax.axis.export import axis_record
+    from medax.schemas import stamp
+
+    return [
+        stamp(
+            "axis",
+            axis_record(a),
+            length_unit,
+            {
+                "curve_tol_rel": a.tol,
+                "point_tol_rel": tolerances.POINT_TOL,
+                "endpoint_tol_rel": tolerances.ENDPOINT_TOL,
+            },
+        )
+        for a in axes
+    ]

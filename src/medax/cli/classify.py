@@ -91,6 +91,7 @@ def classify_part(
     from medax.cad.classify import classify_solid
     from medax.cad.reader import read_part
     from medax.cad.report import ClassifiedSolid, part_report, trace_fillet_axes
+    from medax.schemas import stamp
 
     part = read_part(path)
     solids = []
@@ -98,7 +99,8 @@ def classify_part(
         c = classify_solid(s, angle, source=part.source, unit=part.unit, index=k)
         solids.append(trace_fillet_axes(c, tol) if axes else ClassifiedSolid(c))
     report = part_report(solids, part.source, part.unit, part.file_unit, part.notes)
-    return report, solids
+    tols = {"tangent_angle_rad": angle, "axis_curve_tol_rel": tol}
+    return stamp("classify-report", report, part.unit, tols, angle="rad"), solids
 
 
 def summary_lines(report: dict[str, Any]) -> list[str]:

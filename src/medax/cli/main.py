@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from medax import __version__
 from medax.errors import MedaxError
 
-SUBCOMMANDS = ("axis", "mesh", "classify", "simplify", "demo")
+SUBCOMMANDS = ("axis", "mesh", "classify", "simplify", "samples", "demo")
 
 
 def build_parser() -> argparse.ArgumentParser:

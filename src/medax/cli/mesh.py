@@ -147,12 +147,13 @@ def report(mesh: Any, time_s: float) -> dict[str, Any]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from medax.geometry.region_io import read_region
+    from medax.geometry.region_io import length_unit, load_region_file, read_region
     from medax.geometry.resolution import coordinate_resolution, resolution_note
     from medax.io_utils import staged_outputs, write_json
     from medax.mesh.export import format_from_path
     from medax.mesh.grouped_export import region_groups, write_grouped_mesh
     from medax.mesh.mesher import mesh_region
+    from medax.schemas import stamp
 
     if Path(args.regions).suffix.lower() in CAD_SUFFIXES:
         from medax.cli.mesh_part import run_part
@@ -192,6 +193,14 @@ def run(args: argparse.Namespace) -> int:
     rep = report(mesh, time_s)
     res = coordinate_resolution(mesh.points, region.diagonal)
     rep["coordinate_resolution_rel"] = res
+    rep = stamp(
+        "mesh-report",
+        rep,
+        length_unit(load_region_file(args.regions)),
+        {"node_tol_rel": float(mesh.info["tol"])},
+        angle="deg",
+        time="s",
+    )
     note = resolution_note(region.name, res, args.tol or tolerances.CURVE_TOL)
     if note:
         log.warning("%s", note)

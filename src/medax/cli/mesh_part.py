@@ -16,8 +16,11 @@ from typing import Any
 import numpy as np
 
 from medax.errors import InputError
+from medax.schemas import stamp
 
 PLOT_SUFFIXES = (".png", ".svg", ".pdf")
+#: units of the report besides length (angles in degrees, times in seconds)
+UNITS = {"angle": "deg", "time": "s"}
 
 
 def parse_faces(text: str) -> list[int] | None:
@@ -68,7 +71,7 @@ def run_part(args: argparse.Namespace) -> int:
         print(f"medax mesh: {msg}", file=sys.stderr, flush=True)
 
     t0 = time.perf_counter()
-    solids = _solids(args.regions, args.simplify, progress)
+    solids, unit = _solids(args.regions, args.simplify, progress)
     if len(solids) > 1 and faces is not None:
         raise InputError(f"{args.regions}: {len(solids)} solids; --faces needs a single solid")
     meshes = []
@@ -95,6 +98,7 @@ def run_part(args: argparse.Namespace) -> int:
         write_grouped_mesh(target, points, quads, groups, quality.as_dict(), fmt)
         if args.report:
             rep["total_time_s"] = total
+            rep = stamp("part-mesh-report", rep, unit, _tolerances(args.simplify), **UNITS)
             write_json(out.path(args.report, "--report"), rep, "--report")
         if args.plot:
             from medax.viz.part_plot import plot_part_mesh
@@ -109,24 +113,41 @@ def run_part(args: argparse.Namespace) -> int:
     return 0
 
 
-def _solids(path: str, simplify: bool, progress: Any) -> list[Any]:
-    """The file's solids, simplified first if asked."""
+def _tolerances(simplify: bool) -> dict[str, float]:
+    """The tolerances of a part mesh (and of the simplification before it)."""
+    from medax.cad import part_mesh
+
+    tols = {
+        "boundary_match_rel": part_mesh.BOUNDARY_MATCH,
+        "match_tol_rel": part_mesh.MATCH_TOL,
+    }
+    if simplify:
+        from medax.cli.simplify import simplify_tolerances
+
+        tols |= simplify_tolerances()
+    return tols
+
+
+def _solids(path: str, simplify: bool, progress: Any) -> tuple[list[Any], str]:
+    """The file's solids, simplified first if asked, and their length unit."""
     if not simplify:
         from medax.cad.reader import read_part
 
-        return list(read_part(path).solids)
+        part = read_part(path)
+        return list(part.solids), part.unit
     from medax.cad.classify import classify_file
     from medax.cad.simplify import simplify as run_simplify
     from medax.cad.simplify import specs_from_classification
 
     out = []
-    for k, cls in enumerate(classify_file(path)):
+    classes = classify_file(path)
+    for k, cls in enumerate(classes):
         specs = specs_from_classification(cls)
         progress(f"solid {k}: {len(cls.faces)} faces, simplifying")
         r = run_simplify(cls.shape, specs, progress=progress)
         progress(f"solid {k}: faces {r.faces_before} -> {r.faces_after}")
         out.append(r.shape)
-    return out
+    return out, classes[0].unit
 
 
 def _combine(meshes: list[Any]) -> tuple[Any, ...]:

@@ -15,6 +15,7 @@ from typing import Any
 from medax.cli.options import check_tol
 from medax.cli.outputs import JSON_SUFFIXES, PLOT_SUFFIXES, Output, check_outputs
 from medax.io_utils import staged_outputs, write_json
+from medax.schemas import stamp
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -91,6 +92,8 @@ def run(args: argparse.Namespace) -> int:
     report = _combine([r.report() for r in results])
     report["input"] = str(args.part)
     report["output"] = str(args.output)
+    tols = simplify_tolerances(args.tol)
+    report = stamp("simplify-report", report, classes[0].unit, tols, time="s")
     with staged_outputs() as out:  # all outputs or none
         staged = write_shape(shape, out.path(args.output, "-o"), fmt)
         progress(f"reading {Path(args.output).name} back")
@@ -119,8 +122,25 @@ def run(args: argparse.Namespace) -> int:
             f"the input's own edge tolerances ({written['allowed_deviation']:.2g} allowed); "
             "a .brep output keeps it exact"
         )
-    print(f"wrote {args.output}")
+    for path in (args.output, args.report, args.png):
+        if path is not None:
+            print(f"wrote {path}")
     return 0
+
+
+def simplify_tolerances(tol: float | None = None) -> dict[str, float]:
+    """The tolerances a simplification checks against (``tol``: the deviation's, default
+    :data:`~medax.cad.simplify.pipeline.DEVIATION_TOL`), for the reports' header."""
+    from medax import tolerances
+    from medax.cad.simplify import pipeline
+
+    return {
+        "deviation_tol_rel": pipeline.DEVIATION_TOL if tol is None else tol,
+        "volume_tol_rel": pipeline.VOLUME_TOL,
+        "area_tol_rel": pipeline.AREA_TOL,
+        "build_tol_rel": pipeline.BUILD_TOL,
+        "tangent_angle_rad": tolerances.TANGENT_ANGLE,
+    }
 
 
 def _combine(reports: list[dict[str, Any]]) -> dict[str, Any]:

@@ -3,7 +3,8 @@
 A file maps region names to ``{"corners": [[x, y] x 4], "sides": [side x 4]}``; a side is
 ``{"kind": "line"}``, ``{"kind": "arc", "sagitta": h}`` or ``{"kind": "arc", "center":
 [x, y], "radius": r}``, ``{"kind": "bspline", "degree": p, "points": [[x, y], ...]}`` or
-``{"kind": "polyline", "points": [[x, y], ...]}``. Keys starting with ``_`` are metadata.
+``{"kind": "polyline", "points": [[x, y], ...]}``. Keys starting with ``_`` are metadata;
+``_units`` names the length unit of the coordinates (copied into the outputs' header).
 """
 
 from __future__ import annotations
@@ -55,6 +56,12 @@ def load_region_file(path: str | Path) -> dict[str, Any]:
 def region_names(data: dict[str, Any]) -> list[str]:
     """Region names in a loaded file (metadata keys starting with ``_`` skipped)."""
     return [k for k in data if not k.startswith("_")]
+
+
+def length_unit(data: dict[str, Any]) -> str:
+    """The length unit a loaded regions file names in ``_units`` (``"unspecified"``)."""
+    unit = data.get("_units")
+    return unit if isinstance(unit, str) and unit.strip() else "unspecified"
 
 
 def read_region(path: str | Path, name: str) -> Region:
