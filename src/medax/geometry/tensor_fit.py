@@ -45,6 +45,10 @@ SAMPLES_PER_SPAN = 4
 CHECK_PER_SPAN = 7
 #: Refinement stops when two halvings of the spacing did not divide the error by 1 / STALL.
 STALL = 0.25
+#: Refinement stops when the last halving's rate, kept for the levels left, would still end
+#: above this many times the tolerance (each level costs about 4x the one before; a cubic
+#: fit's error falls 16x per halving on smooth data, 4x across a curvature jump).
+HOPELESS = 100.0
 #: Largest number of coefficients of one fit (a finer level is not tried): 8e4 unknowns (too
 #: wide a band for MAX_BAND_ENTRIES: SuperLU) take about a second; a plate under many bosses
 #: would otherwise ask for 10^6.
@@ -254,8 +258,9 @@ def refine(
     """The refinement loop shared by the fits here and in :mod:`.periodic_fit`: fits
     ``fit_at(step)`` from ``step = spacing``, halved at most ``levels - 1`` times while the
     measured ``error`` misses ``tol`` (stops when it is within, not finite (data missing
-    inside the face: no knots will mend that), or two halvings did not divide it by
-    ``1 / STALL``: a step or a kink in the data); the best fit, None when even the first is
+    inside the face: no knots will mend that), two halvings did not divide it by
+    ``1 / STALL`` (a step or a kink in the data), or the last halving's rate cannot bring it
+    near ``tol`` in the levels left (:func:`_hopeless`)); the best fit, None when even the first is
     too large to solve (``fit_at`` gave None). ``shortcut(level, step, errors, fit)`` may
     end the loop with a fit of its own after a level that missed ``tol`` (``errors``: the
     earlier levels' errors)."""
@@ -272,6 +277,8 @@ def refine(
             break
         if len(errors) >= 2 and fit.error > STALL * errors[-2]:
             break
+        if errors and _hopeless(fit.error, errors[-1], levels - 1 - level, tol):
+            break
         if shortcut is not None:
             done = shortcut(level, step, errors, fit)
             if done is not None:
@@ -279,6 +286,13 @@ def refine(
         errors.append(fit.error)
         step /= 2
     return best
+
+
+def _hopeless(error: float, before: float, left: int, tol: float) -> bool:
+    """Whether halving ``left`` more times at the rate ``error / before`` of the last
+    halving would leave the error above ``HOPELESS x tol``."""
+    rate = error / before if before > 0 else 1.0
+    return error * min(rate, 1.0) ** left > HOPELESS * tol
 
 
 #: A direction's halving "does not matter" when the fit with only the other direction
