@@ -446,12 +446,12 @@ def test_face_nothing_meshes_gets_finer_edges(monkeypatch):
     real = pm.mesh_face
     calls: dict[int, int] = {}
 
-    def picky(face, index, edge_mid, edge_ids, *args, **kwargs):
+    def picky(face, index, nodes, edges, *args, **kwargs):
         calls[index] = calls.get(index, 0) + 1
-        n = sum(len(ids) - 1 for ids in edge_ids.values())
+        n = sum(len(nodes.edge_ids[j]) - 1 for j in edges)
         if index == target and n < need:
             raise MeshError(f"face {index}: refused at {n} divisions")
-        return real(face, index, edge_mid, edge_ids, *args, **kwargs)
+        return real(face, index, nodes, edges, *args, **kwargs)
 
     monkeypatch.setattr(pm, "mesh_face", picky)
     m = mesh_part(shape, SIZE)

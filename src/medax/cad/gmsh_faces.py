@@ -25,7 +25,7 @@ parameters); nodes on gmsh points to the part's vertex nodes by position.
 from __future__ import annotations
 
 import tempfile
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 from OCP.BRepTools import BRepTools
 
+from medax.cad.shared_nodes import SharedNodes
 from medax.errors import MeshError
 from medax.geometry._types import FloatArray, IntArray
 from medax.mesh.gmsh_session import gmsh_session
@@ -84,22 +85,17 @@ class GmshFace:
 def mesh_face(
     face: Any,
     index: int,
-    edge_mid: Mapping[int, FloatArray],
-    edge_ids: Mapping[int, IntArray],
-    edge_pts: Mapping[int, FloatArray],
-    vertex_pts: FloatArray,
-    vertex_ids: IntArray,
-    size: float,
-    tol: float,
+    nodes: SharedNodes,
+    edges: Sequence[int],
+    vertices: Sequence[int],
     check: Callable[[GmshFace], str | None] | None = None,
 ) -> GmshFace:
     """Mesh CAD ``face`` (face ``index`` of the part) with quads whose boundary nodes are the
-    part's: ``edge_mid[j]`` the middle point (3,) of each of its edges ``j``,
-    ``edge_ids[j]`` / ``edge_pts[j]`` the part's node ids (n + 1,) and points (n + 1, 3)
-    along it, ``vertex_pts`` / ``vertex_ids`` the vertex nodes; ``tol`` the length below
-    which points match; ``check`` says what is wrong with a mesh (e.g. a quad inverted
-    against the face normal), which is then tried again (:data:`ATTEMPTS`). Raises
-    :class:`MeshError` naming the face."""
+    part's ``nodes`` on its ``edges`` (those with nodes) and ``vertices``, at the size
+    ``nodes.size``, points matched to ``nodes.tol``; ``check`` says what is wrong with a
+    mesh (e.g. a quad inverted against the face normal), which is then tried again
+    (:data:`ATTEMPTS`). Raises :class:`MeshError` naming the face."""
+    vs = list(vertices)
     with gmsh_session() as gmsh, tempfile.TemporaryDirectory(prefix="medax-") as tmp:
         path = Path(tmp) / f"face{index}.brep"
         if not BRepTools.Write_s(face, str(path)):
@@ -112,13 +108,10 @@ def mesh_face(
                         inner: float = inner) -> Any:  # fmt: skip
                 gmsh.model.add(f"medax-face-{index}-{algorithm}-{int(subdivide)}-{inner}")
                 try:
-                    out = _mesh(
-                        gmsh, path, index, edge_mid, edge_ids, edge_pts, inner * size, tol,
-                        algorithm, subdivide,
-                    )  # fmt: skip
+                    out = _mesh(gmsh, path, index, nodes, edges, inner, algorithm, subdivide)
                     if out is None:
                         return "triangles left by the recombination"
-                    _vertices(gmsh, out, vertex_pts, vertex_ids, tol, index)
+                    _vertices(gmsh, out, nodes.vert_pts[vs], nodes.vert_ids[vs], nodes.tol, index)
                     problem = None if check is None else check(out)
                     return out if problem is None else problem
                 except MeshError as err:  # (counts not kept, nodes off the edge: try again)
@@ -179,15 +172,16 @@ def _mesh(
     gmsh: Any,
     path: Path,
     index: int,
-    edge_mid: Mapping[int, FloatArray],
-    edge_ids: Mapping[int, IntArray],
-    edge_pts: Mapping[int, FloatArray],
-    size: float,
-    tol: float,
+    nodes: SharedNodes,
+    edges: Sequence[int],
+    inner: float,
     algorithm: int,
     subdivide: bool,
 ) -> GmshFace | None:
-    """One attempt; None when triangles remain."""
+    """One attempt, inside size ``inner`` x ``nodes.size``, on the nodes of ``edges``; None
+    when triangles remain."""
+    edge_ids, edge_pts, tol = nodes.edge_ids, nodes.edge_pts, nodes.tol
+    size = inner * nodes.size
     gmsh.model.occ.importShapes(str(path), highestDimOnly=True)
     gmsh.model.occ.synchronize()
     surfaces = gmsh.model.getEntities(2)
@@ -195,7 +189,7 @@ def _mesh(
         raise MeshError(f"face {index}: gmsh read {len(surfaces)} surfaces from it")
     tag = surfaces[0][1]
     curve_edge: dict[int, int] = {}
-    mids = {j: np.asarray(m) for j, m in edge_mid.items()}
+    mids = {j: np.asarray(nodes.edge_mid[j]) for j in edges}
     for _, c in gmsh.model.getEntities(1):
         lo, hi = gmsh.model.getParametrizationBounds(1, c)
         ends = np.asarray(gmsh.model.getValue(1, c, [lo[0], 0.5 * (lo[0] + hi[0]), hi[0]]))

@@ -9,7 +9,8 @@ Steps (:func:`mesh_part`):
    across the part (:mod:`medax.cad.edge_counts`); faces where they conflict are meshed by
    gmsh instead.
 3. Nodes of every edge at equal arc length on its exact curve, one node per vertex
-   (:mod:`medax.cad.edge_nodes`): the only nodes any face puts on an edge.
+   (:mod:`medax.cad.edge_nodes`; :class:`~medax.cad.shared_nodes.SharedNodes`): the only
+   nodes any face puts on an edge.
 4. Structured faces: :func:`~medax.mesh.mesher.mesh_region` with those counts (and, on sides
    made of several edges, boundary fractions that put nodes on the vertices inside them);
    its boundary nodes are replaced by the edge nodes (they agree to the mesher's tolerance,
@@ -46,6 +47,7 @@ from medax.cad.face_geometry import surface_type
 from medax.cad.face_region import face_sides, side_region
 from medax.cad.gmsh_faces import GmshFace, mesh_face
 from medax.cad.quad_orientation import NATIVE_SURFACES, orient, oriented
+from medax.cad.shared_nodes import SharedNodes
 from medax.cad.topology import build_topology
 from medax.errors import CadError, InputError, MedaxError, MeshError
 from medax.geometry._types import FloatArray, IntArray
@@ -286,36 +288,8 @@ class _Part:
 
         # 3. vertex and edge nodes
         nodes = _Nodes()
-        vmap = topo.vertex_map
-        vert_ids = np.full(vmap.Extent(), -1, dtype=np.int64)
-        vert_pts = np.zeros((vmap.Extent(), 3))
-        used_v = sorted({k for j in self.edges for k in topo.edge_vertices[j]})
-        for k in used_v:
-            p = BRep_Tool.Pnt_s(TopoDS.Vertex(vmap.FindKey(k + 1)))
-            vert_pts[k] = (p.X(), p.Y(), p.Z())
-        vert_ids[used_v] = nodes.add(vert_pts[used_v])
-        edge_ids: dict[int, IntArray] = {}
-        edge_pts: dict[int, FloatArray] = {}
-        edge_mid: dict[int, FloatArray] = {}
-        for j, c in curves.items():
-            e = TopoDS.Edge(topo.edge(j).Oriented(TopAbs_FORWARD))
-            v0 = vmap.FindIndex(TopExp.FirstVertex_s(e, True)) - 1
-            v1 = vmap.FindIndex(TopExp.LastVertex_s(e, True)) - 1
-            n = int(counts.counts[j])
-            pts = equal_arc_nodes(c, n)
-            pts[0], pts[-1] = vert_pts[v0], vert_pts[v1]
-            edge_pts[j] = pts
-            edge_ids[j] = np.concatenate(([vert_ids[v0]], nodes.add(pts[1:-1]), [vert_ids[v1]]))
-            edge_mid[j] = np.asarray(c.evaluate(np.array([0.5])))[0]
+        shared = self._shared_nodes(counts.counts, nodes)
         say(f"{len(curves)} edges, {int(counts.counts.sum())} divisions")
-        # which edge (-1: vertex) and position each boundary node has
-        owner = np.full(nodes.n, -2, dtype=np.int64)
-        where = np.zeros(nodes.n, dtype=np.int64)
-        owner[vert_ids[used_v]] = -1
-        where[vert_ids[used_v]] = used_v
-        for j, ids in edge_ids.items():
-            owner[ids[1:-1]] = j
-            where[ids[1:-1]] = np.arange(1, len(ids) - 1)
 
         # 4-5. faces
         quads: list[IntArray] = []
@@ -327,18 +301,17 @@ class _Part:
                 key = tuple(int(counts.counts[j]) for j in topo.face_edges[i])
                 res = cache.get(i)
                 if res is None or res.key != key:
-                    res = self._face(i, key, regions, why, counts.counts, edge_ids, edge_pts,
-                                     edge_mid, vert_pts, vert_ids, owner, where)  # fmt: skip
+                    res = self._face(i, key, regions, why, counts.counts, shared)
                     cache[i] = res
                     if k % 10 == 9 or res.time_s > 2.0:
                         say(f"face {k + 1}/{len(sel)} ({i}: {res.kind}, {len(res.quads)} quads, "
                             f"{res.time_s:.2f} s)")  # fmt: skip
                 gid = np.full(len(res.points), -1, dtype=np.int64)
                 on_v, on_e = res.edge == -1, res.edge >= 0
-                gid[on_v] = vert_ids[res.pos[on_v]]
+                gid[on_v] = shared.vert_ids[res.pos[on_v]]
                 for j in np.unique(res.edge[on_e]).tolist():
                     at = res.edge == j
-                    gid[at] = edge_ids[j][res.pos[at]]
+                    gid[at] = shared.edge_ids[j][res.pos[at]]
                 inner = res.edge == -2
                 gid[inner] = nodes.add(res.points[inner])
                 gq = gid[res.quads]
@@ -349,8 +322,9 @@ class _Part:
                 n_quads += len(gq)
 
         points = nodes.array()
-        lines = [np.column_stack((ids[:-1], ids[1:])) for ids in edge_ids.values()]
-        line_edge = [np.full(len(ids) - 1, j, dtype=np.int64) for j, ids in edge_ids.items()]
+        ids_of = shared.edge_ids
+        lines = [np.column_stack((ids[:-1], ids[1:])) for ids in ids_of.values()]
+        line_edge = [np.full(len(ids) - 1, j, dtype=np.int64) for j, ids in ids_of.items()]
         return PartMesh(
             points,
             np.concatenate(quads) if quads else np.zeros((0, 4), dtype=np.int64),
@@ -364,6 +338,43 @@ class _Part:
             time.perf_counter() - t0,
         )
 
+    def _shared_nodes(self, counts: IntArray, nodes: _Nodes) -> SharedNodes:
+        """The round's vertex and edge nodes (edge ``j`` in ``counts[j]`` equal arc lengths),
+        added to ``nodes``."""
+        topo = self.topo
+        vmap = topo.vertex_map
+        vert_ids = np.full(vmap.Extent(), -1, dtype=np.int64)
+        vert_pts = np.zeros((vmap.Extent(), 3))
+        used_v = sorted({k for j in self.edges for k in topo.edge_vertices[j]})
+        for k in used_v:
+            p = BRep_Tool.Pnt_s(TopoDS.Vertex(vmap.FindKey(k + 1)))
+            vert_pts[k] = (p.X(), p.Y(), p.Z())
+        vert_ids[used_v] = nodes.add(vert_pts[used_v])
+        edge_ids: dict[int, IntArray] = {}
+        edge_pts: dict[int, FloatArray] = {}
+        edge_mid: dict[int, FloatArray] = {}
+        for j, c in self.curves.items():
+            e = TopoDS.Edge(topo.edge(j).Oriented(TopAbs_FORWARD))
+            v0 = vmap.FindIndex(TopExp.FirstVertex_s(e, True)) - 1
+            v1 = vmap.FindIndex(TopExp.LastVertex_s(e, True)) - 1
+            pts = equal_arc_nodes(c, int(counts[j]))
+            pts[0], pts[-1] = vert_pts[v0], vert_pts[v1]
+            edge_pts[j] = pts
+            edge_ids[j] = np.concatenate(([vert_ids[v0]], nodes.add(pts[1:-1]), [vert_ids[v1]]))
+            edge_mid[j] = np.asarray(c.evaluate(np.array([0.5])))[0]
+        # which edge (-1: vertex) and position each boundary node has
+        owner = np.full(nodes.n, -2, dtype=np.int64)
+        where = np.zeros(nodes.n, dtype=np.int64)
+        owner[vert_ids[used_v]] = -1
+        where[vert_ids[used_v]] = used_v
+        for j, ids in edge_ids.items():
+            owner[ids[1:-1]] = j
+            where[ids[1:-1]] = np.arange(1, len(ids) - 1)
+        return SharedNodes(
+            edge_ids, edge_pts, edge_mid, vert_ids, vert_pts, owner, where, self.size,
+            MATCH_TOL * self.diag,
+        )  # fmt: skip
+
     def _face(
         self,
         i: int,
@@ -371,13 +382,7 @@ class _Part:
         regions: dict[int, tuple[Region, list[list[Any]]]],
         why: dict[int, str],
         counts: IntArray,
-        edge_ids: dict[int, IntArray],
-        edge_pts: dict[int, FloatArray],
-        edge_mid: dict[int, FloatArray],
-        vert_pts: FloatArray,
-        vert_ids: IntArray,
-        owner: IntArray,
-        where: IntArray,
+        shared: SharedNodes,
     ) -> _FaceResult:
         """Face ``i`` meshed: the medial grid if it is 4-sided (gmsh if that fails), else
         gmsh; :class:`_FaceFailed` when nothing meshes it."""
@@ -389,7 +394,7 @@ class _Part:
         if i in regions:
             try:
                 q, uv, pts, gid, divisions = _structured(
-                    regions[i], topo, counts, edge_ids, edge_pts, self.lengths, diag
+                    regions[i], topo, shared, self.lengths, diag
                 )
                 problem = orient(f, q, uv, pts)[1]
                 if problem is not None:
@@ -400,8 +405,7 @@ class _Part:
                 self.say(f"face {i}: {why[i]}; meshed by gmsh")
         try:
             if q is None:
-                gm = _gmsh_face(f, i, topo, edge_mid, edge_ids, edge_pts, vert_pts, vert_ids,
-                                self.size, MATCH_TOL * diag)  # fmt: skip
+                gm = _gmsh_face(f, i, topo, shared)
                 q, uv, pts, gid = gm.quads, gm.uv, gm.points, gm.node_id
             q = oriented(f, i, q, uv, pts)
         except MeshError as err:
@@ -409,18 +413,14 @@ class _Part:
         edge = np.full(len(pts), -2, dtype=np.int64)
         pos = np.zeros(len(pts), dtype=np.int64)
         on = gid >= 0
-        edge[on], pos[on] = owner[gid[on]], where[gid[on]]
+        edge[on], pos[on] = shared.owner[gid[on]], shared.where[gid[on]]
         kind = "structured" if divisions is not None else "gmsh"
         dt = time.perf_counter() - tf
         return _FaceResult(key, q, pts, edge, pos, kind, divisions, why.get(i, ""), dt)
 
 
 def _side_ids(
-    side: list[Any],
-    topo: Any,
-    edge_ids: dict[int, IntArray],
-    edge_pts: dict[int, FloatArray],
-    lengths: FloatArray,
+    side: list[Any], topo: Any, shared: SharedNodes, lengths: FloatArray
 ) -> tuple[IntArray, FloatArray, FloatArray]:
     """Node ids and points along a side (its edges in the side's direction, joints once),
     and the arc-length fractions of its nodes (each edge in equal arc lengths)."""
@@ -429,7 +429,7 @@ def _side_ids(
     lens: list[FloatArray] = []
     for e in side:
         j = topo.edge_index(e)
-        a, p = edge_ids[j], edge_pts[j]
+        a, p = shared.edge_ids[j], shared.edge_pts[j]
         if e.Orientation() == TopAbs_REVERSED:
             a, p = a[::-1], p[::-1]
         lens.append(np.full(len(a) - 1, lengths[j] / (len(a) - 1)))
@@ -445,16 +445,14 @@ def _side_ids(
 def _structured(
     rs: tuple[Region, list[list[Any]]],
     topo: Any,
-    counts: IntArray,
-    edge_ids: dict[int, IntArray],
-    edge_pts: dict[int, FloatArray],
+    shared: SharedNodes,
     lengths: FloatArray,
     diag: float,
 ) -> tuple[IntArray, FloatArray, FloatArray, IntArray, tuple[int, int]]:
     """The medial grid of a 4-sided face on the part's edge nodes: local quads, parameters,
     points, part node ids of the boundary nodes (-1 inside) and the divisions."""
     region, sides = rs
-    per_side = [_side_ids(s, topo, edge_ids, edge_pts, lengths) for s in sides]
+    per_side = [_side_ids(s, topo, shared, lengths) for s in sides]
     n1, n2 = len(per_side[0][0]) - 1, len(per_side[1][0]) - 1
     if (len(per_side[2][0]) - 1, len(per_side[3][0]) - 1) != (n1, n2):
         raise MeshError(f"{region.name}: opposite sides have different counts")  # pragma: no cover
@@ -475,36 +473,16 @@ def _structured(
     return structured_quads(n1, n2), mesh.params, pts, gid, (n1, n2)
 
 
-def _gmsh_face(
-    face: Any,
-    i: int,
-    topo: Any,
-    edge_mid: dict[int, FloatArray],
-    edge_ids: dict[int, IntArray],
-    edge_pts: dict[int, FloatArray],
-    vert_pts: FloatArray,
-    vert_ids: IntArray,
-    size: float,
-    tol: float,
-) -> GmshFace:
-    own = [j for j in topo.face_edges[i] if j in edge_ids]
+def _gmsh_face(face: Any, i: int, topo: Any, shared: SharedNodes) -> GmshFace:
+    """Face ``i`` meshed by gmsh on the shared nodes of its edges and vertices, its quads
+    checked against the face normal."""
 
     def check(m: GmshFace) -> str | None:
         return orient(face, m.quads, m.uv, m.points)[1]
 
+    own = [j for j in topo.face_edges[i] if j in shared.edge_ids]
     vs = sorted({k for j in topo.face_edges[i] for k in topo.edge_vertices[j]})
-    return mesh_face(
-        face,
-        i,
-        {j: edge_mid[j] for j in own},
-        {j: edge_ids[j] for j in own},
-        {j: edge_pts[j] for j in own},
-        vert_pts[vs],
-        vert_ids[vs],
-        size,
-        tol,
-        check,
-    )
+    return mesh_face(face, i, shared, own, vs, check)
 
 
 def _check(mesh: PartMesh) -> None:
