@@ -8,7 +8,10 @@ edges; where blossom still leaves triangles, or the caller's check refuses the q
 inverted or flat against the face normal), the face is meshed again (:data:`ATTEMPTS`):
 quasi-structured quads, Frontal-Delaunay, and both Frontal-Delaunays with half the counts
 and every element split into quads (``Mesh.SubdivisionAlgorithm = 1``), which doubles the
-boundary divisions back to the part's counts (quasi-structured splits by itself).
+boundary divisions back to the part's counts (quasi-structured splits by itself). Faces
+with a seam edge skip the quasi-structured attempt: it leaves the seam curve without nodes
+or with counts not asked for, or aborts (never a usable mesh on the 56 seam faces of the
+benchmark parts), and it is the costliest attempt.
 Triangles the recombination leaves in neighbouring pairs (where the pair's one quad would
 have a flat or reflex corner, or gmsh's two triangles overlap in a narrow gap) become five
 quads each (:func:`pair_triangles`); such a mesh is kept only when no attempt gives quads
@@ -31,7 +34,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from OCP.BRep import BRep_Tool
 from OCP.BRepTools import BRepTools
+from OCP.TopAbs import TopAbs_EDGE
+from OCP.TopExp import TopExp_Explorer
+from OCP.TopoDS import TopoDS
 
 from medax.cad.shared_nodes import SharedNodes
 from medax.errors import MeshError
@@ -55,6 +62,8 @@ ATTEMPTS = (
     (8, True, 0.5),
     (8, False, 0.25),
 )
+#: the quasi-structured algorithm, skipped on faces with a seam edge
+_QUASI_STRUCTURED = 11
 #: least distance (x the 4-gon's diameter) from the point the 5 quads of a triangle pair
 #: are built about to the 4-gon's edges (:func:`pair_triangles`)
 _KERNEL_MARGIN = 0.02
@@ -96,13 +105,15 @@ def mesh_face(
     mesh (e.g. a quad inverted against the face normal), which is then tried again
     (:data:`ATTEMPTS`). Raises :class:`MeshError` naming the face."""
     vs = list(vertices)
+    seam = has_seam(face)
+    attempts = [a for a in ATTEMPTS if not (seam and a[0] == _QUASI_STRUCTURED)]
     with gmsh_session() as gmsh, tempfile.TemporaryDirectory(prefix="medax-") as tmp:
         path = Path(tmp) / f"face{index}.brep"
         if not BRepTools.Write_s(face, str(path)):
             raise MeshError(f"face {index}: could not write it for gmsh")
         last = "triangles left by the recombination"
         fallback: GmshFace | None = None  # the first valid mesh with triangle pairs replaced
-        for algorithm, subdivide, inner in ATTEMPTS:
+        for algorithm, subdivide, inner in attempts:
 
             def attempt(algorithm: int = algorithm, subdivide: bool = subdivide,
                         inner: float = inner) -> Any:  # fmt: skip
@@ -131,6 +142,16 @@ def mesh_face(
         if fallback is not None:
             return fallback
         raise MeshError(f"face {index}: gmsh could not mesh it with valid quads only ({last})")
+
+
+def has_seam(face: Any) -> bool:
+    """Whether ``face`` has a seam edge (one edge twice in its wire: a closed surface)."""
+    exp = TopExp_Explorer(face, TopAbs_EDGE)
+    while exp.More():
+        if BRep_Tool.IsClosed_s(TopoDS.Edge(exp.Current()), face):
+            return True
+        exp.Next()
+    return False
 
 
 def _with_timeout(work: Callable[[], Any], seconds: float) -> Any:
