@@ -436,24 +436,24 @@ def test_face_nothing_meshes_gets_finer_edges(monkeypatch):
     counts propagated), the part is meshed again with the faces whose edges kept their counts
     kept; the result passes the same checks. Refused at every count: the run fails naming
     the face."""
-    import medax.cad.part_mesh as pm
+    from medax.cad.gmsh_faces import GmshFaces
     from medax.errors import MeshError
 
     shape, first = _meshed("plate_with_boss")
     topo = build_topology(shape)
     target = first.gmsh_faces[0]
     need = 2 * sum(int(first.edge_counts[j]) for j in topo.face_edges[target])
-    real = pm.mesh_face
+    real = GmshFaces.mesh
     calls: dict[int, int] = {}
 
-    def picky(face, index, nodes, edges, *args, **kwargs):
+    def picky(self, index):
         calls[index] = calls.get(index, 0) + 1
-        n = sum(len(nodes.edge_ids[j]) - 1 for j in edges)
+        n = sum(len(self.nodes.edge_ids[j]) - 1 for j in self.job(index).edges)
         if index == target and n < need:
             raise MeshError(f"face {index}: refused at {n} divisions")
-        return real(face, index, nodes, edges, *args, **kwargs)
+        return real(self, index)
 
-    monkeypatch.setattr(pm, "mesh_face", picky)
+    monkeypatch.setattr(GmshFaces, "mesh", picky)
     m = mesh_part(shape, SIZE)
     for j in topo.face_edges[target]:
         assert m.edge_counts[j] >= 2 * first.edge_counts[j]
@@ -469,6 +469,46 @@ def test_face_nothing_meshes_gets_finer_edges(monkeypatch):
     need = 10**9
     with pytest.raises(MeshError, match=rf"face {target}: refused .*divided 8 times finer"):
         mesh_part(shape, SIZE)
+
+
+def test_gmsh_worker_survives_hang_and_crash(monkeypatch):
+    """A gmsh attempt that hangs (stopped after ``ATTEMPT_TIMEOUT``) or ends the worker
+    process counts as failed; a new worker goes on with the next attempt, the other faces
+    are served by that same worker, and the part meshes as it did."""
+    import os
+    import time
+
+    import medax.cad.gmsh_faces as gf
+
+    shape, first = _meshed("plate_with_boss")
+    hang, crash = first.gmsh_faces[:2]
+    real = gf._mesh
+
+    def flaky(gmsh, path, index, nodes, edges, inner, algorithm, subdivide):
+        if (algorithm, subdivide, inner) == gf.ATTEMPTS[0]:
+            if index == hang:
+                time.sleep(60.0)
+            if index == crash:
+                os._exit(3)
+        return real(gmsh, path, index, nodes, edges, inner, algorithm, subdivide)
+
+    starts = []
+    real_start = gf.GmshFaces._start
+
+    def counted(self):
+        starts.append(1)
+        real_start(self)
+
+    monkeypatch.setattr(gf, "_mesh", flaky)
+    monkeypatch.setattr(gf, "ATTEMPT_TIMEOUT", 2.0)
+    monkeypatch.setattr(gf.GmshFaces, "_start", counted)
+    m = mesh_part(shape, SIZE)
+    assert len(starts) == 3  # the first worker, one after the hang, one after the crash
+    assert {hang, crash} <= set(m.gmsh_faces)
+    assert len(m.quads) > 0
+    test_shared_nodes_and_closed((shape, m))
+    test_quads_face_outward((shape, m))
+    test_nodes_on_their_faces((shape, m))
 
 
 def _u_channel(w=100.0, r=10.0, h=20.0, t=1.0, depth=60.0):

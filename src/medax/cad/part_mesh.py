@@ -45,7 +45,7 @@ from medax.cad.edge_counts import division_counts
 from medax.cad.edge_nodes import edge_curve, equal_arc_nodes
 from medax.cad.face_geometry import surface_type
 from medax.cad.face_region import face_sides, side_region
-from medax.cad.gmsh_faces import GmshFace, mesh_face
+from medax.cad.gmsh_faces import FaceJob, GmshFace, GmshFaces
 from medax.cad.quad_orientation import NATIVE_SURFACES, orient, oriented
 from medax.cad.shared_nodes import SharedNodes
 from medax.cad.topology import build_topology
@@ -296,12 +296,12 @@ class _Part:
         quad_face: list[IntArray] = []
         infos: list[FaceMeshInfo] = []
         n_quads = 0
-        with gmsh_session():
+        with gmsh_session(), GmshFaces(shared, self._job(shared)) as by_gmsh:
             for k, i in enumerate(sel):
                 key = tuple(int(counts.counts[j]) for j in topo.face_edges[i])
                 res = cache.get(i)
                 if res is None or res.key != key:
-                    res = self._face(i, key, regions, why, counts.counts, shared)
+                    res = self._face(i, key, regions, why, counts.counts, shared, by_gmsh)
                     cache[i] = res
                     if k % 10 == 9 or res.time_s > 2.0:
                         say(f"face {k + 1}/{len(sel)} ({i}: {res.kind}, {len(res.quads)} quads, "
@@ -375,6 +375,23 @@ class _Part:
             MATCH_TOL * self.diag,
         )  # fmt: skip
 
+    def _job(self, shared: SharedNodes) -> Callable[[int], FaceJob]:
+        """What gmsh needs to mesh face ``i`` on the shared nodes: the face, its edges with
+        nodes, its vertices, and the check of its quads against the face normal."""
+        topo = self.topo
+
+        def job(i: int) -> FaceJob:
+            face = topo.face(i)
+
+            def check(m: GmshFace) -> str | None:
+                return orient(face, m.quads, m.uv, m.points)[1]
+
+            own = [j for j in topo.face_edges[i] if j in shared.edge_ids]
+            vs = sorted({k for j in topo.face_edges[i] for k in topo.edge_vertices[j]})
+            return FaceJob(face, own, vs, check)
+
+        return job
+
     def _face(
         self,
         i: int,
@@ -383,6 +400,7 @@ class _Part:
         why: dict[int, str],
         counts: IntArray,
         shared: SharedNodes,
+        by_gmsh: GmshFaces,
     ) -> _FaceResult:
         """Face ``i`` meshed: the medial grid if it is 4-sided (gmsh if that fails), else
         gmsh; :class:`_FaceFailed` when nothing meshes it."""
@@ -405,7 +423,7 @@ class _Part:
                 self.say(f"face {i}: {why[i]}; meshed by gmsh")
         try:
             if q is None:
-                gm = _gmsh_face(f, i, topo, shared)
+                gm = by_gmsh.mesh(i)
                 q, uv, pts, gid = gm.quads, gm.uv, gm.points, gm.node_id
             q = oriented(f, i, q, uv, pts)
         except MeshError as err:
@@ -471,18 +489,6 @@ def _structured(
         gid[idx] = ids
         pts[idx] = ours
     return structured_quads(n1, n2), mesh.params, pts, gid, (n1, n2)
-
-
-def _gmsh_face(face: Any, i: int, topo: Any, shared: SharedNodes) -> GmshFace:
-    """Face ``i`` meshed by gmsh on the shared nodes of its edges and vertices, its quads
-    checked against the face normal."""
-
-    def check(m: GmshFace) -> str | None:
-        return orient(face, m.quads, m.uv, m.points)[1]
-
-    own = [j for j in topo.face_edges[i] if j in shared.edge_ids]
-    vs = sorted({k for j in topo.face_edges[i] for k in topo.edge_vertices[j]})
-    return mesh_face(face, i, shared, own, vs, check)
 
 
 def _check(mesh: PartMesh) -> None:
