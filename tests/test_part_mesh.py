@@ -260,9 +260,9 @@ def test_cli_part(tmp_path, capsys):
     assert main(["mesh", str(brep), "--size", "3", "-o", str(out), "--report", str(rep),
                  "--plot", str(png)]) == 0  # fmt: skip
     cap = capsys.readouterr()
-    assert "8/11 faces structured" in cap.out and "medax mesh:" in cap.err
+    assert "9/11 faces structured" in cap.out and "medax mesh:" in cap.err
     r = json.loads(rep.read_text())
-    assert r["n_structured_faces"] == 8 and r["open_mesh_edges"] == 0 and r["n_inverted"] == 0
+    assert r["n_structured_faces"] == 9 and r["open_mesh_edges"] == 0 and r["n_inverted"] == 0
     assert len(r["faces"]) == 11 and r["share_of_quads"] == 1.0
     for f in r["faces"]:
         assert 0 < f["scaled_jacobian"]["min"] <= 1 and 0 < f["gmsh_scaled_jacobian"]["min"] <= 1
@@ -371,7 +371,7 @@ def test_orientation_turns_and_refuses():
 
 def test_demo_part_mesh(tmp_path):
     """The demo meshes the 12-fillet box after --simplify (6 of 6 faces medial) and the
-    L-bracket (8 of 11), with reports and pictures."""
+    L-bracket (9 of 11: the hole's cylinder too, cut by its seam), with reports and pictures."""
     from medax.cli.demo_part_mesh import demo
 
     written = demo(tmp_path)
@@ -380,7 +380,7 @@ def test_demo_part_mesh(tmp_path):
     box = json.loads((tmp_path / "part-mesh-box-12-edges.json").read_text())
     assert (box["n_faces"], box["n_structured_faces"], box["open_mesh_edges"]) == (6, 6, 0)
     bracket = json.loads((tmp_path / "part-mesh-l-bracket.json").read_text())
-    assert (bracket["n_faces"], bracket["n_structured_faces"]) == (11, 8)
+    assert (bracket["n_faces"], bracket["n_structured_faces"]) == (11, 9)
 
 
 def _area(poly):
@@ -439,7 +439,8 @@ def test_face_nothing_meshes_gets_finer_edges(monkeypatch):
     from medax.cad.gmsh_faces import GmshFaces
     from medax.errors import MeshError
 
-    shape, first = _meshed("plate_with_boss")
+    # (the shaft: doubling its first gmsh face's counts leaves another gmsh face's alone)
+    shape, first = _meshed("stepped_shaft")
     topo = build_topology(shape)
     target = first.gmsh_faces[0]
     need = 2 * sum(int(first.edge_counts[j]) for j in topo.face_edges[target])
@@ -469,6 +470,44 @@ def test_face_nothing_meshes_gets_finer_edges(monkeypatch):
     need = 10**9
     with pytest.raises(MeshError, match=rf"face {target}: refused .*divided 8 times finer"):
         mesh_part(shape, SIZE)
+
+
+def test_seam_faces_structured():
+    """The stepped shaft's lateral cylinders and torus fillets are 4-sided once the wire's
+    two runs along the seam count as sides (circle, seam, circle, seam): each gets the
+    structured grid. On a cylinder that is the uniform grid: every node at a radius the
+    shaft was built with (10, 15, 8) from the axis, at equal angles and equal heights; each
+    mesh edge on the seam is in one quad on each side of it (with the part-wide checks on
+    this part: nodes on their faces, shared, closed, no inverted quad)."""
+    from medax.cad.face_geometry import surface_type
+    from medax.cad.face_region import has_seam
+
+    shape, m = _meshed("stepped_shaft")
+    topo = build_topology(shape)
+    kinds = {i: surface_type(topo.face(i)) for i in range(topo.n_faces)}
+    seamed = {i for i in range(topo.n_faces) if has_seam(topo.face(i))}
+    lateral = {i for i, k in kinds.items() if k in ("cylinder", "torus")}
+    assert len([i for i in lateral if kinds[i] == "cylinder"]) == 3 and len(lateral) == 5
+    assert lateral <= seamed and lateral <= set(m.structured_faces)
+    diag = m.diagonal
+    for i in (i for i in lateral if kinds[i] == "cylinder"):
+        q = m.quads[m.quad_face == i]
+        p = m.points[np.unique(q)]
+        r = np.hypot(p[:, 0], p[:, 1])
+        radius = min((10.0, 15.0, 8.0), key=lambda x: abs(x - r[0]))
+        assert np.max(np.abs(r - radius)) < 1e-9 * diag
+        heights = np.unique(np.round(p[:, 2] / (1e-9 * diag)))
+        a = np.mod(np.arctan2(p[:, 1], p[:, 0]), 2 * np.pi)
+        angles = np.unique(np.round(np.where(a > 2 * np.pi - 1e-9, 0.0, a), 9))
+        assert len(heights) * len(angles) == len(p)  # a grid of circles x lines
+        dz = np.diff(heights) * 1e-9 * diag
+        np.testing.assert_allclose(dz, dz[0], atol=1e-8 * diag)
+        gaps = np.diff(np.concatenate((angles, [angles[0] + 2 * np.pi])))
+        np.testing.assert_allclose(gaps, 2 * np.pi / len(angles), atol=1e-8)
+        # every mesh edge of the face is in two of its quads but those on the two circles
+        e = np.sort(np.stack((q, np.roll(q, -1, axis=1)), axis=-1).reshape(-1, 2), axis=1)
+        _, uses = np.unique(e, axis=0, return_counts=True)
+        assert np.count_nonzero(uses == 1) == 2 * len(angles) and uses.max() == 2
 
 
 def test_gmsh_worker_survives_hang_and_crash(monkeypatch):

@@ -36,12 +36,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from OCP.BRep import BRep_Tool
 from OCP.BRepTools import BRepTools
-from OCP.TopAbs import TopAbs_EDGE
-from OCP.TopExp import TopExp_Explorer
-from OCP.TopoDS import TopoDS
 
+from medax.cad.face_region import has_seam
 from medax.cad.shared_nodes import SharedNodes
 from medax.errors import MeshError
 from medax.geometry._types import FloatArray, IntArray
@@ -109,16 +106,6 @@ def attempts_for(face: Any) -> list[tuple[int, bool, float]]:
     face with a seam edge."""
     seam = has_seam(face)
     return [a for a in ATTEMPTS if not (seam and a[0] == _QUASI_STRUCTURED)]
-
-
-def has_seam(face: Any) -> bool:
-    """Whether ``face`` has a seam edge (one edge twice in its wire: a closed surface)."""
-    exp = TopExp_Explorer(face, TopAbs_EDGE)
-    while exp.More():
-        if BRep_Tool.IsClosed_s(TopoDS.Edge(exp.Current()), face):
-            return True
-        exp.Next()
-    return False
 
 
 class GmshFaces:

@@ -3,8 +3,12 @@ gmsh's quads on the others, the part's edge nodes shared by both.
 
 Steps (:func:`mesh_part`):
 
-1. Each face is 4-sided or not (:func:`~medax.cad.face_region.face_sides`); 4-sided ones
-   become Regions on their surfaces (:func:`~medax.cad.face_region.side_region`).
+1. Each face is 4-sided or not (:func:`~medax.cad.face_region.face_sides`; the wire's two
+   runs along a seam count as two sides); 4-sided ones become Regions on their surfaces
+   (:func:`~medax.cad.face_region.side_region`), those with a seam planar Regions of their
+   pcurves scaled to lengths, mapped onto the surface after meshing
+   (:func:`~medax.cad.face_region.seam_region`: in space the seam's two sides are one curve,
+   so distances to them cannot tell them apart).
 2. Division counts per edge from the size, equal on opposite sides of every structured face
    across the part (:mod:`medax.cad.edge_counts`); faces where they conflict are meshed by
    gmsh instead.
@@ -44,7 +48,7 @@ from OCP.TopoDS import TopoDS
 from medax.cad.edge_counts import division_counts
 from medax.cad.edge_nodes import edge_curve, equal_arc_nodes
 from medax.cad.face_geometry import surface_type
-from medax.cad.face_region import face_sides, side_region
+from medax.cad.face_region import Development, face_sides, has_seam, seam_region, side_region
 from medax.cad.gmsh_faces import FaceJob, GmshFace, GmshFaces
 from medax.cad.quad_orientation import NATIVE_SURFACES, orient, oriented
 from medax.cad.shared_nodes import SharedNodes
@@ -69,6 +73,10 @@ MATCH_TOL = 1e-6
 #: gap between its edges) has its edges' counts doubled, as lower bounds propagated like the
 #: others, before the run fails
 REFINE_ROUNDS = 3
+
+#: a 4-sided face's region, its sides' oriented edges, and for a face with a seam the map of
+#: the (planar) region onto the surface (None: the region is on the surface)
+_FaceRegion = tuple[Region, list[list[Any]], Development | None]
 
 
 @dataclass(frozen=True)
@@ -170,7 +178,7 @@ def mesh_part(
         raise InputError(f"size {size:g} is below 1e-6 x the part's diagonal ({diag:.4g})")
 
     # 1. 4-sided faces and their regions
-    regions: dict[int, tuple[Region, list[list[Any]]]] = {}
+    regions: dict[int, _FaceRegion] = {}
     why: dict[int, str] = {}
     for i in sel:
         f = topo.face(i)
@@ -182,11 +190,14 @@ def mesh_part(
             why[i] = f"a {kind} surface (its B-spline copy may not keep OCCT's parameters)"
             continue
         try:
-            sides = face_sides(f)
+            sides = face_sides(f, seams=True)
             if len(sides) != 4:
                 why[i] = f"{len(sides)} sides"
                 continue
-            regions[i] = side_region(f, sides, f"face {i}")
+            if has_seam(f):
+                regions[i] = seam_region(f, sides, f"face {i}")
+            else:
+                regions[i] = (*side_region(f, sides, f"face {i}"), None)
         except CadError as err:
             why[i] = str(err)
     say(f"{len(sel)} faces, {len(regions)} 4-sided")
@@ -264,7 +275,7 @@ class _Part:
 
     def mesh(
         self,
-        regions: dict[int, tuple[Region, list[list[Any]]]],
+        regions: dict[int, _FaceRegion],
         why: dict[int, str],
         floor: IntArray,
         cache: dict[int, _FaceResult],
@@ -277,7 +288,7 @@ class _Part:
         # 2. counts
         four = {
             i: [[topo.edge_index(e) for e in side] for side in sides]
-            for i, (_, sides) in regions.items()
+            for i, (_, sides, _) in regions.items()
         }
         counts = division_counts(self.lengths, list(curves), four, self.size, floor)
         for i, reason in counts.conflicts.items():
@@ -396,7 +407,7 @@ class _Part:
         self,
         i: int,
         key: tuple[int, ...],
-        regions: dict[int, tuple[Region, list[list[Any]]]],
+        regions: dict[int, _FaceRegion],
         why: dict[int, str],
         counts: IntArray,
         shared: SharedNodes,
@@ -461,7 +472,7 @@ def _side_ids(
 
 
 def _structured(
-    rs: tuple[Region, list[list[Any]]],
+    rs: _FaceRegion,
     topo: Any,
     shared: SharedNodes,
     lengths: FloatArray,
@@ -469,7 +480,7 @@ def _structured(
 ) -> tuple[IntArray, FloatArray, FloatArray, IntArray, tuple[int, int]]:
     """The medial grid of a 4-sided face on the part's edge nodes: local quads, parameters,
     points, part node ids of the boundary nodes (-1 inside) and the divisions."""
-    region, sides = rs
+    region, sides, flat = rs
     per_side = [_side_ids(s, topo, shared, lengths) for s in sides]
     n1, n2 = len(per_side[0][0]) - 1, len(per_side[1][0]) - 1
     if (len(per_side[2][0]) - 1, len(per_side[3][0]) - 1) != (n1, n2):
@@ -477,7 +488,8 @@ def _structured(
     chained = any(len(s) > 1 for s in sides)
     fractions = [p[2] for p in per_side] if chained else None
     mesh = mesh_region(region, divisions=(n1, n2), fractions=fractions)
-    pts = np.array(mesh.points, dtype=np.float64)
+    uv = mesh.params if flat is None else flat.uv(mesh.params)
+    pts = np.array(mesh.points if flat is None else flat.points(mesh.params), dtype=np.float64)
     gid = np.full(len(pts), -1, dtype=np.int64)
     for k, idx in enumerate(boundary_indices(n1, n2)):
         ids, ours, _ = per_side[k]
@@ -488,7 +500,7 @@ def _structured(
             )
         gid[idx] = ids
         pts[idx] = ours
-    return structured_quads(n1, n2), mesh.params, pts, gid, (n1, n2)
+    return structured_quads(n1, n2), uv, pts, gid, (n1, n2)
 
 
 def _check(mesh: PartMesh) -> None:
