@@ -43,7 +43,9 @@ from medax.cad.model import Classification, FilletRecord
 from medax.errors import CadError
 from medax.geometry._types import FloatArray
 from medax.geometry.bspline import BSpline
+from medax.geometry.curve import Curve
 from medax.geometry.embedding import Embedding
+from medax.geometry.line import Line
 from medax.geometry.region import Region
 from medax.geometry.surfaces import (
     ConeSurface,
@@ -306,11 +308,25 @@ def seam_region(
     scale = np.linalg.norm(emb.jacobian(mid[None])[0], axis=0)
     if not np.all(scale > 0.0):
         raise CadError(f"{name}: the surface is singular at the middle of the face")
-    flat = [BSpline(c.control_points * scale, c.degree, c.knots, c.weights) for c in sides2d]
+    flat = [_scaled(c, scale) for c in sides2d]
     region = Region.build(flat, name=name)
     if region.reoriented:  # sides (0, 3, 2, 1), each reversed
         sides = [[TopoDS.Edge(e.Reversed()) for e in reversed(sides[k])] for k in (0, 3, 2, 1)]
     return region, sides, Development(emb, scale)
+
+
+def _scaled(c: BSpline, scale: FloatArray) -> Curve:
+    """Plane curve ``c`` with its coordinates multiplied by ``scale`` (2,): a :class:`Line`
+    where it is straight (degree 1, collinear control points: the pcurve of a circle or a
+    seam on a cylinder), which the mesher solves in closed form, else a B-spline."""
+    ctrl = c.control_points * scale
+    if c.degree == 1:
+        a, b = ctrl[0], ctrl[-1]
+        d = b - a
+        off = np.abs(d[0] * (ctrl[:, 1] - a[1]) - d[1] * (ctrl[:, 0] - a[0]))
+        if np.all(off <= 1e-12 * float(d @ d)):
+            return Line(a, b)
+    return BSpline(ctrl, c.degree, c.knots, c.weights)
 
 
 def side_region(face: Any, sides: list[list[Any]], name: str) -> tuple[Region, list[list[Any]]]:
