@@ -510,6 +510,36 @@ def test_seam_faces_structured():
         assert np.count_nonzero(uses == 1) == 2 * len(angles) and uses.max() == 2
 
 
+@pytest.mark.parametrize("kind", ["cone", "slanted cylinder"])
+def test_seam_faces_cone_and_curved_side(kind):
+    """A cone frustum's lateral face (its scaled parameters exact in length along the
+    circles and the seam only) and a cylinder cut by an inclined plane (a curved side in
+    the parameter plane) are structured too: nodes on their faces, shared and closed, no
+    inverted quad; on the cylinder every node at radius 10 from the axis."""
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox, BRepPrimAPI_MakeCone, BRepPrimAPI_MakeCylinder
+    from OCP.gp import gp_Ax1, gp_Ax2, gp_Dir, gp_Trsf
+
+    axis = gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1))
+    if kind == "cone":
+        shape = BRepPrimAPI_MakeCone(axis, 20.0, 8.0, 30.0).Shape()
+    else:
+        box = BRepPrimAPI_MakeBox(gp_Pnt(-50, -50, 25), 100.0, 100.0, 100.0).Shape()
+        turn = gp_Trsf()
+        turn.SetRotation(gp_Ax1(gp_Pnt(0, 0, 25), gp_Dir(1, 0, 0)), 0.4)
+        cyl = BRepPrimAPI_MakeCylinder(axis, 10.0, 40.0).Shape()
+        shape = BRepAlgoAPI_Cut(cyl, BRepBuilderAPI_Transform(box, turn).Shape()).Shape()
+    m = mesh_part(shape, 2.0)
+    assert len(m.faces) == 3 and m.structured_faces == (0,)  # the lateral face
+    test_nodes_on_their_faces((shape, m))
+    test_shared_nodes_and_closed((shape, m))
+    test_quads_face_outward((shape, m))
+    if kind != "cone":
+        p = m.points[np.unique(m.quads[m.quad_face == 0])]
+        assert np.max(np.abs(np.hypot(p[:, 0], p[:, 1]) - 10.0)) < 1e-9 * m.diagonal
+
+
 def test_gmsh_worker_survives_hang_and_crash(monkeypatch):
     """A gmsh attempt that hangs (stopped after ``ATTEMPT_TIMEOUT``) or ends the worker
     process counts as failed; a new worker goes on with the next attempt, the other faces
