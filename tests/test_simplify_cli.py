@@ -43,6 +43,10 @@ def test_cli_simplify_box(box_step, tmp_path, capsys):
     assert report["valid"] and abs(report["volume_rel_change"]) <= 1e-6
     assert report["max_deviation"]["relative_to_diagonal"] <= 1e-7
     assert png.stat().st_size > 10_000
+    written = report["written_file"]  # the file read back against the validated solid
+    assert written["faces"] == 6 and written["valid"]
+    assert written["max_deviation"] <= 1e-9 * report["diagonal"]
+    assert abs(written["default_integrator_volume_rel_change"]) <= 1e-9
     # the written STEP reads back as a 6-face solid without fillets
     assert (
         main(
@@ -124,3 +128,29 @@ def test_cli_two_solids(tmp_path):
     report = json.loads(rep.read_text())
     assert [(s["faces_before"], s["faces_after"]) for s in report["solids"]] == [(10, 6), (10, 9)]
     assert (report["faces_before"], report["faces_after"]) == (20, 15) and report["valid"]
+
+
+def test_cli_refuses_a_file_that_reads_back_moved(box_step, tmp_path, monkeypatch, capsys):
+    """A writer whose file holds another shape than the one validated (here: the solid moved
+    by 1e-4 of its size) is caught by reading the file back; the user's file survives."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.gp import gp_Trsf, gp_Vec
+
+    from medax.cad.simplify import step_out
+
+    honest = step_out._WRITERS["step"]
+
+    def moved(shape, tmp, path):
+        t = gp_Trsf()
+        t.SetTranslation(gp_Vec(0.0, 0.0, 5e-3))
+        honest(BRepBuilderAPI_Transform(shape, t, True).Shape(), tmp, path)
+
+    monkeypatch.setitem(step_out._WRITERS, "step", moved)
+    out = tmp_path / "s.step"
+    out.write_text("the user's earlier result")
+    code = main(["simplify", str(box_step), "-o", str(out)])
+    err = capsys.readouterr().err
+    assert code == 1
+    assert "s.step: face" in err and "moves by 0.005" in err
+    assert out.read_text() == "the user's earlier result"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.step"]

@@ -38,7 +38,7 @@ from OCP.TopAbs import TopAbs_REVERSED, TopAbs_WIRE
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS
 
-from medax.cad.face_region import surface_embedding
+from medax.cad.face_region import bspline_embedding, surface_embedding
 from medax.cad.simplify.occ import (
     Array,
     edge_points,
@@ -122,6 +122,7 @@ def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
     kind = ad.GetType()
     major = 0.0
     nurbs: NurbsSurface | None = None
+    converted_box: tuple[float, float, float, float] | None = None
     if kind == GeomAbs_Plane:
         ax = ad.Plane().Axis()
         m = ("plane", xyz(ax.Location()), xyz(ax.Direction()), 0.0)
@@ -143,8 +144,14 @@ def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
             return "a B-spline piece without a NURBS embedding"
         nurbs = replace(emb, extrapolate=True)  # continued like the analytic pieces
         m = ("nurbs", np.zeros(3), np.zeros(3), _min_radius(ad))
-    else:
-        return "fitted merge takes plane, cylinder, sphere, torus and B-spline pieces only"
+    else:  # cone, revolution, extrusion, Bezier, offset: the face's piece as a B-spline
+        conv = _trimmed_bspline(face)
+        if conv is None:
+            return f"a {kind.name[7:].lower()} piece that does not convert to a B-spline"
+        nurbs = replace(bspline_embedding(conv), extrapolate=True)
+        m = ("nurbs", np.zeros(3), np.zeros(3), _min_radius(ad))
+        u0, u1, v0, v1 = conv.Bounds()
+        converted_box = (u0, u1, v0, v1)
     outer_wire = BRepTools.OuterWire_s(face)
     outer = _wire_edges(outer_wire, frame)
     edges = list(outer)
@@ -168,9 +175,23 @@ def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
         tuple(edges),
         major,
         nurbs,
-        uv_bounds(face) if free else (0.0, 0.0, 0.0, 0.0),
+        converted_box or (uv_bounds(face) if free else (0.0, 0.0, 0.0, 0.0)),
         (frame[1], frame[2]),
     )
+
+
+def _trimmed_bspline(face: Any) -> Any | None:
+    """The B-spline of ``face``'s surface over the face's UV box (exact for the elementary
+    and swept kinds; its own parameters), or None when OCCT's conversion fails."""
+    from OCP.Geom import Geom_RectangularTrimmedSurface
+    from OCP.GeomConvert import GeomConvert
+
+    u0, u1, v0, v1 = uv_bounds(face)
+    try:
+        trimmed = Geom_RectangularTrimmedSurface(BRep_Tool.Surface_s(face), u0, u1, v0, v1)
+        return GeomConvert.SurfaceToBSplineSurface_s(trimmed)
+    except Exception:  # OCCT's Standard_Failure: no B-spline for this surface
+        return None
 
 
 def _min_radius(ad: Any, n: int = 7) -> float:

@@ -560,7 +560,8 @@ def _split(job: _Job, sel: dict[int, FilletSpec], csel: dict[int, CornerSpec]) -
 def _fit_pass(job: _Job) -> None:
     """Check every fitted face on the full split, first cheaply (is it a height field at
     all?) until no face fails, then with the full fit; fillets of faces that fail are kept
-    (with the reason) before the rebuild is tried, so bisection is not spent on them."""
+    (with the reason) before the rebuild is tried, so bisection is not spent on them; so are
+    fillets that a group on the full split cannot be formed with (:class:`GroupError`)."""
     for probe in (True, False):
         for _ in range(len(job.surfaces) + 1):
             if not _fit_round(job, probe):
@@ -575,6 +576,17 @@ def _fit_round(job: _Job, probe: bool) -> bool:
         return False
     try:
         split, groups = _split(job, job.specs, job.corners)
+    except GroupError as err:  # traced to fillets: keep them now, not after a search
+        blamed = {f for c in err.faces if c in job.corners for f in job.corners[c].fillets}
+        blamed |= err.faces & set(job.specs)
+        if not blamed:
+            return False
+        job.say(f"fillets {sorted(blamed)} kept: {err}")
+        for f in blamed:
+            job.specs.pop(f, None)
+            job.kept.setdefault(f, f"rebuild failed: {err}")
+        _cascade(job.specs, job.corners, job.kept)
+        return True
     except CadError:
         return False  # the attempt will report it
     bad: dict[int, str] = {}
