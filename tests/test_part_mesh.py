@@ -540,6 +540,30 @@ def test_seam_faces_cone_and_curved_side(kind):
         assert np.max(np.abs(np.hypot(p[:, 0], p[:, 1]) - 10.0)) < 1e-9 * m.diagonal
 
 
+def test_gmsh_session_keeps_sigterm_handler():
+    """gmsh's initialisation resets SIGTERM to the default action (the process died at once,
+    leaving temporaries, instead of ``medax mesh``'s clean stop); the session puts the
+    handler back: a real SIGTERM inside it reaches the handler (in a child process)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import os, signal, sys\n"
+        "from medax.mesh.gmsh_session import gmsh_session\n"
+        "class Stop(Exception): pass\n"
+        "def stop(*_): raise Stop\n"
+        "signal.signal(signal.SIGTERM, stop)\n"
+        "try:\n"
+        "    with gmsh_session():\n"
+        "        os.kill(os.getpid(), signal.SIGTERM)\n"
+        "        signal.pause()\n"
+        "except Stop:\n"
+        "    print('stopped cleanly')\n"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and "stopped cleanly" in r.stdout, (r.returncode, r.stderr)
+
+
 def test_gmsh_worker_survives_hang_and_crash(monkeypatch):
     """A gmsh attempt that hangs (stopped after ``ATTEMPT_TIMEOUT``) or ends the worker
     process counts as failed; a new worker goes on with the next attempt, the other faces

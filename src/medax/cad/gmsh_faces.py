@@ -131,12 +131,13 @@ class GmshFaces:
     def __enter__(self) -> GmshFaces:
         return self
 
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+    def __exit__(self, kind: object, *exc: object) -> None:
+        self.close(polite=kind is None)  # (on an error or an interrupt: at once)
 
-    def close(self) -> None:
-        """Stop the worker, remove the face files."""
-        self._stop(polite=True)
+    def close(self, polite: bool = True) -> None:
+        """Stop the worker (asked to finish, or killed when not ``polite``), remove the face
+        files."""
+        self._stop(polite=polite)
         self._tmp.cleanup()
 
     def mesh(self, index: int) -> GmshFace:
