@@ -206,16 +206,16 @@ class GmshFaces:
         def serve() -> None:
             for end in ours:  # (so that the worker sees the end of the requests if we die)
                 end.close()
-            while True:
-                try:
+            try:
+                while True:
                     request = req_recv.recv()
-                except EOFError:
-                    return
-                if request is None:
-                    return
-                index, path, tries, start = request
-                for result in _serve_face(nodes, job(index), index, path, tries, start):
-                    res_send.send(result)
+                    if request is None:
+                        return
+                    index, path, tries, start = request
+                    for result in _serve_face(nodes, job(index), index, path, tries, start):
+                        res_send.send(result)
+            except (EOFError, BrokenPipeError, KeyboardInterrupt):
+                return  # (we are gone or stopping: quietly, the run reports it)
 
         self._proc = ctx.Process(target=serve, daemon=True)
         self._proc.start()
