@@ -324,7 +324,8 @@ def _scaled(c: BSpline, scale: FloatArray) -> Curve:
         a, b = ctrl[0], ctrl[-1]
         d = b - a
         off = np.abs(d[0] * (ctrl[:, 1] - a[1]) - d[1] * (ctrl[:, 0] - a[0]))
-        if np.all(off <= 1e-12 * float(d @ d)):
+        ahead = np.diff((ctrl - a) @ d)  # (no folding back along the line)
+        if np.all(off <= 1e-12 * float(d @ d)) and np.all(ahead > 0.0):
             return Line(a, b)
     return BSpline(ctrl, c.degree, c.knots, c.weights)
 
