@@ -10,7 +10,9 @@ meshing was seen to hang; it is stopped after ``--timeout`` seconds).
 
 Per part and mesher: elements, the share of quads, the 5th percentile and minimum of
 Verdict's scaled Jacobian (on the quads), the smallest angle (degrees), the time (wall,
-seconds) and, for medax, faces structured / all.
+seconds), the CPU time (gmsh's process; medax's and its gmsh workers') and, for medax,
+faces structured / all; after simplify, the whole run's time (simplify + mesh) over
+gmsh's, wall and CPU.
 
     .venv/bin/python benchmarks/bench_part_mesh.py [PART.step ...] [--size H | --per N]
         [--no-simplify]
@@ -42,7 +44,7 @@ gmsh.initialize(readConfigFiles=False, interruptible=False)
 gmsh.option.setNumber("General.Terminal", 0)
 gmsh.model.occ.importShapes(path)
 gmsh.model.occ.synchronize()
-t0 = time.perf_counter()
+t0, c0 = time.perf_counter(), time.process_time()
 gmsh.model.mesh.setTransfiniteAutomatic()
 gmsh.option.setNumber("Mesh.Algorithm", 11)
 gmsh.option.setNumber("Mesh.RecombineAll", 1)
@@ -50,7 +52,7 @@ gmsh.option.setNumber("Mesh.MeshSizeMax", size)
 gmsh.option.setNumber("Mesh.MeshSizeMin", 0.0)
 gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
 gmsh.model.mesh.generate(2)
-dt = time.perf_counter() - t0
+dt, cpu = time.perf_counter() - t0, time.process_time() - c0
 tags, coord, _ = gmsh.model.mesh.getNodes()
 pts = np.asarray(coord).reshape(-1, 3)
 index = np.full(int(max(tags)) + 1, -1)
@@ -63,7 +65,7 @@ for t, c in zip(types, conn):
     else:
         others += len(c) // gmsh.model.mesh.getElementProperties(int(t))[3]
 q = np.concatenate(quads) if quads else np.zeros((0, 4), dtype=int)
-res = {"n": len(q) + others, "quads": len(q), "time": dt}
+res = {"n": len(q) + others, "quads": len(q), "time": dt, "cpu": cpu}
 if len(q):
     qq = quad_quality(pts, q)
     res.update(p5=float(np.percentile(qq.scaled_jacobian, 5)),
@@ -98,17 +100,18 @@ def _medax(shape: Any, size: float) -> dict[str, Any]:
     from medax.errors import MedaxError
     from medax.mesh.quality import quad_quality
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), _cpu()
     try:
         m = mesh_part(shape, size)
     except MedaxError as err:
         return {"error": str(err)[:60]}
-    dt = time.perf_counter() - t0
+    dt, cpu = time.perf_counter() - t0, _cpu() - c0
     q = quad_quality(m.points, m.quads)
     return {
         "n": len(m.quads),
         "quads": len(m.quads),
         "time": dt,
+        "cpu": cpu,
         "p5": float(np.percentile(q.scaled_jacobian, 5)),
         "min": float(q.scaled_jacobian.min()),
         "angle": float(q.min_angle.min()),
@@ -116,14 +119,23 @@ def _medax(shape: Any, size: float) -> dict[str, Any]:
     }
 
 
-def _simplified(shape: Any) -> tuple[Any, float, str]:
+def _cpu() -> float:
+    """CPU seconds of this process and of its children that ended (gmsh's workers)."""
+    import resource
+
+    a, b = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return a.ru_utime + a.ru_stime + b.ru_utime + b.ru_stime
+
+
+def _simplified(shape: Any) -> tuple[Any, float, float, str]:
     from medax.cad.classify import classify_solid
     from medax.cad.simplify import simplify, specs_from_classification
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), _cpu()
     cls = classify_solid(shape)
     r = simplify(cls.shape, specs_from_classification(cls))
-    return r.shape, time.perf_counter() - t0, f"{r.faces_before}->{r.faces_after}"
+    dt, cpu = time.perf_counter() - t0, _cpu() - c0
+    return r.shape, dt, cpu, f"{r.faces_before}->{r.faces_after}"
 
 
 def _parts(paths: list[str]) -> list[tuple[str, Any]]:
@@ -157,7 +169,7 @@ def _row(part: str, who: str, r: dict[str, Any]) -> str:
     ang = f"{r['angle']:.1f}" if "angle" in r else "-"
     return (
         f"{part:<24s} {who:<16s} {r['n']:>8d} {100 * share:>6.1f}% {p5:>7s} {mn:>7s} "
-        f"{ang:>6s} {r['time']:>8.2f} {r.get('faces', ''):>7s}"
+        f"{ang:>6s} {r['time']:>8.2f} {r['cpu']:>7.2f} {r.get('faces', ''):>7s}"
     )
 
 
@@ -173,7 +185,7 @@ def main() -> int:
 
     head = (
         f"{'part':<24s} {'mesher':<16s} {'elements':>8s} {'quads':>7s} {'SJ p5':>7s} "
-        f"{'SJ min':>7s} {'angle':>6s} {'time s':>8s} {'medial':>7s}"
+        f"{'SJ min':>7s} {'angle':>6s} {'time s':>8s} {'cpu s':>7s} {'medial':>7s}"
     )
     print(head)
     print("-" * len(head))
@@ -183,16 +195,23 @@ def main() -> int:
         with tempfile.TemporaryDirectory() as tmp:
             brep = Path(tmp) / "part.brep"
             BRepTools.Write_s(shape, str(brep))
-            print(_row(label, "gmsh", _gmsh(brep, size, args.timeout)), flush=True)
+            gmsh_res = _gmsh(brep, size, args.timeout)
+            print(_row(label, "gmsh", gmsh_res), flush=True)
         print(_row(label, "medax", _medax(shape, size)), flush=True)
         if not args.no_simplify:
             try:
-                simple, t_s, faces = _simplified(shape)
+                simple, t_s, c_s, faces = _simplified(shape)
             except Exception as err:  # (a part the simplification refuses: say so, go on)
                 print(_row(label, "medax simplify", {"error": str(err)[:60]}))
                 continue
             r = _medax(simple, size)
-            print(_row(label, f"medax simp {faces}", r) + f"  (+{t_s:.1f} s simplify)", flush=True)
+            extra = f"  (+{t_s:.1f} s simplify, cpu {c_s:.1f} s)"
+            if "time" in r:  # (the whole --simplify run against gmsh, wall and CPU)
+                g = gmsh_res.get("time"), gmsh_res.get("cpu")
+                if g[0] and g[1]:
+                    extra += (f"; with simplify / gmsh: {(r['time'] + t_s) / g[0]:.2f}x wall, "
+                              f"{(r['cpu'] + c_s) / g[1]:.2f}x cpu")  # fmt: skip
+            print(_row(label, f"medax simp {faces}", r) + extra, flush=True)
     return 0
 
 

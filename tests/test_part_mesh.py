@@ -261,9 +261,9 @@ def test_cli_part(tmp_path, capsys):
     assert main(["mesh", str(brep), "--size", "3", "-o", str(out), "--report", str(rep),
                  "--plot", str(png)]) == 0  # fmt: skip
     cap = capsys.readouterr()
-    assert "8/11 faces structured" in cap.out and "medax mesh:" in cap.err
+    assert "9/11 faces structured" in cap.out and "medax mesh:" in cap.err
     r = json.loads(rep.read_text())
-    assert r["n_structured_faces"] == 8 and r["open_mesh_edges"] == 0 and r["n_inverted"] == 0
+    assert r["n_structured_faces"] == 9 and r["open_mesh_edges"] == 0 and r["n_inverted"] == 0
     assert len(r["faces"]) == 11 and r["share_of_quads"] == 1.0
     for f in r["faces"]:
         assert 0 < f["scaled_jacobian"]["min"] <= 1 and 0 < f["gmsh_scaled_jacobian"]["min"] <= 1
@@ -372,7 +372,7 @@ def test_orientation_turns_and_refuses():
 
 def test_demo_part_mesh(tmp_path):
     """The demo meshes the 12-fillet box after --simplify (6 of 6 faces medial) and the
-    L-bracket (8 of 11), with reports and pictures."""
+    L-bracket (9 of 11: the hole's cylinder too, cut by its seam), with reports and pictures."""
     from medax.cli.demo_part_mesh import demo
 
     written = demo(tmp_path)
@@ -381,7 +381,7 @@ def test_demo_part_mesh(tmp_path):
     box = json.loads((tmp_path / "part-mesh-box-12-edges.json").read_text())
     assert (box["n_faces"], box["n_structured_faces"], box["open_mesh_edges"]) == (6, 6, 0)
     bracket = json.loads((tmp_path / "part-mesh-l-bracket.json").read_text())
-    assert (bracket["n_faces"], bracket["n_structured_faces"]) == (11, 8)
+    assert (bracket["n_faces"], bracket["n_structured_faces"]) == (11, 9)
     for report in (box, bracket):
         assert validation_errors(report, "part-mesh-report") == []
 
@@ -439,24 +439,25 @@ def test_face_nothing_meshes_gets_finer_edges(monkeypatch):
     counts propagated), the part is meshed again with the faces whose edges kept their counts
     kept; the result passes the same checks. Refused at every count: the run fails naming
     the face."""
-    import medax.cad.part_mesh as pm
+    from medax.cad.gmsh_faces import GmshFaces
     from medax.errors import MeshError
 
-    shape, first = _meshed("plate_with_boss")
+    # (the shaft: doubling its first gmsh face's counts leaves another gmsh face's alone)
+    shape, first = _meshed("stepped_shaft")
     topo = build_topology(shape)
     target = first.gmsh_faces[0]
     need = 2 * sum(int(first.edge_counts[j]) for j in topo.face_edges[target])
-    real = pm.mesh_face
+    real = GmshFaces.mesh
     calls: dict[int, int] = {}
 
-    def picky(face, index, edge_mid, edge_ids, *args, **kwargs):
+    def picky(self, index):
         calls[index] = calls.get(index, 0) + 1
-        n = sum(len(ids) - 1 for ids in edge_ids.values())
+        n = sum(len(self.nodes.edge_ids[j]) - 1 for j in self.job(index).edges)
         if index == target and n < need:
             raise MeshError(f"face {index}: refused at {n} divisions")
-        return real(face, index, edge_mid, edge_ids, *args, **kwargs)
+        return real(self, index)
 
-    monkeypatch.setattr(pm, "mesh_face", picky)
+    monkeypatch.setattr(GmshFaces, "mesh", picky)
     m = mesh_part(shape, SIZE)
     for j in topo.face_edges[target]:
         assert m.edge_counts[j] >= 2 * first.edge_counts[j]
@@ -472,6 +473,138 @@ def test_face_nothing_meshes_gets_finer_edges(monkeypatch):
     need = 10**9
     with pytest.raises(MeshError, match=rf"face {target}: refused .*divided 8 times finer"):
         mesh_part(shape, SIZE)
+
+
+def test_seam_faces_structured():
+    """The stepped shaft's lateral cylinders and torus fillets are 4-sided once the wire's
+    two runs along the seam count as sides (circle, seam, circle, seam): each gets the
+    structured grid. On a cylinder that is the uniform grid: every node at a radius the
+    shaft was built with (10, 15, 8) from the axis, at equal angles and equal heights; each
+    mesh edge on the seam is in one quad on each side of it (with the part-wide checks on
+    this part: nodes on their faces, shared, closed, no inverted quad)."""
+    from medax.cad.face_geometry import surface_type
+    from medax.cad.face_region import has_seam
+
+    shape, m = _meshed("stepped_shaft")
+    topo = build_topology(shape)
+    kinds = {i: surface_type(topo.face(i)) for i in range(topo.n_faces)}
+    seamed = {i for i in range(topo.n_faces) if has_seam(topo.face(i))}
+    lateral = {i for i, k in kinds.items() if k in ("cylinder", "torus")}
+    assert len([i for i in lateral if kinds[i] == "cylinder"]) == 3 and len(lateral) == 5
+    assert lateral <= seamed and lateral <= set(m.structured_faces)
+    diag = m.diagonal
+    for i in (i for i in lateral if kinds[i] == "cylinder"):
+        q = m.quads[m.quad_face == i]
+        p = m.points[np.unique(q)]
+        r = np.hypot(p[:, 0], p[:, 1])
+        radius = min((10.0, 15.0, 8.0), key=lambda x: abs(x - r[0]))
+        assert np.max(np.abs(r - radius)) < 1e-9 * diag
+        heights = np.unique(np.round(p[:, 2] / (1e-9 * diag)))
+        a = np.mod(np.arctan2(p[:, 1], p[:, 0]), 2 * np.pi)
+        angles = np.unique(np.round(np.where(a > 2 * np.pi - 1e-9, 0.0, a), 9))
+        assert len(heights) * len(angles) == len(p)  # a grid of circles x lines
+        dz = np.diff(heights) * 1e-9 * diag
+        np.testing.assert_allclose(dz, dz[0], atol=1e-8 * diag)
+        gaps = np.diff(np.concatenate((angles, [angles[0] + 2 * np.pi])))
+        np.testing.assert_allclose(gaps, 2 * np.pi / len(angles), atol=1e-8)
+        # every mesh edge of the face is in two of its quads but those on the two circles
+        e = np.sort(np.stack((q, np.roll(q, -1, axis=1)), axis=-1).reshape(-1, 2), axis=1)
+        _, uses = np.unique(e, axis=0, return_counts=True)
+        assert np.count_nonzero(uses == 1) == 2 * len(angles) and uses.max() == 2
+
+
+@pytest.mark.parametrize("kind", ["cone", "slanted cylinder"])
+def test_seam_faces_cone_and_curved_side(kind):
+    """A cone frustum's lateral face (its scaled parameters exact in length along the
+    circles and the seam only) and a cylinder cut by an inclined plane (a curved side in
+    the parameter plane) are structured too: nodes on their faces, shared and closed, no
+    inverted quad; on the cylinder every node at radius 10 from the axis."""
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox, BRepPrimAPI_MakeCone, BRepPrimAPI_MakeCylinder
+    from OCP.gp import gp_Ax1, gp_Ax2, gp_Dir, gp_Trsf
+
+    axis = gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1))
+    if kind == "cone":
+        shape = BRepPrimAPI_MakeCone(axis, 20.0, 8.0, 30.0).Shape()
+    else:
+        box = BRepPrimAPI_MakeBox(gp_Pnt(-50, -50, 25), 100.0, 100.0, 100.0).Shape()
+        turn = gp_Trsf()
+        turn.SetRotation(gp_Ax1(gp_Pnt(0, 0, 25), gp_Dir(1, 0, 0)), 0.4)
+        cyl = BRepPrimAPI_MakeCylinder(axis, 10.0, 40.0).Shape()
+        shape = BRepAlgoAPI_Cut(cyl, BRepBuilderAPI_Transform(box, turn).Shape()).Shape()
+    m = mesh_part(shape, 2.0)
+    assert len(m.faces) == 3 and m.structured_faces == (0,)  # the lateral face
+    test_nodes_on_their_faces((shape, m))
+    test_shared_nodes_and_closed((shape, m))
+    test_quads_face_outward((shape, m))
+    if kind != "cone":
+        p = m.points[np.unique(m.quads[m.quad_face == 0])]
+        assert np.max(np.abs(np.hypot(p[:, 0], p[:, 1]) - 10.0)) < 1e-9 * m.diagonal
+
+
+def test_gmsh_session_keeps_sigterm_handler():
+    """gmsh's initialisation resets SIGTERM to the default action (the process died at once,
+    leaving temporaries, instead of ``medax mesh``'s clean stop); the session puts the
+    handler back: a real SIGTERM inside it reaches the handler (in a child process)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import os, signal, sys\n"
+        "from medax.mesh.gmsh_session import gmsh_session\n"
+        "class Stop(Exception): pass\n"
+        "def stop(*_): raise Stop\n"
+        "signal.signal(signal.SIGTERM, stop)\n"
+        "try:\n"
+        "    with gmsh_session():\n"
+        "        os.kill(os.getpid(), signal.SIGTERM)\n"
+        "        signal.pause()\n"
+        "except Stop:\n"
+        "    print('stopped cleanly')\n"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and "stopped cleanly" in r.stdout, (r.returncode, r.stderr)
+
+
+def test_gmsh_worker_survives_hang_and_crash(monkeypatch):
+    """A gmsh attempt that hangs (stopped after ``ATTEMPT_TIMEOUT``) or ends the worker
+    process counts as failed; a new worker goes on with the next attempt, the other faces
+    are served by that same worker, and the part meshes as it did."""
+    import os
+    import time
+
+    import medax.cad.gmsh_faces as gf
+
+    shape, first = _meshed("plate_with_boss")
+    hang, crash = first.gmsh_faces[:2]
+    real = gf._mesh
+
+    def flaky(gmsh, path, index, nodes, edges, inner, algorithm, subdivide):
+        if (algorithm, subdivide, inner) == gf.ATTEMPTS[0]:
+            if index == hang:
+                time.sleep(60.0)
+            if index == crash:
+                os._exit(3)
+        return real(gmsh, path, index, nodes, edges, inner, algorithm, subdivide)
+
+    starts = []
+    real_start = gf.GmshFaces._start
+
+    def counted(self):
+        starts.append(1)
+        real_start(self)
+
+    monkeypatch.setattr(gf, "_mesh", flaky)
+    monkeypatch.setattr(gf, "ATTEMPT_TIMEOUT", 2.0)
+    monkeypatch.setattr(gf.GmshFaces, "_start", counted)
+    m = mesh_part(shape, SIZE)
+    assert len(starts) == 3  # the first worker, one after the hang, one after the crash
+    assert {hang, crash} <= set(m.gmsh_faces)
+    assert len(m.quads) > 0
+    test_shared_nodes_and_closed((shape, m))
+    test_quads_face_outward((shape, m))
+    test_nodes_on_their_faces((shape, m))
 
 
 def _u_channel(w=100.0, r=10.0, h=20.0, t=1.0, depth=60.0):

@@ -13,7 +13,7 @@ constraints (0, 2): no second copy of the tracer.
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -33,7 +33,7 @@ from OCP.GeomAbs import (
 )
 from OCP.GeomConvert import GeomConvert, GeomConvert_CompCurveToBSplineCurve
 from OCP.gp import gp_Pnt, gp_Vec
-from OCP.TopAbs import TopAbs_REVERSED, TopAbs_WIRE
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_REVERSED, TopAbs_WIRE
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS
 
@@ -43,7 +43,9 @@ from medax.cad.model import Classification, FilletRecord
 from medax.errors import CadError
 from medax.geometry._types import FloatArray
 from medax.geometry.bspline import BSpline
+from medax.geometry.curve import Curve
 from medax.geometry.embedding import Embedding
+from medax.geometry.line import Line
 from medax.geometry.region import Region
 from medax.geometry.surfaces import (
     ConeSurface,
@@ -209,11 +211,13 @@ def not_four_sided(face: Any, angle_tol: float = CORNER_ANGLE) -> str | None:
     return None if len(sides) == 4 else f"{len(sides)} sides"
 
 
-def face_sides(face: Any, angle_tol: float = CORNER_ANGLE) -> list[list[Any]]:
+def face_sides(face: Any, angle_tol: float = CORNER_ANGLE, seams: bool = False) -> list[list[Any]]:
     """The outer wire's oriented edges, in wire order, grouped into sides: consecutive
     edges whose tangents turn by less than ``angle_tol`` (radians, in space) form one side.
-    Raises :class:`CadError` for a face with inner wires, a seam or degenerate edge (no
-    corner structure), or a wire with no corner."""
+    Raises :class:`CadError` for a face with inner wires, a degenerate edge or, unless
+    ``seams``, a seam edge (no corner structure), or a wire with no corner. With ``seams`` a
+    seam edge is a side of its own each time the wire runs along it (a cylinder's lateral
+    face cut by one seam: circle, seam, circle, seam)."""
     wires = TopExp_Explorer(face, TopAbs_WIRE)
     n_wires = 0
     while wires.More():
@@ -228,12 +232,16 @@ def face_sides(face: Any, angle_tol: float = CORNER_ANGLE) -> list[list[Any]]:
         exp.Next()
         if BRep_Tool.Degenerated_s(e):
             raise CadError("a degenerate edge (pole)")
-        if BRep_Tool.IsClosed_s(e, face):
+        if not seams and BRep_Tool.IsClosed_s(e, face):
             raise CadError("a seam edge (closed surface)")
         edges.append(e)
     tangents = [_end_tangents(e) for e in edges]
     cos = np.cos(angle_tol)
-    corner = [float(tangents[k - 1][1] @ tangents[k][0]) < cos for k in range(len(edges))]
+    corner = [
+        float(tangents[k - 1][1] @ tangents[k][0]) < cos
+        or (seams and (_is_seam(edges[k], face) or _is_seam(edges[k - 1], face)))
+        for k in range(len(edges))
+    ]
     if not any(corner):
         raise CadError("no corner in the outer wire")
     k0 = corner.index(True)
@@ -243,6 +251,83 @@ def face_sides(face: Any, angle_tol: float = CORNER_ANGLE) -> list[list[Any]]:
             sides.append([])
         sides[-1].append(edges[k % len(edges)])
     return sides
+
+
+def has_seam(face: Any) -> bool:
+    """Whether ``face`` has a seam edge (one edge twice in its wire: a closed surface)."""
+    exp = TopExp_Explorer(face, TopAbs_EDGE)
+    while exp.More():
+        if _is_seam(TopoDS.Edge(exp.Current()), face):
+            return True
+        exp.Next()
+    return False
+
+
+def _is_seam(edge: Any, face: Any) -> bool:
+    return bool(BRep_Tool.IsClosed_s(edge, face))
+
+
+@dataclass(frozen=True)
+class Development:
+    """A face's surface over its parameters scaled to lengths: plane point ``p`` (n, 2) is
+    the surface point at ``(u, v) = p / scale``; ``scale`` (2,) the lengths of the surface's
+    parameter derivatives ``|S_u|, |S_v|`` at the middle of the face's parameter box (model
+    units per parameter unit). Exact in length along both parameters on a cylinder, and
+    along iso-lines of constant speed (a circle of a surface of revolution) on others."""
+
+    surface: Embedding
+    scale: FloatArray
+
+    def uv(self, p: FloatArray) -> FloatArray:
+        """Surface parameters (n, 2) of plane points ``p`` (n, 2)."""
+        return np.asarray(p, dtype=np.float64) / self.scale
+
+    def points(self, p: FloatArray) -> FloatArray:
+        """Surface points (n, 3) of plane points ``p`` (n, 2)."""
+        return self.surface.evaluate(self.uv(p))
+
+
+def seam_region(
+    face: Any, sides: list[list[Any]], name: str
+) -> tuple[Region, list[list[Any]], Development]:
+    """A 4-sided ``face`` with a seam (its sides from :func:`face_sides` with ``seams``) as
+    a planar Region of its pcurves scaled to lengths (:class:`Development`): the seam's two
+    sides are its two pcurves, so the distance from the seam, which is the same on both
+    sides in space, is measured across the face instead. Also the oriented edges of each
+    region side in the side's direction, and the development that maps the region's
+    points onto the surface."""
+    try:
+        sides2d = [_to_bspline(_chain([_pcurve(e, face) for e in s], True), 2) for s in sides]
+        emb = surface_embedding(face)
+    except CadError as err:
+        raise CadError(f"{name}: {err}") from err
+    except Exception as err:
+        raise CadError(f"{name}: OCCT ({err})") from err
+    box = np.concatenate([c.control_points for c in sides2d])
+    mid = 0.5 * (box.min(axis=0) + box.max(axis=0))
+    scale = np.linalg.norm(emb.jacobian(mid[None])[0], axis=0)
+    if not np.all(scale > 0.0):
+        raise CadError(f"{name}: the surface is singular at the middle of the face")
+    flat = [_scaled(c, scale) for c in sides2d]
+    region = Region.build(flat, name=name)
+    if region.reoriented:  # sides (0, 3, 2, 1), each reversed
+        sides = [[TopoDS.Edge(e.Reversed()) for e in reversed(sides[k])] for k in (0, 3, 2, 1)]
+    return region, sides, Development(emb, scale)
+
+
+def _scaled(c: BSpline, scale: FloatArray) -> Curve:
+    """Plane curve ``c`` with its coordinates multiplied by ``scale`` (2,): a :class:`Line`
+    where it is straight (degree 1, collinear control points: the pcurve of a circle or a
+    seam on a cylinder), which the mesher solves in closed form, else a B-spline."""
+    ctrl = c.control_points * scale
+    if c.degree == 1:
+        a, b = ctrl[0], ctrl[-1]
+        d = b - a
+        off = np.abs(d[0] * (ctrl[:, 1] - a[1]) - d[1] * (ctrl[:, 0] - a[0]))
+        ahead = np.diff((ctrl - a) @ d)  # (no folding back along the line)
+        if np.all(off <= 1e-12 * float(d @ d)) and np.all(ahead > 0.0):
+            return Line(a, b)
+    return BSpline(ctrl, c.degree, c.knots, c.weights)
 
 
 def side_region(face: Any, sides: list[list[Any]], name: str) -> tuple[Region, list[list[Any]]]:

@@ -1,14 +1,19 @@
 """Quad meshes of the faces that are not structured, by gmsh, on the part's edge nodes.
 
 Each face is written alone to a BRep file and meshed in its own gmsh model (so a failure
-names its face): every curve is made transfinite with the part's division count of its
+names its face), each attempt from a fresh gmsh state in a forked worker process that
+serves the part's faces one after another (:class:`GmshFaces`: a hang or a crash costs one
+attempt, not the run): every curve is made transfinite with the part's division count of its
 edge, then Frontal-Delaunay for quads and blossom recombination (``Mesh.Algorithm = 8``,
 ``Mesh.RecombineAll``). The counts are even, so each face has an even number of boundary
 edges; where blossom still leaves triangles, or the caller's check refuses the quads (one
 inverted or flat against the face normal), the face is meshed again (:data:`ATTEMPTS`):
 quasi-structured quads, Frontal-Delaunay, and both Frontal-Delaunays with half the counts
 and every element split into quads (``Mesh.SubdivisionAlgorithm = 1``), which doubles the
-boundary divisions back to the part's counts (quasi-structured splits by itself).
+boundary divisions back to the part's counts (quasi-structured splits by itself). Faces
+with a seam edge skip the quasi-structured attempt: it leaves the seam curve without nodes
+or with counts not asked for, or aborts (never a usable mesh on the 56 seam faces of the
+benchmark parts), and it is the costliest attempt.
 Triangles the recombination leaves in neighbouring pairs (where the pair's one quad would
 have a flat or reflex corner, or gmsh's two triangles overlap in a narrow gap) become five
 quads each (:func:`pair_triangles`); such a mesh is kept only when no attempt gives quads
@@ -25,7 +30,7 @@ parameters); nodes on gmsh points to the part's vertex nodes by position.
 from __future__ import annotations
 
 import tempfile
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -33,9 +38,10 @@ from typing import Any
 import numpy as np
 from OCP.BRepTools import BRepTools
 
+from medax.cad.face_region import has_seam
+from medax.cad.shared_nodes import SharedNodes
 from medax.errors import MeshError
 from medax.geometry._types import FloatArray, IntArray
-from medax.mesh.gmsh_session import gmsh_session
 
 #: gmsh element types
 _QUAD, _TRIANGLE = 3, 2
@@ -54,6 +60,8 @@ ATTEMPTS = (
     (8, True, 0.5),
     (8, False, 0.25),
 )
+#: the quasi-structured algorithm, skipped on faces with a seam edge
+_QUASI_STRUCTURED = 11
 #: least distance (x the 4-gon's diameter) from the point the 5 quads of a triangle pair
 #: are built about to the 4-gon's edges (:func:`pair_triangles`)
 _KERNEL_MARGIN = 0.02
@@ -81,113 +89,212 @@ class GmshFace:
     paired: int = 0
 
 
-def mesh_face(
-    face: Any,
-    index: int,
-    edge_mid: Mapping[int, FloatArray],
-    edge_ids: Mapping[int, IntArray],
-    edge_pts: Mapping[int, FloatArray],
-    vertex_pts: FloatArray,
-    vertex_ids: IntArray,
-    size: float,
-    tol: float,
-    check: Callable[[GmshFace], str | None] | None = None,
-) -> GmshFace:
-    """Mesh CAD ``face`` (face ``index`` of the part) with quads whose boundary nodes are the
-    part's: ``edge_mid[j]`` the middle point (3,) of each of its edges ``j``,
-    ``edge_ids[j]`` / ``edge_pts[j]`` the part's node ids (n + 1,) and points (n + 1, 3)
-    along it, ``vertex_pts`` / ``vertex_ids`` the vertex nodes; ``tol`` the length below
-    which points match; ``check`` says what is wrong with a mesh (e.g. a quad inverted
-    against the face normal), which is then tried again (:data:`ATTEMPTS`). Raises
-    :class:`MeshError` naming the face."""
-    with gmsh_session() as gmsh, tempfile.TemporaryDirectory(prefix="medax-") as tmp:
-        path = Path(tmp) / f"face{index}.brep"
-        if not BRepTools.Write_s(face, str(path)):
+@dataclass(frozen=True)
+class FaceJob:
+    """One face for :class:`GmshFaces`: the CAD ``face``, its ``edges`` that have nodes,
+    its ``vertices`` (indices into the shared nodes) and ``check``, which says what is
+    wrong with a mesh (e.g. a quad inverted against the face normal) or returns None."""
+
+    face: Any
+    edges: Sequence[int]
+    vertices: Sequence[int]
+    check: Callable[[GmshFace], str | None] | None = None
+
+
+def attempts_for(face: Any) -> list[tuple[int, bool, float]]:
+    """The attempts (:data:`ATTEMPTS`) for ``face``: without the quasi-structured one on a
+    face with a seam edge."""
+    seam = has_seam(face)
+    return [a for a in ATTEMPTS if not (seam and a[0] == _QUASI_STRUCTURED)]
+
+
+class GmshFaces:
+    """Faces of a part meshed by gmsh on the part's shared ``nodes`` (face ``i`` described
+    by ``job(i)``), in a forked worker process that serves one face after another.
+
+    Each attempt starts from a fresh gmsh state. An attempt that takes longer than
+    :data:`ATTEMPT_TIMEOUT` or ends the process (gmsh's quasi-structured quads were seen to
+    hang and to abort) counts as failed, with a message; a new worker goes on with the
+    next attempt. One worker for many attempts: forking the part's process for each cost
+    30 - 40 ms (page tables and teardown), more than most attempts take. Without ``fork``
+    (not POSIX) the attempts run in this process, unbounded. Use as a context manager (the
+    worker is stopped at the end)."""
+
+    def __init__(self, nodes: SharedNodes, job: Callable[[int], FaceJob]) -> None:
+        self.nodes = nodes
+        self.job = job
+        self._tmp = tempfile.TemporaryDirectory(prefix="medax-")
+        self._proc: Any = None
+        self._requests: Any = None
+        self._results: Any = None
+
+    def __enter__(self) -> GmshFaces:
+        return self
+
+    def __exit__(self, kind: object, *exc: object) -> None:
+        self.close(polite=kind is None)  # (on an error or an interrupt: at once)
+
+    def close(self, polite: bool = True) -> None:
+        """Stop the worker (asked to finish, or killed when not ``polite``), remove the face
+        files."""
+        self._stop(polite=polite)
+        self._tmp.cleanup()
+
+    def mesh(self, index: int) -> GmshFace:
+        """Face ``index`` meshed with quads whose boundary nodes are the shared nodes of its
+        edges and vertices, at the size ``nodes.size``; tried again
+        (:data:`ATTEMPTS`) while triangles remain or the job's check refuses the quads.
+        Raises :class:`MeshError` naming the face."""
+        job = self.job(index)
+        tries = attempts_for(job.face)
+        path = Path(self._tmp.name) / f"face{index}.brep"
+        if not BRepTools.Write_s(job.face, str(path)):
             raise MeshError(f"face {index}: could not write it for gmsh")
         last = "triangles left by the recombination"
         fallback: GmshFace | None = None  # the first valid mesh with triangle pairs replaced
-        for algorithm, subdivide, inner in ATTEMPTS:
-
-            def attempt(algorithm: int = algorithm, subdivide: bool = subdivide,
-                        inner: float = inner) -> Any:  # fmt: skip
-                gmsh.model.add(f"medax-face-{index}-{algorithm}-{int(subdivide)}-{inner}")
-                try:
-                    out = _mesh(
-                        gmsh, path, index, edge_mid, edge_ids, edge_pts, inner * size, tol,
-                        algorithm, subdivide,
-                    )  # fmt: skip
-                    if out is None:
-                        return "triangles left by the recombination"
-                    _vertices(gmsh, out, vertex_pts, vertex_ids, tol, index)
-                    problem = None if check is None else check(out)
-                    return out if problem is None else problem
-                except MeshError as err:  # (counts not kept, nodes off the edge: try again)
-                    return str(err).removeprefix(f"face {index}: ")
-                except Exception as err:  # gmsh raises plain Exceptions
-                    return f"gmsh: {err}"
-                finally:
-                    gmsh.model.remove()
-
-            result = _with_timeout(attempt, ATTEMPT_TIMEOUT)
-            if isinstance(result, GmshFace) and not result.paired:
-                return result
-            if isinstance(result, GmshFace):
-                fallback = fallback or result
-            else:
-                last = result
+        k = 0
+        while k < len(tries):
+            for result in self._run(index, str(path), tries, k):
+                k += 1
+                if isinstance(result, GmshFace) and not result.paired:
+                    return result
+                if isinstance(result, GmshFace):
+                    fallback = fallback or result
+                else:
+                    last = result
         if fallback is not None:
             return fallback
         raise MeshError(f"face {index}: gmsh could not mesh it with valid quads only ({last})")
 
+    def _run(
+        self, index: int, path: str, tries: list[tuple[int, bool, float]], start: int
+    ) -> Iterator[GmshFace | str]:
+        """The results of attempts ``tries[start:]`` on face ``index`` (stored at ``path``)
+        in order, up to the first mesh of quads alone; after a timeout or a crash the
+        message, and nothing more (the worker is gone)."""
+        import multiprocessing as mp  # noqa: PLC0415
 
-def _with_timeout(work: Callable[[], Any], seconds: float) -> Any:
-    """``work()`` run in a forked child (it inherits gmsh's state), its result sent back;
-    the child is killed after ``seconds`` (gmsh's quasi-structured quads were seen to hang)
-    and a message returned instead. Without ``fork`` (not POSIX) it runs here, unbounded."""
-    import multiprocessing as mp  # noqa: PLC0415
+        if "fork" not in mp.get_all_start_methods():  # pragma: no cover
+            yield from _serve_face(self.nodes, self.job(index), index, path, tries, start)
+            return
+        if self._proc is None:
+            self._start()
+        self._requests.send((index, path, tries, start))
+        for _ in range(start, len(tries)):
+            try:
+                if not self._results.poll(ATTEMPT_TIMEOUT):
+                    self._stop()
+                    yield f"gmsh took more than {ATTEMPT_TIMEOUT:g} s"
+                    return
+                result = self._results.recv()
+            except EOFError:
+                code = self._stop()
+                yield f"gmsh's process ended without a result (exit code {code})"
+                return
+            yield result
+            if isinstance(result, GmshFace) and not result.paired:
+                return
 
-    if "fork" not in mp.get_all_start_methods():  # pragma: no cover
-        return work()
-    ctx = mp.get_context("fork")
-    recv, send = ctx.Pipe(duplex=False)
+    def _start(self) -> None:
+        import multiprocessing as mp  # noqa: PLC0415
 
-    def child() -> None:
+        ctx = mp.get_context("fork")
+        req_recv, self._requests = ctx.Pipe(duplex=False)
+        self._results, res_send = ctx.Pipe(duplex=False)
+        nodes, job, ours = self.nodes, self.job, (self._requests, self._results)
+
+        def serve() -> None:
+            for end in ours:  # (so that the worker sees the end of the requests if we die)
+                end.close()
+            try:
+                while True:
+                    request = req_recv.recv()
+                    if request is None:
+                        return
+                    index, path, tries, start = request
+                    for result in _serve_face(nodes, job(index), index, path, tries, start):
+                        res_send.send(result)
+            except (EOFError, BrokenPipeError, KeyboardInterrupt):
+                return  # (we are gone or stopping: quietly, the run reports it)
+
+        self._proc = ctx.Process(target=serve, daemon=True)
+        self._proc.start()
+        req_recv.close()
+        res_send.close()
+
+    def _stop(self, polite: bool = False) -> int | None:
+        """End the worker (asked to, when ``polite``, else killed); its exit code."""
+        proc, self._proc = self._proc, None
+        if proc is None:
+            return None
         try:
-            send.send(work())
-        except BaseException as err:  # (anything, as a message: the parent goes on)
-            send.send(f"{type(err).__name__}: {err}")
-        finally:
-            send.close()
-
-    proc = ctx.Process(target=child, daemon=True)
-    proc.start()
-    send.close()
-    try:
-        if recv.poll(seconds):
-            return recv.recv()
-        return f"gmsh took more than {seconds:g} s"
-    except EOFError:
-        return f"gmsh's process ended without a result (exit code {proc.exitcode})"
-    finally:
+            if polite and proc.is_alive():
+                self._requests.send(None)
+                proc.join(5.0)
+        except OSError:  # pragma: no cover (the worker is gone already)
+            pass
         if proc.is_alive():
             proc.kill()
         proc.join()
-        recv.close()
+        self._requests.close()
+        self._results.close()
+        return proc.exitcode
+
+
+def _serve_face(
+    nodes: SharedNodes,
+    job: FaceJob,
+    index: int,
+    path: str,
+    tries: list[tuple[int, bool, float]],
+    start: int,
+) -> Iterator[GmshFace | str]:
+    """Attempts ``tries[start:]`` on face ``index`` (its BRep file at ``path``), each on a
+    fresh gmsh state: each one's mesh or what was wrong, up to the first mesh of quads
+    alone."""
+    import gmsh  # noqa: PLC0415
+
+    vs = list(job.vertices)
+    for algorithm, subdivide, inner in tries[start:]:
+        if gmsh.isInitialized():
+            gmsh.finalize()
+        gmsh.initialize(readConfigFiles=False, interruptible=False)
+        gmsh.option.setNumber("General.Terminal", 0)
+        result: GmshFace | str
+        gmsh.model.add(f"medax-face-{index}-{algorithm}-{int(subdivide)}-{inner}")
+        try:
+            out = _mesh(gmsh, Path(path), index, nodes, job.edges, inner, algorithm, subdivide)
+            if out is None:
+                result = "triangles left by the recombination"
+            else:
+                _vertices(gmsh, out, nodes.vert_pts[vs], nodes.vert_ids[vs], nodes.tol, index)
+                problem = None if job.check is None else job.check(out)
+                result = out if problem is None else problem
+        except MeshError as err:  # (counts not kept, nodes off the edge: try again)
+            result = str(err).removeprefix(f"face {index}: ")
+        except Exception as err:  # gmsh raises plain Exceptions
+            result = f"gmsh: {err}"
+        finally:
+            gmsh.model.remove()
+        yield result
+        if isinstance(result, GmshFace) and not result.paired:
+            return
 
 
 def _mesh(
     gmsh: Any,
     path: Path,
     index: int,
-    edge_mid: Mapping[int, FloatArray],
-    edge_ids: Mapping[int, IntArray],
-    edge_pts: Mapping[int, FloatArray],
-    size: float,
-    tol: float,
+    nodes: SharedNodes,
+    edges: Sequence[int],
+    inner: float,
     algorithm: int,
     subdivide: bool,
 ) -> GmshFace | None:
-    """One attempt; None when triangles remain."""
+    """One attempt, inside size ``inner`` x ``nodes.size``, on the nodes of ``edges``; None
+    when triangles remain."""
+    edge_ids, edge_pts, tol = nodes.edge_ids, nodes.edge_pts, nodes.tol
+    size = inner * nodes.size
     gmsh.model.occ.importShapes(str(path), highestDimOnly=True)
     gmsh.model.occ.synchronize()
     surfaces = gmsh.model.getEntities(2)
@@ -195,7 +302,7 @@ def _mesh(
         raise MeshError(f"face {index}: gmsh read {len(surfaces)} surfaces from it")
     tag = surfaces[0][1]
     curve_edge: dict[int, int] = {}
-    mids = {j: np.asarray(m) for j, m in edge_mid.items()}
+    mids = {j: np.asarray(nodes.edge_mid[j]) for j in edges}
     for _, c in gmsh.model.getEntities(1):
         lo, hi = gmsh.model.getParametrizationBounds(1, c)
         ends = np.asarray(gmsh.model.getValue(1, c, [lo[0], 0.5 * (lo[0] + hi[0]), hi[0]]))

@@ -3,13 +3,18 @@ gmsh's quads on the others, the part's edge nodes shared by both.
 
 Steps (:func:`mesh_part`):
 
-1. Each face is 4-sided or not (:func:`~medax.cad.face_region.face_sides`); 4-sided ones
-   become Regions on their surfaces (:func:`~medax.cad.face_region.side_region`).
+1. Each face is 4-sided or not (:func:`~medax.cad.face_region.face_sides`; the wire's two
+   runs along a seam count as two sides); 4-sided ones become Regions on their surfaces
+   (:func:`~medax.cad.face_region.side_region`), those with a seam planar Regions of their
+   pcurves scaled to lengths, mapped onto the surface after meshing
+   (:func:`~medax.cad.face_region.seam_region`: in space the seam's two sides are one curve,
+   so distances to them cannot tell them apart).
 2. Division counts per edge from the size, equal on opposite sides of every structured face
    across the part (:mod:`medax.cad.edge_counts`); faces where they conflict are meshed by
    gmsh instead.
 3. Nodes of every edge at equal arc length on its exact curve, one node per vertex
-   (:mod:`medax.cad.edge_nodes`): the only nodes any face puts on an edge.
+   (:mod:`medax.cad.edge_nodes`; :class:`~medax.cad.shared_nodes.SharedNodes`): the only
+   nodes any face puts on an edge.
 4. Structured faces: :func:`~medax.mesh.mesher.mesh_region` with those counts (and, on sides
    made of several edges, boundary fractions that put nodes on the vertices inside them);
    its boundary nodes are replaced by the edge nodes (they agree to the mesher's tolerance,
@@ -43,9 +48,10 @@ from OCP.TopoDS import TopoDS
 from medax.cad.edge_counts import division_counts
 from medax.cad.edge_nodes import edge_curve, equal_arc_nodes
 from medax.cad.face_geometry import surface_type
-from medax.cad.face_region import face_sides, side_region
-from medax.cad.gmsh_faces import GmshFace, mesh_face
+from medax.cad.face_region import Development, face_sides, has_seam, seam_region, side_region
+from medax.cad.gmsh_faces import FaceJob, GmshFace, GmshFaces
 from medax.cad.quad_orientation import NATIVE_SURFACES, orient, oriented
+from medax.cad.shared_nodes import SharedNodes
 from medax.cad.topology import build_topology
 from medax.errors import CadError, InputError, MedaxError, MeshError
 from medax.geometry._types import FloatArray, IntArray
@@ -67,6 +73,10 @@ MATCH_TOL = 1e-6
 #: gap between its edges) has its edges' counts doubled, as lower bounds propagated like the
 #: others, before the run fails
 REFINE_ROUNDS = 3
+
+#: a 4-sided face's region, its sides' oriented edges, and for a face with a seam the map of
+#: the (planar) region onto the surface (None: the region is on the surface)
+_FaceRegion = tuple[Region, list[list[Any]], Development | None]
 
 
 @dataclass(frozen=True)
@@ -168,7 +178,7 @@ def mesh_part(
         raise InputError(f"size {size:g} is below 1e-6 x the part's diagonal ({diag:.4g})")
 
     # 1. 4-sided faces and their regions
-    regions: dict[int, tuple[Region, list[list[Any]]]] = {}
+    regions: dict[int, _FaceRegion] = {}
     why: dict[int, str] = {}
     for i in sel:
         f = topo.face(i)
@@ -180,11 +190,14 @@ def mesh_part(
             why[i] = f"a {kind} surface (its B-spline copy may not keep OCCT's parameters)"
             continue
         try:
-            sides = face_sides(f)
+            sides = face_sides(f, seams=True)
             if len(sides) != 4:
                 why[i] = f"{len(sides)} sides"
                 continue
-            regions[i] = side_region(f, sides, f"face {i}")
+            if has_seam(f):
+                regions[i] = seam_region(f, sides, f"face {i}")
+            else:
+                regions[i] = (*side_region(f, sides, f"face {i}"), None)
         except CadError as err:
             why[i] = str(err)
     say(f"{len(sel)} faces, {len(regions)} 4-sided")
@@ -262,7 +275,7 @@ class _Part:
 
     def mesh(
         self,
-        regions: dict[int, tuple[Region, list[list[Any]]]],
+        regions: dict[int, _FaceRegion],
         why: dict[int, str],
         floor: IntArray,
         cache: dict[int, _FaceResult],
@@ -275,7 +288,7 @@ class _Part:
         # 2. counts
         four = {
             i: [[topo.edge_index(e) for e in side] for side in sides]
-            for i, (_, sides) in regions.items()
+            for i, (_, sides, _) in regions.items()
         }
         counts = division_counts(self.lengths, list(curves), four, self.size, floor)
         for i, reason in counts.conflicts.items():
@@ -286,59 +299,30 @@ class _Part:
 
         # 3. vertex and edge nodes
         nodes = _Nodes()
-        vmap = topo.vertex_map
-        vert_ids = np.full(vmap.Extent(), -1, dtype=np.int64)
-        vert_pts = np.zeros((vmap.Extent(), 3))
-        used_v = sorted({k for j in self.edges for k in topo.edge_vertices[j]})
-        for k in used_v:
-            p = BRep_Tool.Pnt_s(TopoDS.Vertex(vmap.FindKey(k + 1)))
-            vert_pts[k] = (p.X(), p.Y(), p.Z())
-        vert_ids[used_v] = nodes.add(vert_pts[used_v])
-        edge_ids: dict[int, IntArray] = {}
-        edge_pts: dict[int, FloatArray] = {}
-        edge_mid: dict[int, FloatArray] = {}
-        for j, c in curves.items():
-            e = TopoDS.Edge(topo.edge(j).Oriented(TopAbs_FORWARD))
-            v0 = vmap.FindIndex(TopExp.FirstVertex_s(e, True)) - 1
-            v1 = vmap.FindIndex(TopExp.LastVertex_s(e, True)) - 1
-            n = int(counts.counts[j])
-            pts = equal_arc_nodes(c, n)
-            pts[0], pts[-1] = vert_pts[v0], vert_pts[v1]
-            edge_pts[j] = pts
-            edge_ids[j] = np.concatenate(([vert_ids[v0]], nodes.add(pts[1:-1]), [vert_ids[v1]]))
-            edge_mid[j] = np.asarray(c.evaluate(np.array([0.5])))[0]
+        shared = self._shared_nodes(counts.counts, nodes)
         say(f"{len(curves)} edges, {int(counts.counts.sum())} divisions")
-        # which edge (-1: vertex) and position each boundary node has
-        owner = np.full(nodes.n, -2, dtype=np.int64)
-        where = np.zeros(nodes.n, dtype=np.int64)
-        owner[vert_ids[used_v]] = -1
-        where[vert_ids[used_v]] = used_v
-        for j, ids in edge_ids.items():
-            owner[ids[1:-1]] = j
-            where[ids[1:-1]] = np.arange(1, len(ids) - 1)
 
         # 4-5. faces
         quads: list[IntArray] = []
         quad_face: list[IntArray] = []
         infos: list[FaceMeshInfo] = []
         n_quads = 0
-        with gmsh_session():
+        with gmsh_session(), GmshFaces(shared, self._job(shared)) as by_gmsh:
             for k, i in enumerate(sel):
                 key = tuple(int(counts.counts[j]) for j in topo.face_edges[i])
                 res = cache.get(i)
                 if res is None or res.key != key:
-                    res = self._face(i, key, regions, why, counts.counts, edge_ids, edge_pts,
-                                     edge_mid, vert_pts, vert_ids, owner, where)  # fmt: skip
+                    res = self._face(i, key, regions, why, counts.counts, shared, by_gmsh)
                     cache[i] = res
                     if k % 10 == 9 or res.time_s > 2.0:
                         say(f"face {k + 1}/{len(sel)} ({i}: {res.kind}, {len(res.quads)} quads, "
                             f"{res.time_s:.2f} s)")  # fmt: skip
                 gid = np.full(len(res.points), -1, dtype=np.int64)
                 on_v, on_e = res.edge == -1, res.edge >= 0
-                gid[on_v] = vert_ids[res.pos[on_v]]
+                gid[on_v] = shared.vert_ids[res.pos[on_v]]
                 for j in np.unique(res.edge[on_e]).tolist():
                     at = res.edge == j
-                    gid[at] = edge_ids[j][res.pos[at]]
+                    gid[at] = shared.edge_ids[j][res.pos[at]]
                 inner = res.edge == -2
                 gid[inner] = nodes.add(res.points[inner])
                 gq = gid[res.quads]
@@ -349,8 +333,9 @@ class _Part:
                 n_quads += len(gq)
 
         points = nodes.array()
-        lines = [np.column_stack((ids[:-1], ids[1:])) for ids in edge_ids.values()]
-        line_edge = [np.full(len(ids) - 1, j, dtype=np.int64) for j, ids in edge_ids.items()]
+        ids_of = shared.edge_ids
+        lines = [np.column_stack((ids[:-1], ids[1:])) for ids in ids_of.values()]
+        line_edge = [np.full(len(ids) - 1, j, dtype=np.int64) for j, ids in ids_of.items()]
         return PartMesh(
             points,
             np.concatenate(quads) if quads else np.zeros((0, 4), dtype=np.int64),
@@ -364,20 +349,69 @@ class _Part:
             time.perf_counter() - t0,
         )
 
+    def _shared_nodes(self, counts: IntArray, nodes: _Nodes) -> SharedNodes:
+        """The round's vertex and edge nodes (edge ``j`` in ``counts[j]`` equal arc lengths),
+        added to ``nodes``."""
+        topo = self.topo
+        vmap = topo.vertex_map
+        vert_ids = np.full(vmap.Extent(), -1, dtype=np.int64)
+        vert_pts = np.zeros((vmap.Extent(), 3))
+        used_v = sorted({k for j in self.edges for k in topo.edge_vertices[j]})
+        for k in used_v:
+            p = BRep_Tool.Pnt_s(TopoDS.Vertex(vmap.FindKey(k + 1)))
+            vert_pts[k] = (p.X(), p.Y(), p.Z())
+        vert_ids[used_v] = nodes.add(vert_pts[used_v])
+        edge_ids: dict[int, IntArray] = {}
+        edge_pts: dict[int, FloatArray] = {}
+        edge_mid: dict[int, FloatArray] = {}
+        for j, c in self.curves.items():
+            e = TopoDS.Edge(topo.edge(j).Oriented(TopAbs_FORWARD))
+            v0 = vmap.FindIndex(TopExp.FirstVertex_s(e, True)) - 1
+            v1 = vmap.FindIndex(TopExp.LastVertex_s(e, True)) - 1
+            pts = equal_arc_nodes(c, int(counts[j]))
+            pts[0], pts[-1] = vert_pts[v0], vert_pts[v1]
+            edge_pts[j] = pts
+            edge_ids[j] = np.concatenate(([vert_ids[v0]], nodes.add(pts[1:-1]), [vert_ids[v1]]))
+            edge_mid[j] = np.asarray(c.evaluate(np.array([0.5])))[0]
+        # which edge (-1: vertex) and position each boundary node has
+        owner = np.full(nodes.n, -2, dtype=np.int64)
+        where = np.zeros(nodes.n, dtype=np.int64)
+        owner[vert_ids[used_v]] = -1
+        where[vert_ids[used_v]] = used_v
+        for j, ids in edge_ids.items():
+            owner[ids[1:-1]] = j
+            where[ids[1:-1]] = np.arange(1, len(ids) - 1)
+        return SharedNodes(
+            edge_ids, edge_pts, edge_mid, vert_ids, vert_pts, owner, where, self.size,
+            MATCH_TOL * self.diag,
+        )  # fmt: skip
+
+    def _job(self, shared: SharedNodes) -> Callable[[int], FaceJob]:
+        """What gmsh needs to mesh face ``i`` on the shared nodes: the face, its edges with
+        nodes, its vertices, and the check of its quads against the face normal."""
+        topo = self.topo
+
+        def job(i: int) -> FaceJob:
+            face = topo.face(i)
+
+            def check(m: GmshFace) -> str | None:
+                return orient(face, m.quads, m.uv, m.points)[1]
+
+            own = [j for j in topo.face_edges[i] if j in shared.edge_ids]
+            vs = sorted({k for j in topo.face_edges[i] for k in topo.edge_vertices[j]})
+            return FaceJob(face, own, vs, check)
+
+        return job
+
     def _face(
         self,
         i: int,
         key: tuple[int, ...],
-        regions: dict[int, tuple[Region, list[list[Any]]]],
+        regions: dict[int, _FaceRegion],
         why: dict[int, str],
         counts: IntArray,
-        edge_ids: dict[int, IntArray],
-        edge_pts: dict[int, FloatArray],
-        edge_mid: dict[int, FloatArray],
-        vert_pts: FloatArray,
-        vert_ids: IntArray,
-        owner: IntArray,
-        where: IntArray,
+        shared: SharedNodes,
+        by_gmsh: GmshFaces,
     ) -> _FaceResult:
         """Face ``i`` meshed: the medial grid if it is 4-sided (gmsh if that fails), else
         gmsh; :class:`_FaceFailed` when nothing meshes it."""
@@ -389,7 +423,7 @@ class _Part:
         if i in regions:
             try:
                 q, uv, pts, gid, divisions = _structured(
-                    regions[i], topo, counts, edge_ids, edge_pts, self.lengths, diag
+                    regions[i], topo, shared, self.lengths, diag
                 )
                 problem = orient(f, q, uv, pts)[1]
                 if problem is not None:
@@ -400,8 +434,7 @@ class _Part:
                 self.say(f"face {i}: {why[i]}; meshed by gmsh")
         try:
             if q is None:
-                gm = _gmsh_face(f, i, topo, edge_mid, edge_ids, edge_pts, vert_pts, vert_ids,
-                                self.size, MATCH_TOL * diag)  # fmt: skip
+                gm = by_gmsh.mesh(i)
                 q, uv, pts, gid = gm.quads, gm.uv, gm.points, gm.node_id
             q = oriented(f, i, q, uv, pts)
         except MeshError as err:
@@ -409,18 +442,14 @@ class _Part:
         edge = np.full(len(pts), -2, dtype=np.int64)
         pos = np.zeros(len(pts), dtype=np.int64)
         on = gid >= 0
-        edge[on], pos[on] = owner[gid[on]], where[gid[on]]
+        edge[on], pos[on] = shared.owner[gid[on]], shared.where[gid[on]]
         kind = "structured" if divisions is not None else "gmsh"
         dt = time.perf_counter() - tf
         return _FaceResult(key, q, pts, edge, pos, kind, divisions, why.get(i, ""), dt)
 
 
 def _side_ids(
-    side: list[Any],
-    topo: Any,
-    edge_ids: dict[int, IntArray],
-    edge_pts: dict[int, FloatArray],
-    lengths: FloatArray,
+    side: list[Any], topo: Any, shared: SharedNodes, lengths: FloatArray
 ) -> tuple[IntArray, FloatArray, FloatArray]:
     """Node ids and points along a side (its edges in the side's direction, joints once),
     and the arc-length fractions of its nodes (each edge in equal arc lengths)."""
@@ -429,7 +458,7 @@ def _side_ids(
     lens: list[FloatArray] = []
     for e in side:
         j = topo.edge_index(e)
-        a, p = edge_ids[j], edge_pts[j]
+        a, p = shared.edge_ids[j], shared.edge_pts[j]
         if e.Orientation() == TopAbs_REVERSED:
             a, p = a[::-1], p[::-1]
         lens.append(np.full(len(a) - 1, lengths[j] / (len(a) - 1)))
@@ -443,25 +472,24 @@ def _side_ids(
 
 
 def _structured(
-    rs: tuple[Region, list[list[Any]]],
+    rs: _FaceRegion,
     topo: Any,
-    counts: IntArray,
-    edge_ids: dict[int, IntArray],
-    edge_pts: dict[int, FloatArray],
+    shared: SharedNodes,
     lengths: FloatArray,
     diag: float,
 ) -> tuple[IntArray, FloatArray, FloatArray, IntArray, tuple[int, int]]:
     """The medial grid of a 4-sided face on the part's edge nodes: local quads, parameters,
     points, part node ids of the boundary nodes (-1 inside) and the divisions."""
-    region, sides = rs
-    per_side = [_side_ids(s, topo, edge_ids, edge_pts, lengths) for s in sides]
+    region, sides, flat = rs
+    per_side = [_side_ids(s, topo, shared, lengths) for s in sides]
     n1, n2 = len(per_side[0][0]) - 1, len(per_side[1][0]) - 1
     if (len(per_side[2][0]) - 1, len(per_side[3][0]) - 1) != (n1, n2):
         raise MeshError(f"{region.name}: opposite sides have different counts")  # pragma: no cover
     chained = any(len(s) > 1 for s in sides)
     fractions = [p[2] for p in per_side] if chained else None
     mesh = mesh_region(region, divisions=(n1, n2), fractions=fractions)
-    pts = np.array(mesh.points, dtype=np.float64)
+    uv = mesh.params if flat is None else flat.uv(mesh.params)
+    pts = np.array(mesh.points if flat is None else flat.points(mesh.params), dtype=np.float64)
     gid = np.full(len(pts), -1, dtype=np.int64)
     for k, idx in enumerate(boundary_indices(n1, n2)):
         ids, ours, _ = per_side[k]
@@ -472,39 +500,7 @@ def _structured(
             )
         gid[idx] = ids
         pts[idx] = ours
-    return structured_quads(n1, n2), mesh.params, pts, gid, (n1, n2)
-
-
-def _gmsh_face(
-    face: Any,
-    i: int,
-    topo: Any,
-    edge_mid: dict[int, FloatArray],
-    edge_ids: dict[int, IntArray],
-    edge_pts: dict[int, FloatArray],
-    vert_pts: FloatArray,
-    vert_ids: IntArray,
-    size: float,
-    tol: float,
-) -> GmshFace:
-    own = [j for j in topo.face_edges[i] if j in edge_ids]
-
-    def check(m: GmshFace) -> str | None:
-        return orient(face, m.quads, m.uv, m.points)[1]
-
-    vs = sorted({k for j in topo.face_edges[i] for k in topo.edge_vertices[j]})
-    return mesh_face(
-        face,
-        i,
-        {j: edge_mid[j] for j in own},
-        {j: edge_ids[j] for j in own},
-        {j: edge_pts[j] for j in own},
-        vert_pts[vs],
-        vert_ids[vs],
-        size,
-        tol,
-        check,
-    )
+    return structured_quads(n1, n2), uv, pts, gid, (n1, n2)
 
 
 def _check(mesh: PartMesh) -> None:

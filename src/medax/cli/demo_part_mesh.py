@@ -1,9 +1,9 @@
 """Demo part: quad meshes of CAD parts, through the command line.
 
 The box with all 12 edges filleted (built with OCCT, 26 faces) is meshed after ``--simplify``
-(6 four-sided faces, all medial grids), and the L-bracket as it is (8 of 11 faces medial,
-gmsh's quads on the two faces with the hole and on the hole): the mesh with its groups, the
-report and the picture coloured by scaled Jacobian.
+(6 four-sided faces, all medial grids), and the L-bracket as it is (9 of 11 faces medial,
+the hole's cylinder too, 4-sided with its seam; gmsh's quads on the two faces with the
+hole): the mesh with its groups, the report and the picture coloured by scaled Jacobian.
 """
 
 from __future__ import annotations
