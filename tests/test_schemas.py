@@ -123,3 +123,25 @@ def test_region_units_default_to_unspecified(tmp_path):
 def test_stamp_refuses_an_unknown_kind():
     with pytest.raises(ValueError, match="unknown output kind"):
         stamp("regions", {}, "mm", {})
+
+
+def test_simplify_report_without_a_fit_volume_estimate_is_json():
+    """A fitted face whose side of the solid cannot be told has no volume estimate (NaN):
+    the report says null, not a non-JSON NaN (a 708-face corpus part failed to write its
+    report after the whole run)."""
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+
+    from medax.cad.simplify.pipeline import SimplifyResult
+
+    box = BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape()
+    r = SimplifyResult(box, 6, 6, [], [], True, 6.0, 6.0, 0.0, 3.7, [], 0.1)
+    r = SimplifyResult(**{**r.__dict__, "fit_volume_rel_change": float("nan")})
+    report = json.loads(json.dumps(r.report(), allow_nan=False))
+    assert report["fit_volume_rel_change"] is None
+    from medax.cli.simplify import simplify_tolerances
+
+    written = {"solids": 1, "faces": 6, "valid": True, "max_deviation": 0.0}
+    written |= {"allowed_deviation": 3.7e-5, "default_integrator_volume_rel_change": 0.0}
+    report.update(input="in.step", output="out.step", written_file=written)
+    full = stamp("simplify-report", report, "mm", simplify_tolerances(1e-5), time="s")
+    assert validation_errors(full, "simplify-report") == []

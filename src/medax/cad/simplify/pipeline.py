@@ -12,6 +12,7 @@ never returned: at worst the result is the input itself with every fillet kept.
 from __future__ import annotations
 
 import logging
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -147,7 +148,10 @@ class SimplifyResult:
             },
             "diagonal": self.diagonal,
             "medial_equidistance_error": self.medial_error,
-            "fit_volume_rel_change": self.fit_volume_rel_change,
+            # null where a fitted face's side of the solid could not be told (no estimate)
+            "fit_volume_rel_change": (
+                self.fit_volume_rel_change if math.isfinite(self.fit_volume_rel_change) else None
+            ),
             "max_fit_error": {
                 "absolute": self.fit_error,
                 "relative_to_diagonal": self.fit_error / self.diagonal,
