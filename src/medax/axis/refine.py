@@ -25,7 +25,12 @@ from medax.geometry.fitting import interpolate
 
 #: samples per interval when checking the fitted curve ("10x denser")
 CHECK_SAMPLES = 10
+#: rounds that check the fitted curve (and refine it)
 MAX_ROUNDS = 30
+#: rounds that only add breaks or points to short pieces between breaks: each adds points,
+#: and an axis has as many breaks as its constraints have vertices and kinks (a 270-degree
+#: channel of 361-vertex polylines: 876 breaks, 48 such rounds)
+MAX_FEATURE_ROUNDS = 200
 #: intervals shorter than this (x diagonal) are not refined further
 MIN_INTERVAL = 1e-7
 #: refinement stops when the error, still above twice the target, has not dropped by 10 %
@@ -91,20 +96,27 @@ def fit_and_refine(
     rounds = 0
     checked: _Checked | None = None
     history: list[float] = []  # curve error per checked round
-    for rounds in range(1, MAX_ROUNDS + 1):  # noqa: B007
+    checks = features = 0
+    while checks < MAX_ROUNDS and features < MAX_FEATURE_ROUNDS:
+        rounds = checks + features + 1
         # 1. pieces between breaks need DEGREE + 1 points: where short, all of the piece's
         # intervals split evenly along their chords into enough pieces, in one insertion
+        # (where the corrected points leave their interval, the piece stays short and is
+        # fitted by a lower-degree polynomial: see interpolate)
         cuts = np.array([0, *sorted(breaks), len(pts) - 1])
         span = np.diff(cuts)
         if np.any(span < DEGREE):
             short = np.flatnonzero(span < DEGREE)
             intervals = np.concatenate([np.arange(cuts[j], cuts[j + 1]) for j in short])
             parts = np.repeat(-(-DEGREE // span[short]), span[short])  # ceil(DEGREE / span)
+            n_before = len(pts)
             pts, s, breaks, it = _insert(
                 field, pts, s, breaks, intervals, None, None, tol_point, parts
             )
             iters += it
-            continue
+            if len(pts) > n_before:
+                features += 1
+                continue
         # 2. breaks where the axis is not smooth: kinks (a foot jumps between branches of a
         # constraint) and transitions (a foot reaches its constraint's end)
         jumps = kink_intervals(s, scale)
@@ -155,9 +167,12 @@ def fit_and_refine(
             elif marked:
                 breaks |= marked
             else:
+                features += 1
                 continue  # nothing new: the tried sets keep these intervals from coming back
             tried = set()
+            features += 1
             continue
+        checks += 1
         spline, u = interpolate(pts, sorted(breaks), DEGREE)
         # 3. check the curve between the points
         err, checked = _check(field, spline, u, pts, checked, target)
@@ -183,6 +198,8 @@ def fit_and_refine(
         iters += it
     if spline is None or len(u) != len(pts):  # rounds ran out while inserting breaks
         spline, u = interpolate(pts, sorted(breaks), DEGREE)
+        err, _ = _check(field, spline, u, pts, None, target)  # the error of this spline
+        curve_error = float(err.max())
     return Fitted(pts, s, sorted(breaks), spline, u, curve_error, rounds, iters)
 
 
