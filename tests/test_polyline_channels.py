@@ -96,3 +96,34 @@ def test_270_degree_polyline_channel_mesh_not_below_coons(r0, r1):
     rims = (grid[0, :], grid[:, -1], grid[-1, ::-1], grid[::-1, 0])
     for k, rim in enumerate(rims):
         assert side[k](rim).max() <= 1e-9 * mesh.region.diagonal
+
+
+def thin_channel(kind: str, n: int = 300) -> dict:
+    """A 1:20 channel between two ``n``-vertex polylines (S0 and S2; S1, S3 lines across):
+    ``"arc"`` bent through 90 degrees (radii 12.7 and 13.7: vertices of both sides on the
+    same rays, a kink and two transitions close together at each), ``"wave"`` a sine."""
+    if kind == "arc":
+        a = np.linspace(0.0, np.pi / 2, n)
+        outer = np.column_stack((13.7 * np.cos(a), 13.7 * np.sin(a)))
+        inner = np.column_stack((12.7 * np.cos(a), 12.7 * np.sin(a)))[::-1]
+        lo, hi = outer, inner
+    else:
+        x = np.linspace(0.0, 20.0, n)
+        lo = np.column_stack((x, 0.5 * np.sin(x / 3)))
+        hi = np.column_stack((x, 1.0 + 0.5 * np.sin(x / 3)))[::-1]
+    return {
+        "corners": [lo[0].tolist(), lo[-1].tolist(), hi[0].tolist(), hi[-1].tolist()],
+        "sides": [
+            {"kind": "polyline", "points": lo.tolist()},
+            {"kind": "line"},
+            {"kind": "polyline", "points": hi.tolist()},
+            {"kind": "line"},
+        ],
+    }
+
+
+@pytest.mark.parametrize("kind", ["arc", "wave"])
+def test_thin_channel_of_300_vertex_polylines(kind):
+    """The axis spline along a 1:20 channel meets 1e-6 x diagonal (it ended at 2.7e-6 - 4.8e-6:
+    vertices crossed between two points were never made breaks)."""
+    check_axis(thin_channel(kind), (0, 2))
