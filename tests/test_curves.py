@@ -175,3 +175,27 @@ def test_transformed_bspline_keeps_exact_pieces():
     t = np.linspace(0.0, 1.0, 301)
     for got, nu in zip(img.jet(t), (0, 1, 2), strict=True):
         assert np.allclose(got, ref(t, nu), rtol=0.0, atol=1e-13)
+
+
+def test_polyline_closest_in_bracket_is_exact():
+    """Polyline.closest_in: the nearest point with its parameter in [lo, hi] (exact segments,
+    clipped to the bracket) equals the nearest of dense samples of that bracket, and never
+    loses to the bracketed Newton it replaces."""
+    from medax.geometry.curve import _bracketed_newton
+
+    rng = np.random.default_rng(5)
+    pts = np.cumsum(rng.normal(size=(40, 2)), axis=0)
+    poly = Polyline(pts)
+    x = rng.uniform(pts.min(0), pts.max(0), (300, 2))
+    lo = rng.uniform(0.0, 0.9, 300)
+    hi = np.minimum(lo + rng.uniform(0.0, 0.2, 300), 1.0)
+    t, foot = poly.closest_in(x, lo, hi, lo)
+    assert np.all((t >= lo) & (t <= hi))
+    np.testing.assert_allclose(foot, poly.evaluate(t), atol=1e-12)
+    d = np.linalg.norm(foot - x, axis=1)
+    s = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, 4001)[None, :]
+    dense = np.linalg.norm(poly.evaluate(s.ravel()).reshape(300, -1, 2) - x[:, None], axis=2)
+    assert np.all(d <= dense.min(axis=1) + 1e-12)
+    assert np.all(d >= dense.min(axis=1) - 1e-2 * (hi - lo) * poly.length())  # sample spacing
+    _, f_newton = _bracketed_newton(poly, x, lo, hi, start=lo)
+    assert np.all(d <= np.linalg.norm(f_newton - x, axis=1) + 1e-12)

@@ -160,6 +160,13 @@ class Curve(ABC):
         c = pts - centre
         return centre, np.column_stack((-2.0 * c, np.einsum("mj,mj->m", c, c)))
 
+    def closest_in(
+        self, points: FloatArray, lo: FloatArray, hi: FloatArray, start: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """The nearest point to ``points[i]`` (n, dim) with parameter in ``[lo[i], hi[i]]``
+        (n,): parameters (n,) and foot points (n, dim); bracketed Newton from ``start``."""
+        return _bracketed_newton(self, points, lo, hi, start=start)
+
     def closest(self, points: FloatArray) -> Closest:
         """Global closest points on the curve for ``points`` of shape ``(n, dim)``.
 
@@ -179,7 +186,7 @@ def closest_near(curve: Curve, points: FloatArray, t0: FloatArray, width: float)
     t0 = np.asarray(t0, dtype=np.float64)
     lo = np.clip(t0 - width, 0.0, 1.0)
     hi = np.clip(t0 + width, 0.0, 1.0)
-    t, foot = _bracketed_newton(curve, x, lo, hi, start=t0)
+    t, foot = curve.closest_in(x, lo, hi, t0)
     return Closest(t=t, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
 
 

@@ -82,3 +82,30 @@ class Polyline(Curve):
             t_out[s : s + _CHUNK] = self._tk[j] + uj * (self._tk[j + 1] - self._tk[j])
         foot = self.evaluate(t_out)
         return Closest(t=t_out, foot=foot, distance=np.linalg.norm(x - foot, axis=1))
+
+    def closest_in(
+        self, points: FloatArray, lo: FloatArray, hi: FloatArray, start: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """Exact: the segments that meet ``[lo, hi]`` (n,), each clipped to it, the nearest
+        wins (all rows at once; a bracketed Newton would bisect at every vertex)."""
+        x = np.asarray(points, dtype=np.float64)
+        n, tk, p = len(x), self._tk, self.points
+        i0, _ = self._locate(lo)
+        i1, _ = self._locate(hi)
+        width = int((i1 - i0).max(initial=0)) + 1
+        t_best, d_best = np.asarray(lo, dtype=np.float64).copy(), np.full(n, np.inf)
+        for k in range(width):  # (a bracket covers few segments: a loop over them)
+            j = np.minimum(i0 + k, i1)
+            a, b = tk[j], tk[j + 1]
+            ua = (np.maximum(lo, a) - a) / (b - a)
+            ub = (np.minimum(hi, b) - a) / (b - a)
+            d = p[j + 1] - p[j]
+            rel = x - p[j]
+            u = np.einsum("ij,ij->i", rel, d) / np.einsum("ij,ij->i", d, d)
+            u = np.minimum(np.maximum(u, ua), ub)
+            r = rel - u[:, None] * d
+            dist = np.einsum("ij,ij->i", r, r)
+            better = dist < d_best
+            t_best = np.where(better, a + u * (b - a), t_best)
+            d_best = np.where(better, dist, d_best)
+        return t_best, self.evaluate(t_best)
