@@ -199,3 +199,19 @@ def test_polyline_closest_in_bracket_is_exact():
     assert np.all(d >= dense.min(axis=1) - 1e-2 * (hi - lo) * poly.length())  # sample spacing
     _, f_newton = _bracketed_newton(poly, x, lo, hi, start=lo)
     assert np.all(d <= np.linalg.norm(f_newton - x, axis=1) + 1e-12)
+
+
+@pytest.mark.parametrize("far", [0.01, 1.0, 100.0])
+def test_polyline_closest_many_segments_is_exact(far):
+    """Polylines of many segments settle most points from their nearest vertices' segments
+    (k-d tree): the same feet as the distance to every segment, points near the polyline
+    and far from it (relative to the segments' length)."""
+    rng = np.random.default_rng(7)
+    a = np.linspace(0.0, 4.0, 500)
+    pts = np.column_stack((np.cos(a), np.sin(a))) * (1.0 + 0.01 * rng.normal(size=(500, 1)))
+    poly = Polyline(pts)
+    x = pts[rng.integers(0, 500, 400)] + rng.normal(size=(400, 2)) * far
+    got = poly.closest(x)
+    t_all = poly._closest_all(x)
+    d_all = np.linalg.norm(poly.evaluate(t_all) - x, axis=1)
+    np.testing.assert_allclose(got.distance, d_all, rtol=0.0, atol=1e-14 * (1.0 + far))
