@@ -215,3 +215,51 @@ def test_polyline_closest_many_segments_is_exact(far):
     t_all = poly._closest_all(x)
     d_all = np.linalg.norm(poly.evaluate(t_all) - x, axis=1)
     np.testing.assert_allclose(got.distance, d_all, rtol=0.0, atol=1e-14 * (1.0 + far))
+
+
+#: a region hypothesis found (tests/test_property_regions.py): side 2 a degree-1 B-spline
+CORNER_REGION = {
+    "corners": [
+        [-2.9534160636075995, 1.250360647143797],
+        [-1.2446486661087848, -3.3692369891657314],
+        [7.169488535414266, -12.640574740468796],
+        [13.417638806849286, 3.304690836589584],
+    ],
+    "sides": [
+        {"kind": "line"},
+        {"kind": "line"},
+        {
+            "kind": "bspline",
+            "degree": 1,
+            "points": [
+                [7.169488535414266, -12.640574740468796],
+                [8.062081431333555, -10.362679658031885],
+                [8.954674327252842, -8.084784575594973],
+                [9.557149851861631, -5.6932070384167766],
+                [10.171071986841532, -3.3061148540445036],
+                [11.632453015010707, -1.2510993282842406],
+                [13.708142322093018, 0.5631995771672184],
+                [13.417638806849286, 3.304690836589584],
+            ],
+        },
+        {"kind": "arc", "sagitta": 1.557881157621627},
+    ],
+}
+
+
+def test_closest_at_a_corner_from_a_pieces_normal_line():
+    """A point (an axis transition) on the normal line of one piece of a degree-1 B-spline
+    at a corner convex towards it: the nearest point is the corner, where ``(C - x) . C'``
+    jumps from negative to positive without a root; the bracketed Newton stopped on the
+    piece, 2.9e-6 x diagonal farther (the region's axis was off by that). The side as the
+    tracer has it (centred, unit diagonal: the rounding of its samples decides)."""
+    from medax.geometry.region import normalised_region
+    from medax.geometry.region_io import region_from_dict
+
+    work, _, _ = normalised_region(region_from_dict(CORNER_REGION, "r"))
+    curve = work.sides[2]
+    x = np.array([[-0.05004809617337858, -0.0009438420310409994]])
+    vertex = curve.evaluate(np.array([3.0 / 7.0]))
+    got = curve.closest(x)
+    assert got.distance[0] <= np.linalg.norm(vertex - x) + 1e-15
+    assert abs(got.t[0] - 3.0 / 7.0) <= 1e-15

@@ -32,6 +32,7 @@ from medax.errors import MedaxError
 from medax.geometry.region_io import region_from_dict
 from medax.geometry.resolution import coordinate_resolution
 from medax.mesh.mesher import mesh_region
+from test_curves import CORNER_REGION
 from truth import truth_sides
 
 EXAMPLES = int(os.environ.get("MEDAX_HYPOTHESIS_EXAMPLES", "32"))
@@ -213,6 +214,9 @@ def check_region(spec: dict) -> None:
             },
         ],
     }
+)
+@example(  # a transition on a piece's normal line at a corner: its foot missed the corner
+    CORNER_REGION
 )
 def test_property_regions(spec):
     with warnings.catch_warnings():
