@@ -263,3 +263,17 @@ def test_closest_at_a_corner_from_a_pieces_normal_line():
     got = curve.closest(x)
     assert got.distance[0] <= np.linalg.norm(vertex - x) + 1e-15
     assert abs(got.t[0] - 3.0 / 7.0) <= 1e-15
+
+
+def test_closest_of_no_points():
+    """An empty query gives empty answers on every kind of curve (the generic search
+    failed to reshape its empty candidates)."""
+    curves = [
+        Line(np.zeros(2), np.ones(2)),
+        Arc(np.zeros(2), 1.0, 0.0, 1.0),
+        Polyline(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])),
+        BSpline(np.array([[0.0, 0.0], [1.0, 2.0], [2.0, 0.0], [3.0, 1.0]]), 3),
+    ]
+    for c in curves:
+        got = c.closest(np.zeros((0, 2)))
+        assert got.t.shape == (0,) and got.distance.shape == (0,) and got.foot.shape[0] == 0

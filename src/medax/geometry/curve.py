@@ -451,6 +451,8 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
     ts, pts = curve._search
     slopes = curve._slopes
     n, m = points.shape[0], ts.size
+    if n == 0:
+        return Closest(t=np.zeros(0), foot=np.zeros((0, curve.dim)), distance=np.zeros(0))
     cand = _candidate_samples(curve, points, k).ravel()
     x = np.repeat(points, k, axis=0)
     j3 = np.minimum(np.maximum(cand[:, None] + _THREE, 0), m - 1)  # (nk, 3) samples
