@@ -13,7 +13,8 @@ either refused with one of medax's own errors (one line), or gets
 Every bound is widened by what doubles resolve at the region's coordinates
 (:func:`coordinate_resolution`, ~1e-16 near the origin): the stated bound far from it.
 ``MEDAX_HYPOTHESIS_EXAMPLES`` sets the number of examples (default 32, under a minute;
-300 and 250 passed), ``MEDAX_HYPOTHESIS_RANDOM=1`` draws other ones (with ``--hypothesis-seed``).
+hunts of 300, 250, 200 and 300 passed), ``MEDAX_HYPOTHESIS_RANDOM=1`` draws other ones (with
+``--hypothesis-seed``).
 """
 
 from __future__ import annotations
