@@ -175,3 +175,105 @@ def test_transformed_bspline_keeps_exact_pieces():
     t = np.linspace(0.0, 1.0, 301)
     for got, nu in zip(img.jet(t), (0, 1, 2), strict=True):
         assert np.allclose(got, ref(t, nu), rtol=0.0, atol=1e-13)
+
+
+def test_polyline_closest_in_bracket_is_exact():
+    """Polyline.closest_in: the nearest point with its parameter in [lo, hi] (exact segments,
+    clipped to the bracket) equals the nearest of dense samples of that bracket, and never
+    loses to the bracketed Newton it replaces."""
+    from medax.geometry.curve import _bracketed_newton
+
+    rng = np.random.default_rng(5)
+    pts = np.cumsum(rng.normal(size=(40, 2)), axis=0)
+    poly = Polyline(pts)
+    x = rng.uniform(pts.min(0), pts.max(0), (300, 2))
+    lo = rng.uniform(0.0, 0.9, 300)
+    hi = np.minimum(lo + rng.uniform(0.0, 0.2, 300), 1.0)
+    t, foot = poly.closest_in(x, lo, hi, lo)
+    assert np.all((t >= lo) & (t <= hi))
+    np.testing.assert_allclose(foot, poly.evaluate(t), atol=1e-12)
+    d = np.linalg.norm(foot - x, axis=1)
+    s = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, 4001)[None, :]
+    dense = np.linalg.norm(poly.evaluate(s.ravel()).reshape(300, -1, 2) - x[:, None], axis=2)
+    assert np.all(d <= dense.min(axis=1) + 1e-12)
+    assert np.all(d >= dense.min(axis=1) - 1e-2 * (hi - lo) * poly.length())  # sample spacing
+    _, f_newton = _bracketed_newton(poly, x, lo, hi, start=lo)
+    assert np.all(d <= np.linalg.norm(f_newton - x, axis=1) + 1e-12)
+
+
+@pytest.mark.parametrize("far", [0.01, 1.0, 100.0])
+def test_polyline_closest_many_segments_is_exact(far):
+    """Polylines of many segments settle most points from their nearest vertices' segments
+    (k-d tree): the same feet as the distance to every segment, points near the polyline
+    and far from it (relative to the segments' length)."""
+    rng = np.random.default_rng(7)
+    a = np.linspace(0.0, 4.0, 500)
+    pts = np.column_stack((np.cos(a), np.sin(a))) * (1.0 + 0.01 * rng.normal(size=(500, 1)))
+    poly = Polyline(pts)
+    x = pts[rng.integers(0, 500, 400)] + rng.normal(size=(400, 2)) * far
+    got = poly.closest(x)
+    t_all = poly._closest_all(x)
+    d_all = np.linalg.norm(poly.evaluate(t_all) - x, axis=1)
+    np.testing.assert_allclose(got.distance, d_all, rtol=0.0, atol=1e-14 * (1.0 + far))
+
+
+#: a region hypothesis found (tests/test_property_regions.py): side 2 a degree-1 B-spline
+CORNER_REGION = {
+    "corners": [
+        [-2.9534160636075995, 1.250360647143797],
+        [-1.2446486661087848, -3.3692369891657314],
+        [7.169488535414266, -12.640574740468796],
+        [13.417638806849286, 3.304690836589584],
+    ],
+    "sides": [
+        {"kind": "line"},
+        {"kind": "line"},
+        {
+            "kind": "bspline",
+            "degree": 1,
+            "points": [
+                [7.169488535414266, -12.640574740468796],
+                [8.062081431333555, -10.362679658031885],
+                [8.954674327252842, -8.084784575594973],
+                [9.557149851861631, -5.6932070384167766],
+                [10.171071986841532, -3.3061148540445036],
+                [11.632453015010707, -1.2510993282842406],
+                [13.708142322093018, 0.5631995771672184],
+                [13.417638806849286, 3.304690836589584],
+            ],
+        },
+        {"kind": "arc", "sagitta": 1.557881157621627},
+    ],
+}
+
+
+def test_closest_at_a_corner_from_a_pieces_normal_line():
+    """A point (an axis transition) on the normal line of one piece of a degree-1 B-spline
+    at a corner convex towards it: the nearest point is the corner, where ``(C - x) . C'``
+    jumps from negative to positive without a root; the bracketed Newton stopped on the
+    piece, 2.9e-6 x diagonal farther (the region's axis was off by that). The side as the
+    tracer has it (centred, unit diagonal: the rounding of its samples decides)."""
+    from medax.geometry.region import normalised_region
+    from medax.geometry.region_io import region_from_dict
+
+    work, _, _ = normalised_region(region_from_dict(CORNER_REGION, "r"))
+    curve = work.sides[2]
+    x = np.array([[-0.05004809617337858, -0.0009438420310409994]])
+    vertex = curve.evaluate(np.array([3.0 / 7.0]))
+    got = curve.closest(x)
+    assert got.distance[0] <= np.linalg.norm(vertex - x) + 1e-15
+    assert abs(got.t[0] - 3.0 / 7.0) <= 1e-15
+
+
+def test_closest_of_no_points():
+    """An empty query gives empty answers on every kind of curve (the generic search
+    failed to reshape its empty candidates)."""
+    curves = [
+        Line(np.zeros(2), np.ones(2)),
+        Arc(np.zeros(2), 1.0, 0.0, 1.0),
+        Polyline(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])),
+        BSpline(np.array([[0.0, 0.0], [1.0, 2.0], [2.0, 0.0], [3.0, 1.0]]), 3),
+    ]
+    for c in curves:
+        got = c.closest(np.zeros((0, 2)))
+        assert got.t.shape == (0,) and got.distance.shape == (0,) and got.foot.shape[0] == 0

@@ -15,6 +15,27 @@ from scipy.optimize import minimize_scalar
 from scipy.spatial import cKDTree
 
 
+def arc_geometry(spec: dict, p0, p1) -> tuple[np.ndarray, float, float, float]:
+    """(centre, radius, start angle, sweep) of a JSON arc side from ``p0`` to ``p1``."""
+    p0, p1 = np.asarray(p0, float), np.asarray(p1, float)
+    if "sagitta" in spec:
+        h = spec["sagitta"]
+        c = np.linalg.norm(p1 - p0)
+        right = np.array([(p1 - p0)[1], -(p1 - p0)[0]]) / c
+        r = (c * c / 4 + h * h) / (2 * abs(h))
+        apex = (p0 + p1) / 2 + h * right
+        centre = apex - math.copysign(r, h) * right
+    else:
+        centre, r = np.asarray(spec["center"], float), spec["radius"]
+    a0 = math.atan2(*(p0 - centre)[::-1])
+    a1 = math.atan2(*(p1 - centre)[::-1])
+    sweep = (a1 - a0 + math.pi) % (2 * math.pi) - math.pi
+    if "sagitta" in spec:
+        am = math.atan2(*(apex - centre)[::-1])
+        sweep = 2 * ((am - a0 + math.pi) % (2 * math.pi) - math.pi)
+    return centre, float(r), a0, sweep
+
+
 def side_function(spec: dict, p0, p1):
     """A callable ``f(t) -> (n, 2)`` on [0, 1] for one JSON side between corners p0, p1."""
     p0, p1 = np.asarray(p0, float), np.asarray(p1, float)
@@ -22,21 +43,7 @@ def side_function(spec: dict, p0, p1):
     if kind == "line":
         return lambda t: p0 + np.asarray(t)[:, None] * (p1 - p0)
     if kind == "arc":
-        if "sagitta" in spec:
-            h = spec["sagitta"]
-            c = np.linalg.norm(p1 - p0)
-            right = np.array([(p1 - p0)[1], -(p1 - p0)[0]]) / c
-            r = (c * c / 4 + h * h) / (2 * abs(h))
-            apex = (p0 + p1) / 2 + h * right
-            centre = apex - math.copysign(r, h) * right
-        else:
-            centre, r = np.asarray(spec["center"], float), spec["radius"]
-        a0 = math.atan2(*(p0 - centre)[::-1])
-        a1 = math.atan2(*(p1 - centre)[::-1])
-        sweep = (a1 - a0 + math.pi) % (2 * math.pi) - math.pi
-        if "sagitta" in spec:
-            am = math.atan2(*(apex - centre)[::-1])
-            sweep = 2 * ((am - a0 + math.pi) % (2 * math.pi) - math.pi)
+        centre, r, a0, sweep = arc_geometry(spec, p0, p1)
         return lambda t: (
             centre
             + r
@@ -231,3 +238,100 @@ def default_volume(shape: object) -> float:
     props = GProp_GProps()
     BRepGProp.VolumeProperties_s(shape, props)
     return float(props.Mass())
+
+
+class SideTruth:
+    """Distances from many points to one JSON side at once, independent of medax's curves:
+    lines and polylines by exact point-to-segment distances, arcs in closed form (radial
+    distance inside the sweep, else the nearer end), B-splines (scipy) by the nearest of
+    ``n`` samples' chords and Newton steps on ``(f(t) - x) . f'(t)`` within that chord's
+    neighbours. All in coordinates relative to ``origin`` (exact differences of nearby
+    doubles), so regions far from the origin keep their relative accuracy. B-spline
+    distances are to points on the curve (never a chord's sagitta below it)."""
+
+    def __init__(self, spec: dict, p0, p1, origin, n: int = 20_001, k: int = 4) -> None:
+        o = np.asarray(origin, float)
+        self.origin = o
+        spec = _shifted(spec, o)
+        p0, p1 = np.asarray(p0, float) - o, np.asarray(p1, float) - o
+        self.kind = spec["kind"]
+        self.k = k
+        if self.kind == "arc":
+            self.arc = arc_geometry(spec, p0, p1)
+            self.ends = np.array([p0, p1])
+            return
+        if self.kind == "line":
+            self.s = np.array([p0, p1])
+        elif self.kind == "polyline":
+            self.s = np.asarray(spec["points"], float)
+        else:
+            pts = np.asarray(spec["points"], float)
+            deg = spec.get("degree", 3)
+            n_inner = len(pts) - deg - 1
+            knots = np.r_[np.zeros(deg + 1), np.linspace(0, 1, n_inner + 2)[1:-1], np.ones(deg + 1)]
+            self.spl = BSpline(knots, pts, deg)
+            self.d1 = self.spl.derivative(1)
+            self.d2 = self.spl.derivative(2) if deg > 1 else None
+            self.t = np.union1d(np.linspace(0.0, 1.0, n), knots)  # no chord across a knot
+            self.s = self.spl(self.t)
+        self.tree = cKDTree(self.s)
+
+    def __call__(self, x) -> np.ndarray:
+        """Distances (m,) from points ``x`` (m, 2) (absolute coordinates) to the side."""
+        x = np.atleast_2d(np.asarray(x, float)) - self.origin
+        if self.kind == "arc":
+            return self._arc(x)
+        k = min(self.k, len(self.s))
+        _, idx = self.tree.query(x, k=k)
+        idx = np.asarray(idx).reshape(len(x), k)
+        j = np.clip(np.concatenate((idx, idx - 1), axis=1), 0, len(self.s) - 2)  # chords
+        a, ab = self.s[j], self.s[j + 1] - self.s[j]
+        w = np.einsum("mkd,mkd->mk", x[:, None] - a, ab) / np.maximum(
+            np.einsum("mkd,mkd->mk", ab, ab), 1e-300
+        )
+        w = np.clip(w, 0.0, 1.0)
+        d = np.linalg.norm(a + w[..., None] * ab - x[:, None], axis=2)
+        best = np.argmin(d, axis=1)
+        rows = np.arange(len(x))
+        dist = d[rows, best]
+        if self.kind != "bspline":
+            return dist
+        jb = j[rows, best]
+        lo = self.t[np.maximum(jb - 1, 0)]
+        hi = self.t[np.minimum(jb + 2, len(self.t) - 1)]
+        t = self.t[jb] + w[rows, best] * (self.t[jb + 1] - self.t[jb])
+        for _ in range(8):
+            r, c1 = self.spl(t) - x, self.d1(t)
+            c2 = self.d2(t) if self.d2 is not None else np.zeros_like(c1)
+            g = np.einsum("md,md->m", r, c1)
+            dg = np.einsum("md,md->m", c1, c1) + np.einsum("md,md->m", r, c2)
+            t = np.clip(t - np.where(dg > 0, g / np.where(dg > 0, dg, 1.0), 0.0), lo, hi)
+        # points on the curve only (a chord is off it by its sagitta)
+        near = np.linalg.norm(self.s[idx] - x[:, None], axis=2).min(axis=1)
+        return np.minimum(near, np.linalg.norm(self.spl(t) - x, axis=1))
+
+    def _arc(self, x: np.ndarray) -> np.ndarray:
+        centre, r, a0, sweep = self.arc
+        v = x - centre
+        ang = np.arctan2(v[:, 1], v[:, 0])
+        rel = np.mod((ang - a0) * np.sign(sweep), 2 * math.pi)  # angle along the sweep
+        inside = rel <= abs(sweep)
+        radial = np.abs(np.linalg.norm(v, axis=1) - r)
+        ends = np.min(np.linalg.norm(x[:, None] - self.ends[None], axis=2), axis=1)
+        return np.where(inside, radial, ends)
+
+
+def truth_sides(spec: dict) -> list[SideTruth]:
+    """The four sides of a JSON region as :class:`SideTruth`, relative to its first corner."""
+    c = spec["corners"]
+    return [SideTruth(spec["sides"][k], c[k], c[(k + 1) % 4], c[0]) for k in range(4)]
+
+
+def _shifted(spec: dict, o: np.ndarray) -> dict:
+    """A JSON side with its points (and centre) moved by ``-o``."""
+    out = dict(spec)
+    if "points" in spec:
+        out["points"] = (np.asarray(spec["points"], float) - o).tolist()
+    if "center" in spec:
+        out["center"] = (np.asarray(spec["center"], float) - o).tolist()
+    return out

@@ -127,8 +127,9 @@ def _start(p: FloatArray, s: FieldSample, ii: np.ndarray) -> FloatArray:
     with np.errstate(divide="ignore", invalid="ignore"):
         u = (ab[:, 0] * (-tb[:, 1]) - ab[:, 1] * (-tb[:, 0])) / det
         v = (ta[:, 0] * ab[:, 1] - ta[:, 1] * ab[:, 0]) / det
-    h = np.linalg.norm(ab, axis=1)
-    ok = (np.abs(det) > 1e-3) & (u > 0.0) & (v > 0.0) & (u < 2.0 * h) & (v < 2.0 * h)
+        h = np.linalg.norm(ab, axis=1)
+        ok = (np.abs(det) > 1e-3) & (u > 0.0) & (v > 0.0) & (u < 2.0 * h) & (v < 2.0 * h)
+    u = np.where(ok, u, 0.0)  # (NaN where det = 0: not carried into the product)
     return np.where(ok[:, None], a + u[:, None] * ta, 0.5 * (a + b))
 
 

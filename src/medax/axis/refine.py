@@ -18,14 +18,19 @@ import numpy as np
 from medax.axis.correct import correct_newton
 from medax.axis.field import DistanceField, FieldSample
 from medax.axis.kinks import KINK_TRY, kink_intervals, locate_kinks
-from medax.axis.transitions import locate_transitions, transition_intervals
+from medax.axis.transitions import locate_transitions, transition_intervals, vertex_crossings
 from medax.geometry._types import FloatArray
 from medax.geometry.bspline import BSpline
 from medax.geometry.fitting import interpolate
 
 #: samples per interval when checking the fitted curve ("10x denser")
 CHECK_SAMPLES = 10
+#: rounds that check the fitted curve (and refine it)
 MAX_ROUNDS = 30
+#: rounds that only add breaks or points to short pieces between breaks: each adds points,
+#: and an axis has as many breaks as its constraints have vertices and kinks (a 270-degree
+#: channel of 361-vertex polylines: 876 breaks, 48 such rounds)
+MAX_FEATURE_ROUNDS = 200
 #: intervals shorter than this (x diagonal) are not refined further
 MIN_INTERVAL = 1e-7
 #: refinement stops when the error, still above twice the target, has not dropped by 10 %
@@ -91,20 +96,27 @@ def fit_and_refine(
     rounds = 0
     checked: _Checked | None = None
     history: list[float] = []  # curve error per checked round
-    for rounds in range(1, MAX_ROUNDS + 1):  # noqa: B007
+    checks = features = 0
+    while checks < MAX_ROUNDS and features < MAX_FEATURE_ROUNDS:
+        rounds = checks + features + 1
         # 1. pieces between breaks need DEGREE + 1 points: where short, all of the piece's
         # intervals split evenly along their chords into enough pieces, in one insertion
+        # (where the corrected points leave their interval, the piece stays short and is
+        # fitted by a lower-degree polynomial: see interpolate)
         cuts = np.array([0, *sorted(breaks), len(pts) - 1])
         span = np.diff(cuts)
         if np.any(span < DEGREE):
             short = np.flatnonzero(span < DEGREE)
             intervals = np.concatenate([np.arange(cuts[j], cuts[j + 1]) for j in short])
             parts = np.repeat(-(-DEGREE // span[short]), span[short])  # ceil(DEGREE / span)
+            n_before = len(pts)
             pts, s, breaks, it = _insert(
                 field, pts, s, breaks, intervals, None, None, tol_point, parts
             )
             iters += it
-            continue
+            if len(pts) > n_before:
+                features += 1
+                continue
         # 2. breaks where the axis is not smooth: kinks (a foot jumps between branches of a
         # constraint) and transitions (a foot reaches its constraint's end)
         jumps = kink_intervals(s, scale)
@@ -127,21 +139,31 @@ def fit_and_refine(
             and f[0] not in jumps  # a foot jumping onto an end is a kink, not a transition
             and f[0] not in kinked  # (one round's breaks: the kinks there)
         ]
-        tried_t |= {_key(pts, f) for f in trans}
-        ti, tq, trans_s = locate_transitions(field, pts, s, trans, tol_point)
-        # new breaks: one transition per interval, or the interval's kinks (in order along
-        # it); each with its row in the field samples of both (transitions, then kinks)
-        one = {i: j for j, i in enumerate(ti.tolist())}  # one per interval
+        # feet that cross vertices between two points (none resting on one): transitions
+        # or kinks at those vertices, several per interval
+        cross = [
+            f
+            for f in vertex_crossings(field, s, vertices)
+            if _key(pts, f) not in tried_t and f[0] not in jumps and f[0] not in kinked
+        ]
+        tried_t |= {_key(pts, f) for f in trans + cross}
+        ti, tq, trans_s, rows_t = locate_transitions(field, pts, s, trans + cross, tol_point)
+        # new breaks: one transition per interval (found from a foot on a vertex) and the
+        # vertex crossings, and the kinks, in order along each interval; each with its row
+        # in the field samples of both (transitions, then kinks)
+        at = rows_t < len(trans)
+        one = {int(ti[j]): int(j) for j in np.flatnonzero(at)}  # one per interval
         nt = len(ti)
-        new_breaks = sorted(
-            [(i, 0, tq[j], j) for i, j in one.items()]
-            + [(i, 1 + k, q, nt + k) for k, (i, q) in enumerate(found)],
-            key=lambda b: (b[0], b[1]),
+        cand = (
+            [(i, tq[j], j) for i, j in one.items()]
+            + [(int(ti[j]), tq[j], int(j)) for j in np.flatnonzero(~at)]
+            + [(i, q, nt + k) for k, (i, q) in enumerate(found)]
         )
+        new_breaks = _ordered(pts, cand, 1e-12 * scale)
         if new_breaks:
             idx = np.array([b[0] for b in new_breaks], dtype=np.int64)
-            kp = np.array([b[2] for b in new_breaks])
-            rows = np.array([b[3] for b in new_breaks], dtype=np.int64)
+            kp = np.array([b[1] for b in new_breaks])
+            rows = np.array([b[2] for b in new_breaks], dtype=np.int64)
             # a break found on an existing point (e.g. a foot reaching its constraint's end
             # exactly at B1 or B2) is not inserted again: interior points become breaks
             on = _existing(pts, idx, kp, 1e-12 * scale)
@@ -155,9 +177,12 @@ def fit_and_refine(
             elif marked:
                 breaks |= marked
             else:
+                features += 1
                 continue  # nothing new: the tried sets keep these intervals from coming back
             tried = set()
+            features += 1
             continue
+        checks += 1
         spline, u = interpolate(pts, sorted(breaks), DEGREE)
         # 3. check the curve between the points
         err, checked = _check(field, spline, u, pts, checked, target)
@@ -183,7 +208,29 @@ def fit_and_refine(
         iters += it
     if spline is None or len(u) != len(pts):  # rounds ran out while inserting breaks
         spline, u = interpolate(pts, sorted(breaks), DEGREE)
+        err, _ = _check(field, spline, u, pts, None, target)  # the error of this spline
+        curve_error = float(err.max())
     return Fitted(pts, s, sorted(breaks), spline, u, curve_error, rounds, iters)
+
+
+def _ordered(
+    pts: FloatArray, cand: list[tuple[int, FloatArray, int]], eps: float
+) -> list[tuple[int, FloatArray, int]]:
+    """New break points ``(interval, point, row)`` sorted along their intervals (by the
+    projection on the chord), one of any that coincide (within ``eps``)."""
+    if not cand:
+        return []
+    i = np.array([c[0] for c in cand], dtype=np.int64)
+    q = np.array([c[1] for c in cand])
+    ab = pts[i + 1] - pts[i]
+    along = np.einsum("ij,ij->i", q - pts[i], ab) / np.einsum("ij,ij->i", ab, ab)
+    order = np.lexsort((along, i))
+    out: list[tuple[int, FloatArray, int]] = []
+    for j in order.tolist():
+        if out and out[-1][0] == i[j] and np.linalg.norm(q[j] - out[-1][1]) <= eps:
+            continue
+        out.append(cand[j])
+    return out
 
 
 def _key(pts: FloatArray, f: tuple[int, int, float, int]) -> tuple[bytes, int, float, int]:

@@ -10,6 +10,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -160,6 +161,13 @@ class Curve(ABC):
         c = pts - centre
         return centre, np.column_stack((-2.0 * c, np.einsum("mj,mj->m", c, c)))
 
+    def closest_in(
+        self, points: FloatArray, lo: FloatArray, hi: FloatArray, start: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """The nearest point to ``points[i]`` (n, dim) with parameter in ``[lo[i], hi[i]]``
+        (n,): parameters (n,) and foot points (n, dim); bracketed Newton from ``start``."""
+        return _bracketed_newton(self, points, lo, hi, start=start)
+
     def closest(self, points: FloatArray) -> Closest:
         """Global closest points on the curve for ``points`` of shape ``(n, dim)``.
 
@@ -179,7 +187,7 @@ def closest_near(curve: Curve, points: FloatArray, t0: FloatArray, width: float)
     t0 = np.asarray(t0, dtype=np.float64)
     lo = np.clip(t0 - width, 0.0, 1.0)
     hi = np.clip(t0 + width, 0.0, 1.0)
-    t, foot = _bracketed_newton(curve, x, lo, hi, start=t0)
+    t, foot = curve.closest_in(x, lo, hi, t0)
     return Closest(t=t, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
 
 
@@ -443,6 +451,8 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
     ts, pts = curve._search
     slopes = curve._slopes
     n, m = points.shape[0], ts.size
+    if n == 0:
+        return Closest(t=np.zeros(0), foot=np.zeros((0, curve.dim)), distance=np.zeros(0))
     cand = _candidate_samples(curve, points, k).ravel()
     x = np.repeat(points, k, axis=0)
     j3 = np.minimum(np.maximum(cand[:, None] + _THREE, 0), m - 1)  # (nk, 3) samples
@@ -455,6 +465,7 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
         ta, tb = ts[ia[interior]], ts[ia[interior] + 1]
         start = _start(ts[j3[interior]], g[interior], ta, tb, ga[interior], gb[interior])
         t[interior], foot[interior] = _quick_newton(curve, x[interior], ta, tb, start)
+    at_breaks(curve, curve.breaks(), x, ts[j3[:, 0]], ts[j3[:, 2]], t, foot)
     dist = np.linalg.norm(foot - x, axis=1).reshape(n, k)
     pick = np.argmin(dist, axis=1)
     r = np.arange(n)
@@ -463,6 +474,36 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
         foot=foot.reshape(n, k, -1)[r, pick],
         distance=dist[r, pick],
     )
+
+
+def at_breaks(
+    curve: Curve | Any,
+    breaks: FloatArray,
+    x: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    t: FloatArray,
+    foot: FloatArray,
+) -> None:
+    """In place: where a C0 corner ``breaks`` (k,) (sorted) lies in a row's window ``[lo,
+    hi]`` (n,) and is nearer to ``x`` (n, dim) than its refined foot (``t`` (n,), ``foot``
+    (n, dim)), the corner. At a corner that is convex towards ``x`` the distance has its
+    minimum without ``g = (C - x) . C'`` crossing zero (``g`` jumps there), which the
+    bracketed Newton, meant for roots, can miss: a point on the normal line of one piece
+    at the corner got a foot on that piece, farther than the corner. ``curve`` has ``jet``."""
+    if breaks.size == 0 or x.shape[0] == 0:
+        return
+    i = np.searchsorted(breaks, lo, side="left")
+    e = breaks[np.minimum(i, breaks.size - 1)]
+    rows = np.flatnonzero((i < breaks.size) & (e <= hi))
+    if rows.size == 0:
+        return
+    c = curve.jet(e[rows])[0]
+    nearer = np.einsum("ij,ij->i", c - x[rows], c - x[rows]) < np.einsum(
+        "ij,ij->i", foot[rows] - x[rows], foot[rows] - x[rows]
+    )
+    r = rows[nearer]
+    t[r], foot[r] = e[rows][nearer], c[nearer]
 
 
 def sign_brackets(

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from scipy.interpolate import make_interp_spline
+from scipy.interpolate import BarycentricInterpolator, make_interp_spline
 
 from medax.errors import CurveError
 from medax.geometry._types import FloatArray
@@ -26,7 +26,9 @@ def interpolate(
 
     ``breaks`` are indices of interior points where the curve may turn (a kink): there the
     knot multiplicity is ``degree``, so the spline is only C0. Each piece between breaks is
-    a not-a-knot interpolant and needs at least ``degree + 1`` points. Returns the spline
+    a not-a-knot interpolant; a piece of ``m <= degree`` points (at least 2) is the
+    polynomial of degree ``m - 1`` through them, raised to ``degree`` (e.g. a 3-point
+    piece between close breaks of a traced axis is a parabola). Returns the spline
     (parameter domain [0, 1]) and the parameters ``u`` (n,) of the points on it.
     """
     pts = np.asarray(points, dtype=np.float64)
@@ -35,14 +37,16 @@ def interpolate(
         i = int(np.argmin(np.diff(u)))
         raise CurveError(f"cannot fit a spline: points {i} and {i + 1} of {len(pts)} coincide")
     cuts = [0, *sorted(int(b) for b in breaks), len(pts) - 1]
+    if np.any(np.diff(cuts) < 1):
+        raise CurveError(f"cannot fit a spline: breaks {sorted(breaks)} of {len(pts)} points")
+    u_all = u
+    if np.any(np.diff(cuts) < degree):
+        u, pts, cuts = _fill_short(u, pts, cuts, degree)
     if degree % 2:
-        return _interpolate_odd(pts, u, cuts, degree), u
+        return _interpolate_odd(pts, u, cuts, degree), u_all
     knots: list[FloatArray] = []
     ctrl: list[FloatArray] = []
     for j, (a, b) in enumerate(zip(cuts[:-1], cuts[1:], strict=True)):
-        n_piece = b - a + 1
-        if n_piece < degree + 1:
-            raise ValueError(f"piece {j} has {n_piece} points; degree {degree} needs more")
         spl = make_interp_spline(u[a : b + 1], pts[a : b + 1], k=degree)
         t, c = np.asarray(spl.t), np.asarray(spl.c)
         if j == 0:
@@ -58,7 +62,37 @@ def interpolate(
     # the loop appended the junction knots with multiplicity `degree` (C0 joints)
     kn = np.concatenate(knots)
     cp = np.concatenate(ctrl)
-    return BSpline(cp, degree, kn), u
+    return BSpline(cp, degree, kn), u_all
+
+
+def _fill_short(
+    u: FloatArray, pts: FloatArray, cuts: list[int], degree: int
+) -> tuple[FloatArray, FloatArray, list[int]]:
+    """Pieces between ``cuts`` with fewer than ``degree + 1`` points get points of their own
+    lower-degree interpolating polynomial (in ``u``) at the middles of their widest gaps,
+    until they have ``degree + 1``: the not-a-knot interpolant of those is that polynomial.
+    Returns the parameters, points and cut indices with them inserted."""
+    at: list[np.ndarray] = []
+    sites: list[FloatArray] = []
+    values: list[FloatArray] = []
+    for a, b in zip(cuts[:-1], cuts[1:], strict=True):
+        if b - a >= degree:
+            continue
+        uu = u[a : b + 1].copy()
+        extra: list[float] = []
+        for _ in range(degree - (b - a)):
+            grid = np.sort(np.concatenate((uu, extra)))
+            i = int(np.argmax(np.diff(grid)))
+            extra.append(0.5 * (grid[i] + grid[i + 1]))
+        e = np.sort(np.array(extra))
+        at.append(np.searchsorted(u, e))
+        sites.append(e)
+        values.append(BarycentricInterpolator(uu, pts[a : b + 1])(e))
+    pos = np.concatenate(at)
+    u_new = np.insert(u, pos, np.concatenate(sites))
+    p_new = np.insert(pts, pos, np.concatenate(values), axis=0)
+    shift = np.searchsorted(np.sort(pos), np.asarray(cuts), side="right")
+    return u_new, p_new, [int(c) for c in np.asarray(cuts) + shift]
 
 
 def _interpolate_odd(pts: FloatArray, u: FloatArray, cuts: list[int], degree: int) -> BSpline:
@@ -70,8 +104,6 @@ def _interpolate_odd(pts: FloatArray, u: FloatArray, cuts: list[int], degree: in
     half = (degree - 1) // 2
     knots: list[FloatArray] = [np.full(degree + 1, u[0])]
     for j, (a, b) in enumerate(zip(cuts[:-1], cuts[1:], strict=True)):
-        if b - a + 1 < degree + 1:
-            raise ValueError(f"piece {j} has {b - a + 1} points; degree {degree} needs more")
         knots.append(u[a + 1 + half : b - half])
         knots.append(np.full(degree if j < len(cuts) - 2 else degree + 1, u[b]))
     kn = np.concatenate(knots)

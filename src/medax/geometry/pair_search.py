@@ -21,6 +21,7 @@ from medax.geometry.curve import (
     _bracketed_newton,
     _quick_newton,
     _start,
+    at_breaks,
     sign_brackets,
 )
 
@@ -55,6 +56,7 @@ class PairSearch:
         (t1, p1), (t2, p2) = c1._search, c2._search
         self.k, self.m1, self.m = k, t1.size, t1.size + t2.size
         self.ts = np.concatenate((t1, t2 + SHIFT))
+        self.breaks = np.concatenate((c1.breaks(), c2.breaks() + SHIFT))  # C0 corners
         self.pts = np.concatenate((p1, p2))
         self.slopes = np.concatenate((c1._slopes, c2._slopes))
         self.centre = self.pts.mean(axis=0)
@@ -110,6 +112,7 @@ class PairSearch:
                 self.pieces,  # type: ignore[arg-type]
                 x[interior], ta, tb, s0,
             )  # fmt: skip
+        at_breaks(self.pieces, self.breaks, x, self.ts[j3[:, 0]], self.ts[j3[:, 2]], t, foot)
         dist = np.linalg.norm(foot - x, axis=1).reshape(n, 2, k)
         pick = np.argmin(dist, axis=2)  # (n, 2)
         r = np.arange(n)

@@ -397,10 +397,13 @@ def _newton_block(
         # full steps with a small enough remainder: taken unevaluated
         top = np.maximum(np.maximum(h[0], h[1]), np.maximum(h[2], h[3]))
         half = 0.5 * norm * norm
-        bound = 2.0 * np.hypot(
-            half * (w[0] * h[0] + w[2] * h[2]), half * (w[1] * h[1] + w[3] * h[3])
-        )
-        sure = hot & (cap == 1.0) & (norm * top <= _LOCAL) & (bound <= 0.5 * tol)
+        # a side whose Hessian bound is unknown (inf: its foot was found by a global query)
+        # gives inf, or NaN times a zero weight or step: either way the row is not "sure"
+        with np.errstate(invalid="ignore", over="ignore"):
+            bound = 2.0 * np.hypot(
+                half * (w[0] * h[0] + w[2] * h[2]), half * (w[1] * h[1] + w[3] * h[3])
+            )
+            sure = hot & (cap == 1.0) & (norm * top <= _LOCAL) & (bound <= 0.5 * tol)
         if sure.any():
             _jump(xs, sx, sy, res, bound, d, f, sure)
             hot &= ~sure

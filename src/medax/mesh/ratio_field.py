@@ -55,14 +55,14 @@ def pair_weighting(region: Region, a: int, b: int, weighting: str) -> str:
     simple = all(isinstance(sides[k], (Line, Arc)) for k in (a, b))
     if not (region.embedding.is_identity and simple) or weighting == "distance":
         return "distance"
-    if not _facing(region, a, b):
+    if not facing(region, a, b):
         return "distance"
     if weighting == "angle":
         return "angle"
     return "angle" if _is_polar_pair(region, a, b) else "distance"
 
 
-def _facing(region: Region, a: int, b: int) -> bool:
+def facing(region: Region, a: int, b: int) -> bool:
     """False for two line sides of which one lies behind the other (a region bent past 180
     degrees around their meeting point: the angle between the lines does not describe it)."""
     la, lb = region.sides[a], region.sides[b]

@@ -405,6 +405,7 @@ def _solve(
     p = p.copy()
     res = np.zeros(n)
     rows = np.arange(n)
+    unsettled = rows[:0]  # rows still off (or with wrong feet) after the global rounds
     free = FreeField.supports(region, kinds)
     for round_ in range(_GLOBAL_ROUNDS + 1):
         if free:
@@ -425,12 +426,12 @@ def _solve(
         if rows.size == 0:
             break
         if round_ == _GLOBAL_ROUNDS:
-            res[rows] = np.inf
+            unsettled = rows
             break
         counts["global_resolved"] += int(rows.size)
         log.debug("region '%s': %d nodes re-solved from global feet", region.name, rows.size)
     # the feet of every row are now the global ones (to tol): res is the true residual
-    _check_residual(region, res, ra, rb, tol, counts)
+    _check_residual(region, res, ra, rb, tol, counts, unsettled)
     return p, sides.t, counts
 
 
@@ -441,13 +442,24 @@ def _check_residual(
     rb: FloatArray,
     tol: float,
     counts: dict[str, float],
+    unsettled: np.ndarray | None = None,
 ) -> None:
-    """Store the worst residual in ``counts``; raise if a node did not converge."""
+    """Store the worst residual in ``counts``; raise if a node did not converge (also the
+    ``unsettled`` rows: still off, or their feet not the global ones, after the re-solves
+    from global feet)."""
     worst = float(res.max())
-    counts["max_residual"] = worst
+    counts["max_residual"] = worst if unsettled is None or not unsettled.size else np.inf
+    diag = region.diagonal
+    if unsettled is not None and unsettled.size:
+        bad = int(unsettled[np.argmax(res[unsettled])])
+        raise MeshError(
+            f"region '{region.name}': ratio curves {ra[bad]:.4g} of (S0, S2) and "
+            f"{rb[bad]:.4g} of (S1, S3) do not cross: Newton did not settle on {unsettled.size} "
+            f"nodes from global feet either (residual {res[bad] / diag:.2e} x diagonal); the "
+            "region is too distorted for a structured grid"
+        )
     if worst > 1e3 * tol or not np.isfinite(worst):
         bad = int(np.argmax(res))
-        diag = region.diagonal
         raise MeshError(
             f"region '{region.name}': ratio curves {ra[bad]:.4g} of (S0, S2) and "
             f"{rb[bad]:.4g} of (S1, S3) do not cross (Newton residual {worst / diag:.2e} x "
