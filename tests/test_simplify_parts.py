@@ -340,3 +340,24 @@ def test_local_measures_match_whole_solids(box4):
     assert abs(L.local_volume_change(big, old, v_old, 1e-6) - (1.001**3 - 1.0)) <= 1e-9
     assert abs(L.volume_delta(big, old, 1e-9, gk=True) / v_old - (1.001**3 - 1.0)) <= 1e-9
     assert L.local_area_change(big, old, L._area(old, 1e-9), 5e-6) is None
+
+
+def test_box_far_from_the_origin():
+    """The 4-fillet box moved 1e9 mm away simplifies as at the origin, in seconds (it ran
+    past 300 s in validation): the checks work relative to the part, and the deviation is
+    what doubles hold there (1e9 carries about 1.2e-7 mm)."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.gp import gp_Trsf, gp_Vec
+
+    part = P.box_vertical_fillets(40.0, 30.0, 20.0, 5.0)
+    t = gp_Trsf()
+    t.SetTranslation(gp_Vec(1e9, 1e9, 0.0))
+    far = BRepBuilderAPI_Transform(part.shape, t, True).Shape()
+    r = simplify(far, specs_from_blend_faces(far, part.blends))
+    assert (r.faces_before, r.faces_after) == (10, 6) and r.valid
+    assert abs(r.volume_rel_change) <= 1e-6
+    assert r.max_deviation <= 1e-5 * r.diagonal
+    c = check(r.shape)
+    assert c.valid and c.shells == 1 and c.closed
+    old_to_new, new_to_old = boundary_distances(far, r.shape, 5, 12)
+    assert max(old_to_new, new_to_old) <= 1e-5 * r.diagonal
