@@ -121,14 +121,17 @@ def test_axis_with_nan_fails_with_the_reason(tmp_path, capsys, monkeypatch):
         ("1e-300", "below"),
     ],
 )
-@pytest.mark.parametrize("command", ["axis", "mesh", "classify", "simplify"])
+@pytest.mark.parametrize("command", ["axis", "mesh", "mesh-part", "classify", "simplify"])
 def test_bad_tol_refused_before_work(box_step, tmp_path, capsys, command, tol, message):
     if command == "mesh" and tol == "0":
         return  # mesh: 0 solves every node (tested in test_mesh_cli)
+    if command == "mesh-part":
+        message = "--tol applies to regions, not to CAD parts"  # any value, nan and inf too
     out = tmp_path / "o"
     argv = {
         "axis": ["axis", SAMPLE, "--region", "wavy", "-o", f"{out}.json"],
         "mesh": ["mesh", SAMPLE, "--region", "wavy", "--size", "1", "-o", f"{out}.vtu"],
+        "mesh-part": ["mesh", str(box_step), "--size", "5", "-o", f"{out}.msh"],
         "classify": ["classify", str(box_step), "--report", f"{out}.json"],
         "simplify": ["simplify", str(box_step), "-o", f"{out}.step"],
     }[command]

@@ -124,3 +124,89 @@ def test_mesh_boundary_rule(tmp_path):
         other = mesh_region(region, (6, 5), boundary="arclength" if rule == "ratio" else "ratio")
         np.testing.assert_allclose(pts, want, atol=1e-12)
         assert np.abs(pts - other.points).max() > 1e-3
+
+
+def test_huge_divisions_refused_before_work(tmp_path, capsys, monkeypatch):
+    """A division count whose estimated memory exceeds the limit is refused on one line that
+    names the estimate, the limit and --force, before any meshing; nothing is written."""
+    import medax.mesh.mesher as mesher
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("meshed")
+
+    monkeypatch.setattr(mesher, "mesh_region", no_work)
+    out = tmp_path / "m.vtu"
+    for extra, head in [
+        (
+            ["--divisions", "100000"],
+            "--divisions 100000,100000: 1e+10 nodes, about 6e+03 GB and 27.8 h",
+        ),
+        (["--size", "1e-4"], "--size 0.0001 (100000x65000 quads): 6.5e+09 nodes, about"),
+    ]:
+        assert main(["mesh", REGIONS, "--region", "trapezoid", *extra, "-o", str(out)]) == 1
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and "Traceback" not in err, err
+        assert head in err and "above the limit" in err and "--force" in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_force_lifts_the_memory_limit(tmp_path, capsys, monkeypatch):
+    """With the limit made tiny, a normal run is refused and --force runs it, saying the
+    estimate on stderr first."""
+    import medax.cli.limits as limits
+
+    monkeypatch.setattr(limits, "MAX_BYTES", 1.0)
+    out = tmp_path / "m.vtu"
+    argv = ["mesh", REGIONS, "--region", "trapezoid", "--divisions", "4,3", "-o", str(out)]
+    assert main(argv) == 1
+    assert "--divisions 4,3: 20 nodes, about" in capsys.readouterr().err
+    assert not out.exists()
+    assert main([*argv, "--force"]) == 0
+    assert "--divisions 4,3: estimated 20 nodes" in capsys.readouterr().err
+    assert meshio.read(out).cells_dict["quad"].shape == (12, 4)
+
+
+def test_large_run_says_its_estimate(tmp_path, capsys, monkeypatch):
+    """Runs estimated above the note thresholds print the estimate on stderr and go on."""
+    import medax.cli.limits as limits
+
+    monkeypatch.setattr(limits, "NOTE_S", 0.0)
+    out = tmp_path / "m.vtu"
+    assert main(["mesh", REGIONS, "--region", "trapezoid", "--size", "2", "-o", str(out)]) == 0
+    assert "--size 2 (5x4 quads): estimated 30 nodes, about" in capsys.readouterr().err
+
+
+def test_available_memory(tmp_path, monkeypatch):
+    """MemAvailable where /proc/meminfo has it, else the physical memory; the limit is the
+    lower of half of it and the fixed cap."""
+    import medax.cli.limits as limits
+
+    avail = limits.available_memory()
+    assert avail is not None and avail > 1e6
+    limit, _ = limits.memory_limit()
+    assert 0.0 < limit <= limits.MAX_BYTES and limit < avail
+    monkeypatch.setattr(limits, "Path", lambda _: tmp_path / "no-meminfo")
+    phys = limits.available_memory()
+    assert phys is not None and phys >= avail * 0.5
+
+
+@pytest.mark.parametrize("simplify", [[], ["--simplify"]])
+def test_part_size_refused_before_work(tmp_path, capsys, monkeypatch, simplify):
+    """``mesh PART --size H`` estimates its nodes from the part's surface area / H^2 and is
+    refused above the limit before meshing or simplifying; nothing is written."""
+    import medax.cad.part_mesh as part_mesh
+    import medax.cad.simplify as cad_simplify
+    from medax.samples import sample_path
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("worked")
+
+    monkeypatch.setattr(part_mesh, "mesh_part", no_work)
+    monkeypatch.setattr(cad_simplify, "simplify", no_work)
+    out = tmp_path / "p.msh"
+    part = str(sample_path("l-bracket.step"))
+    assert main(["mesh", part, "--size", "0.001", *simplify, "-o", str(out)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert "--size 0.001: 4.53e+09 nodes, about" in err and "--force" in err, err
+    assert list(tmp_path.iterdir()) == []

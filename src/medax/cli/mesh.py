@@ -10,6 +10,8 @@ from pathlib import Path
 from typing import Any
 
 from medax import tolerances
+from medax.cli import limits
+from medax.cli.limits import check_estimate, region_estimate
 from medax.cli.options import check_tol
 from medax.cli.outputs import JSON_SUFFIXES, PLOT_SUFFIXES, Output, check_outputs
 from medax.errors import InputError, MeshError
@@ -100,6 +102,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="write the mesh even when quads are inverted (refused by default)",
     )
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="run even when the peak memory estimated from the node count (regions: "
+        "(N1+1)(N2+1); parts: surface area / size^2) exceeds the limit, "
+        f"{limits.MEMORY_SHARE:g} x the available memory and at most "
+        f"{limits.MAX_BYTES / limits.GB:g} GB (refused by default); estimates above "
+        f"{limits.NOTE_BYTES / limits.GB:g} GB or {limits.NOTE_S:g} s are printed on stderr "
+        "before the work",
+    )
     p.set_defaults(run=run)
 
 
@@ -152,7 +164,7 @@ def run(args: argparse.Namespace) -> int:
     from medax.io_utils import staged_outputs, write_json
     from medax.mesh.export import format_from_path
     from medax.mesh.grouped_export import region_groups, write_grouped_mesh
-    from medax.mesh.mesher import mesh_region
+    from medax.mesh.mesher import divisions_for_size, mesh_region
     from medax.schemas import stamp
 
     if Path(args.regions).suffix.lower() in CAD_SUFFIXES:
@@ -181,6 +193,13 @@ def run(args: argparse.Namespace) -> int:
     if args.tol is not None:
         check_tol(args.tol, "--tol", tolerances.MIN_CURVE_TOL, zero_ok=args.method != "paper")
     region = read_region(args.regions, _region_name(args.regions, args.region))
+    if divisions is not None:
+        what, (n1, n2) = f"--divisions {divisions[0]},{divisions[1]}", divisions
+    else:
+        n1, n2 = divisions_for_size(region, args.size)
+        what = f"--size {args.size:g} ({n1}x{n2} quads)"
+    est = region_estimate(n1, n2, args.method, args.plot is not None)
+    check_estimate(est, what, args.force)
     mesh = mesh_region(
         region,
         divisions=divisions,

@@ -10,11 +10,13 @@ import argparse
 import math
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from medax.cli.limits import check_estimate, part_estimate
 from medax.errors import InputError
 from medax.schemas import stamp
 
@@ -70,8 +72,12 @@ def run_part(args: argparse.Namespace) -> int:
     def progress(msg: str) -> None:
         print(f"medax mesh: {msg}", file=sys.stderr, flush=True)
 
+    def check_size(shapes: list[Any]) -> None:
+        est = part_estimate(sum(surface_area(sh) for sh in shapes), args.size)
+        check_estimate(est, f"--size {args.size:g}", args.force)
+
     t0 = time.perf_counter()
-    solids, unit = _solids(args.regions, args.simplify, progress)
+    solids, unit = _solids(args.regions, args.simplify, progress, check_size)
     if len(solids) > 1 and faces is not None:
         raise InputError(f"{args.regions}: {len(solids)} solids; --faces needs a single solid")
     meshes = []
@@ -128,19 +134,33 @@ def _tolerances(simplify: bool) -> dict[str, float]:
     return tols
 
 
-def _solids(path: str, simplify: bool, progress: Any) -> tuple[list[Any], str]:
-    """The file's solids, simplified first if asked, and their length unit."""
-    if not simplify:
-        from medax.cad.reader import read_part
+def surface_area(shape: Any) -> float:
+    """The surface area of an OCCT shape (model units^2)."""
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
 
-        part = read_part(path)
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(shape, props)
+    return float(props.Mass())
+
+
+def _solids(
+    path: str, simplify: bool, progress: Any, check: Callable[[list[Any]], None]
+) -> tuple[list[Any], str]:
+    """The file's solids, simplified first if asked, and their length unit; ``check`` is
+    called on the solids as read, before any simplification."""
+    from medax.cad.reader import read_part
+
+    part = read_part(path)
+    check(list(part.solids))
+    if not simplify:
         return list(part.solids), part.unit
     from medax.cad.classify import classify_file
     from medax.cad.simplify import simplify as run_simplify
     from medax.cad.simplify import specs_from_classification
 
     out = []
-    classes = classify_file(path)
+    classes = classify_file(path)  # reads the file again (cheap beside the simplification)
     for k, cls in enumerate(classes):
         specs = specs_from_classification(cls)
         progress(f"solid {k}: {len(cls.faces)} faces, simplifying")
