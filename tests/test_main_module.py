@@ -15,4 +15,10 @@ def test_python_m_medax_runs_the_command(tmp_path):
     assert run.returncode == 0, run.stderr
     assert (tmp_path / "regions.json").is_file()
     version = subprocess.run([sys.executable, "-m", "medax", "--version"], capture_output=True)
-    assert version.stdout.decode().strip() == f"medax {__version__}"
+    assert version.returncode == 0
+    line = version.stdout.decode().strip()
+    import numpy
+    import OCP
+
+    assert line.startswith(f"medax {__version__}, OpenCASCADE ")
+    assert f"(OCP {OCP.__version__})" in line and f"numpy {numpy.__version__}" in line

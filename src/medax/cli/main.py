@@ -24,6 +24,36 @@ from medax.errors import MedaxError
 SUBCOMMANDS = ("axis", "mesh", "classify", "simplify", "samples", "demo")
 
 
+def versions() -> str:
+    """One line: medax's version and those of the libraries whose results it depends on
+    (OpenCASCADE's is the first three numbers of OCP's, which is built against it)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    import numpy
+
+    parts = [f"medax {__version__}", f"numpy {numpy.__version__}"]
+    try:
+        import OCP
+
+        ocp = str(OCP.__version__)
+        parts.insert(1, f"OpenCASCADE {'.'.join(ocp.split('.')[:3])} (OCP {ocp})")
+    except ImportError:
+        parts.insert(1, "OpenCASCADE: OCP not importable")
+    try:
+        parts.append(f"gmsh {version('gmsh')}")
+    except PackageNotFoundError:
+        parts.append("gmsh: not installed")
+    return ", ".join(parts)
+
+
+class _Version(argparse.Action):
+    """``--version``: imports the libraries only when asked."""
+
+    def __call__(self, parser, namespace, values, option_string=None):  # type: ignore[no-untyped-def]
+        print(versions())
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every available subcommand registered."""
     parser = argparse.ArgumentParser(
@@ -31,7 +61,12 @@ def build_parser() -> argparse.ArgumentParser:
         description="Product-oriented medial axes of 4-sided regions and CAD faces, fillet "
         "simplification of STEP solids, and structured quad meshes.",
     )
-    parser.add_argument("--version", action="version", version=f"medax {__version__}")
+    parser.add_argument(
+        "--version",
+        action=_Version,
+        nargs=0,
+        help="print medax's version and those of OpenCASCADE, OCP, numpy and gmsh, and exit",
+    )
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress to stderr")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in SUBCOMMANDS:
