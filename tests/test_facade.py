@@ -73,6 +73,7 @@ def test_classify_accepts_a_path_a_part_or_a_solid():
     one_line(by_path, "11 faces", "2 fillet", "6 protection")
 
 
+@pytest.mark.slow
 def test_simplify_takes_a_classification_and_writes(tmp_path):
     (c,) = medax.classify(sample_path("box-12-edges.step"))
     r = medax.simplify(c)
