@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint typecheck unit bench bench-axis bench-classify bench-mesh bench-simplify clean
+.PHONY: demo test quick lint typecheck unit bench bench-axis bench-classify bench-mesh bench-simplify clean
 
 $(BIN)/python:
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found (medax needs Python 3.11)"; exit 1; }
@@ -33,6 +33,10 @@ unit: $(STAMP)
 	$(BIN)/python -m pytest -n auto --maxprocesses 4 --dist loadfile
 
 test: lint typecheck unit
+
+# the tests not marked slow (OCCT-heavy and long ones), on the cores like unit: under a minute
+quick: $(STAMP)
+	$(BIN)/python -m pytest -n auto --maxprocesses 4 --dist loadfile -m "not slow"
 
 # benchmarks print ratios against peers measured in the same run (not part of `make test`)
 bench: bench-axis bench-classify bench-mesh bench-simplify

@@ -21,6 +21,7 @@ def _batched(axis) -> bool:
     return axis.counts.predictor_steps == 0 and axis.counts.closed_form_pieces == 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pair", [(0, 2), (1, 3)])
 @pytest.mark.parametrize("tol", [1e-6, 1e-8])
 def test_wavy_batch_against_dense_distances(regions, regions_spec, pair, tol):

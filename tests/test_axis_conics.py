@@ -60,6 +60,7 @@ def _dense(axis, per_interval: int = 10) -> np.ndarray:
     return axis.spline.sample(per_interval * (axis.n_points - 1) + 1)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("name", "pair"), CASES)
 def test_conic_axis_against_dense_sampling(regions_spec, name, pair):
     spec = _spec(regions_spec, name)
@@ -118,6 +119,7 @@ def test_bowl_kink_where_the_bottom_foot_jumps():
     assert turn > 5.0  # a real corner, not a smooth joint
 
 
+@pytest.mark.slow
 def test_unhandled_case_falls_back_to_the_tracer():
     """``lens (1,3)``: a foot jumps between the ends of its constraint while the other foot
     sits at an end; no hypothesis of the closed form passes its checks, so the numerical

@@ -18,6 +18,7 @@ def regions() -> dict[str, Region]:
     return read_regions(sample_regions_path())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", REGIONS)
 @pytest.mark.parametrize("pair", [(0, 2), (1, 3)])
 def test_points_and_spline_equidistant(regions, regions_spec, name, pair):

@@ -71,6 +71,7 @@ def _assert_triple_points(axis, spec: dict, pair: tuple[int, int]) -> None:
         assert jumps, (q, ba[:2], bb[:2])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pair", [(0, 2), (1, 3)])
 @pytest.mark.parametrize("tol", [1e-6, 1e-8])
 def test_wavy_kinks_are_triple_points(regions, regions_spec, pair, tol):

@@ -198,6 +198,7 @@ def _random_convex_quad(rng: np.random.Generator) -> Region:
     return _quad(c, "random")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 2, 3, 4])
 def test_same_axis_as_the_tracer_on_random_convex_quads(seed):
     reg = _random_convex_quad(np.random.default_rng(seed))
@@ -354,6 +355,7 @@ SLIVER = np.array(
 )
 
 
+@pytest.mark.slow
 def test_tracer_follows_the_sliver():
     """The tracer (forced) on the sliver: its first step was the shortest side / 5, longer
     than the whole axis (0.9 of a 17-long region), and it lost the axis (6e-3 x diagonal);
@@ -369,6 +371,7 @@ def test_tracer_follows_the_sliver():
     assert np.linalg.norm(a.points[-1] - b.points[-1]) <= 1e-12 * d
 
 
+@pytest.mark.slow
 def test_tracer_refuses_a_lost_trace(monkeypatch):
     """With the old first step (past the end of the axis) the trace is lost; it says so
     with a typed error instead of returning points 6e-3 x diagonal off the axis."""

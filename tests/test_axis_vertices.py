@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from medax.axis import trace_axis
 from medax.geometry import Line, Polyline, Region, read_regions, sample_regions_path
@@ -23,6 +24,7 @@ def roof_region() -> Region:
     return Region.build(sides, name="roof")
 
 
+@pytest.mark.slow
 def test_axis_over_a_roof_corner_is_exact():
     reg = roof_region()
     a = trace_axis(reg, (0, 2), tol=1e-8)

@@ -58,6 +58,7 @@ def occt_distance(point: np.ndarray, shapes) -> float:
 _KNOWN: dict[str, pytest.MarkDecorator] = {}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "name", [pytest.param(n, marks=_KNOWN[n]) if n in _KNOWN else n for n in sorted(BUILDERS)]
 )

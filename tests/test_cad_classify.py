@@ -61,6 +61,7 @@ def check_exact(built, unify: bool) -> None:
             assert rec.radius is None  # a variable-radius blend
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(parts.CATALOGUE))
 @pytest.mark.parametrize("unify", [False, True])
 def test_catalogue_parts_blends_exact(name, unify):

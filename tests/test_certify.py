@@ -52,6 +52,7 @@ def test_piece_bounds_enclose_the_curve():
         assert low[p] >= d2.min() - 0.5  # and not vacuous
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("side", [0, 1, 2, 3])
 def test_grouped_certification_never_certifies_a_wrong_foot(side):
     """Wrong local feet (started from the far end of a wavy side) are never certified;
@@ -89,6 +90,7 @@ def test_points_in_groups_are_within_rho():
     np.testing.assert_array_equal(gr.reduce_max(d), gr.rho)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("side", [0, 1, 2, 3])
 def test_group_window_runs_through_rising_and_convex_pieces(side):
     """The group pass alone decides most true feet of points inside ``wavy``: its window

@@ -46,6 +46,7 @@ def _default_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("sig", "after", "code"),
     [
@@ -78,6 +79,7 @@ def test_interrupted_simplify_leaves_outputs_intact(part, tmp_path, sig, after, 
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.step", "report.json"]
 
 
+@pytest.mark.slow
 def test_uninterrupted_run_replaces_the_outputs(part, tmp_path):
     """The same command left alone replaces both outputs (so the test above can fail)."""
     out, rep = tmp_path / "out.step", tmp_path / "report.json"

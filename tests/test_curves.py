@@ -32,6 +32,7 @@ CURVES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(CURVES))
 def test_closest_is_global_and_exact(name):
     c = CURVES[name]
@@ -47,6 +48,7 @@ def test_closest_is_global_and_exact(name):
     assert np.allclose(c.evaluate(got.t), got.foot)
 
 
+@pytest.mark.slow
 def test_closest_is_exact_near_the_evolute():
     """Points near the centres of curvature (where ``g'`` is small and Newton slow: the
     medial axis of a wavy side runs there): feet stationary to round-off, foot points (a
@@ -140,6 +142,7 @@ def test_reversed_and_sub_curve():
     assert np.allclose(sub_curve(s, 0.5, 1.0).evaluate(t), c.evaluate(0.5 + 0.25 * t))
 
 
+@pytest.mark.slow
 def test_pair_search_matches_dense_samples_on_both_curves():
     """Two B-splines searched together (stacked tables): each answer global and exact,
     against 400k samples of each curve, and equal to the separate queries."""

@@ -128,6 +128,7 @@ def test_ratio_nodes_are_on_their_curves(boundary):
         assert np.abs(ra.ravel() - j / n2)[inner].max() > 1e-3
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["wavy", "arcs", "trapezoid"])
 def test_boundary_nodes_at_equal_arc_length(name):
     """Boundary nodes divide each side into equal arc lengths (as gmsh's transfinite
@@ -206,6 +207,7 @@ def test_bad_input():
     assert divisions_for_size(r, 1.0) == (10, 7)
 
 
+@pytest.mark.slow
 def test_axis_side_closest_points_are_global():
     """A traced axis used as a side (hundreds of spans) answers the nearest point, checked
     against dense sampling of the spline; with the total sampling capped (12 pieces, as

@@ -144,6 +144,7 @@ def _free_form_region(name: str):
     return region_from_dict({"corners": c, "sides": sides[name]}, name)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("name", "divisions", "tol", "share"),
     [
@@ -170,6 +171,7 @@ def test_interpolated_nodes_within_the_tolerance(name, divisions, tol, share):
     assert np.all(fast.quality().scaled_jacobian > 0.0)
 
 
+@pytest.mark.slow
 def test_stalled_newton_is_solved_again_from_global_feet(monkeypatch):
     """Quarter-size coarse levels leave one node of the 512x512 ``wavy`` grid whose damped
     Newton stalls with tracked feet (residual 3e-7 x diagonal after 40 iterations); it is
@@ -233,6 +235,7 @@ def test_track_closest_gives_exact_feet_from_nearby_starts():
         np.testing.assert_allclose(got.foot, c.evaluate(t), atol=1e-14)
 
 
+@pytest.mark.slow
 def test_certify_closest_never_certifies_a_wrong_foot():
     """Feet on the wrong part of a wavy side are never certified; true ones mostly are."""
     r = REGIONS["wavy"]
@@ -252,6 +255,7 @@ def test_certify_closest_never_certifies_a_wrong_foot():
     assert not np.any(certify_closest(c, x, far.t, far.distance, slack)[wrong])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("div", [(5, 4), (50, 48)])
 def test_mesh_on_a_cylinder_patch_measures_in_space(div):
     """Nodes of a patch on a cylinder satisfy both ratio equations with distances in space
@@ -363,6 +367,7 @@ def test_planar_field_only_for_closed_form_sides():
     assert not rf.PlanarField.supports(cyl, ("distance", "distance"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("name", "tol"), [("wavy", 0.0), ("wavy", 1e-6), ("bulge", 0.0)])
 def test_free_field_solve_gives_the_general_nodes(name, tol, monkeypatch):
     """The coordinate-row solve of free-form regions (:mod:`medax.mesh.free_field`, several
@@ -436,6 +441,7 @@ def test_certify_closest_is_the_documented_rule(monkeypatch):
         assert not np.any(got & ~want & (bound < loc.distance - 1e-9))
 
 
+@pytest.mark.slow
 def test_certify_closest_near_equidistant_parts():
     """Points near where the nearest point of a wavy side jumps (two local feet at nearly
     the same distance): the farther foot is never certified, even when it is farther by
@@ -505,6 +511,7 @@ def test_stacked_jets_equal_each_curves_own():
         np.testing.assert_allclose(got, np.vstack((c0.T, c1.T, c2.T)), rtol=0, atol=1e-12)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("name", "divisions", "tol"), [("wavy", (512, 512), 1e-6), ("wavy", (300, 200), 0.0),
                                    ("bulge", (256, 256), 1e-6)],

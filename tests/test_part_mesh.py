@@ -78,6 +78,7 @@ def _face_nodes(mesh, i):
     return np.unique(mesh.quads[mesh.quad_face == i])
 
 
+@pytest.mark.slow
 def test_box6_all_faces_structured(box6):
     _, m = box6
     assert len(m.structured_faces) == 6 and not m.conflicts
@@ -96,6 +97,7 @@ def test_built_parts_mix_structured_and_gmsh(built):
         assert f.kind == "structured" or f.why
 
 
+@pytest.mark.slow
 def test_nodes_on_their_faces(any_part):
     """Every node within 1e-9 x diagonal of its CAD face (BRepExtrema on the trimmed face;
     measured: at most 4e-16, also on the simplified box's fitted faces)."""
@@ -121,6 +123,7 @@ def test_shared_nodes_and_closed(any_part):
     assert all(tuple(sorted(seg)) in quad_edges for seg in m.lines.tolist())
 
 
+@pytest.mark.slow
 def test_quads_face_outward(any_part):
     """At each quad corner the turn ``L_{k-1} x L_k`` points along OCCT's outward normal of
     the face there (no inverted or flat corner)."""
@@ -248,6 +251,7 @@ def test_counts_propagate_and_conflict():
     assert c.structured == () and "opposite sides 0 and 2" in c.conflicts[0]
 
 
+@pytest.mark.slow
 def test_cli_part(tmp_path, capsys):
     """``medax mesh PART.brep``: the mesh, a report with both scaled Jacobians per face, the
     plot; --faces meshes a subset (open where the other faces were)."""
@@ -370,6 +374,7 @@ def test_orientation_turns_and_refuses():
         oriented(face, 7, flat, uv, pts)
 
 
+@pytest.mark.slow
 def test_demo_part_mesh(tmp_path):
     """The demo meshes the 12-fillet box after --simplify (6 of 6 faces medial) and the
     L-bracket (9 of 11: the hole's cylinder too, cut by its seam), with reports and pictures."""
@@ -567,6 +572,7 @@ def test_gmsh_session_keeps_sigterm_handler():
     assert r.returncode == 0 and "stopped cleanly" in r.stdout, (r.returncode, r.stderr)
 
 
+@pytest.mark.slow
 def test_gmsh_worker_survives_hang_and_crash(monkeypatch):
     """A gmsh attempt that hangs (stopped after ``ATTEMPT_TIMEOUT``) or ends the worker
     process counts as failed; a new worker goes on with the next attempt, the other faces
@@ -650,6 +656,7 @@ def _u_channel(w=100.0, r=10.0, h=20.0, t=1.0, depth=60.0):
     return BRepPrimAPI_MakePrism(face, gp_Vec(depth, 0.0, 0.0)).Shape()
 
 
+@pytest.mark.slow
 def test_thin_curved_strip_structured():
     """The end faces of a thin U channel (1 mm wall): at size 4.1 the inner arcs' own
     counts (4) are below the outer arcs' (6). The chains are evened on the coarsest edges

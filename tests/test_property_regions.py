@@ -24,6 +24,7 @@ import os
 import warnings
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, Phase, event, example, given, settings
 from hypothesis import strategies as st
 
@@ -178,6 +179,7 @@ def check_region(spec: dict) -> None:
     event("mesh refused (inverted)" if mesh.quality().summary()["n_inverted"] else "mesh kept")
 
 
+@pytest.mark.slow
 @settings(
     max_examples=EXAMPLES,
     derandomize=not os.environ.get("MEDAX_HYPOTHESIS_RANDOM"),  # (then --hypothesis-seed)

@@ -66,6 +66,7 @@ def dense_distance(points: np.ndarray, curve, n: int = 20_000) -> np.ndarray:
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(N_REGIONS))
 def test_random_region_refused_or_right(seed, tmp_path, capsys):
     spec = random_region(seed)

@@ -58,6 +58,7 @@ def outputs(tmp_path_factory):
     return d
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("name", "kind", "unit"),
     [

@@ -19,6 +19,8 @@ from medax.cad.simplify.specs import edge_face_map
 from medax.cad.simplify.validate import face_samples
 from truth import assert_same_solid, classified_and_simplified
 
+pytestmark = pytest.mark.slow  # OCCT-heavy: module fixtures build and simplify parts
+
 #: the box: x in [0, 30], y in [0, 20], z in [0, 10]; the side planes by coordinate
 SIDES = {("x", 0.0), ("x", 30.0), ("y", 0.0), ("y", 20.0)}
 

@@ -32,6 +32,7 @@ def box_step(tmp_path_factory):
     return path
 
 
+@pytest.mark.slow
 def test_cli_simplify_box(box_step, tmp_path, capsys):
     out, rep, png = tmp_path / "s.step", tmp_path / "r.json", tmp_path / "ba.png"
     code = main(

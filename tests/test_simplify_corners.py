@@ -21,6 +21,8 @@ from medax.cad.simplify.specs import edge_face_map
 from medax.cad.simplify.validate import check
 from truth import boundary_distances, face_neighbours
 
+pytestmark = pytest.mark.slow  # OCCT-heavy: module fixtures build and simplify parts
+
 A, B, H, R = 40.0, 30.0, 20.0, 4.0
 
 

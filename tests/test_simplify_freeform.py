@@ -16,6 +16,8 @@ from OCP.TopoDS import TopoDS
 from medax.cad.simplify.occ import edge_points, shape_map
 from truth import assert_same_solid, classified_and_simplified
 
+pytestmark = pytest.mark.slow  # OCCT-heavy: module fixtures build and simplify parts
+
 
 @pytest.fixture(scope="module")
 def variable():

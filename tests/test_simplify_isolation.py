@@ -116,6 +116,7 @@ def corner_kept():
     return part, corner, simplify(cls.shape, blends)
 
 
+@pytest.mark.slow
 def test_fillets_meeting_a_kept_blend_still_go(corner_kept):
     part, corner, r = corner_kept
     assert sorted(r.blends_removed) == sorted(corner.fillets)

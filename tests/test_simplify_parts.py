@@ -129,6 +129,7 @@ ALL_REMOVED = (
 )  # rounded_box_chain, variable_radius_box (every fillet removed too): their own tests
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ALL_REMOVED)
 def test_catalogue(name):
     import medax.cad.parts as catalogue
@@ -186,6 +187,7 @@ def test_deviation_measures_a_known_offset():
     assert d1 < 1e-12 and d2 > 4.0
 
 
+@pytest.mark.slow
 def test_batch_projection_matches_occt_surface_projection(box4, monkeypatch):
     """The numpy projections (planes, cylinders, extrusions through their profile) give
     OCCT's surface-projection distances, point by point, on offset samples of every face
@@ -244,6 +246,7 @@ def test_box4_area_matches_closed_form(box4):
     assert r.report()["area_rel_change"] == r.area_rel_change
 
 
+@pytest.mark.slow
 def test_area_change_keeps_the_fillets(monkeypatch):
     """A rebuilt solid whose boundary area is off (as a pcurve bump between the sampled
     deviations makes it) is not accepted: the fillets are kept, the input is returned."""
@@ -342,6 +345,7 @@ def test_local_measures_match_whole_solids(box4):
     assert L.local_area_change(big, old, L._area(old, 1e-9), 5e-6) is None
 
 
+@pytest.mark.slow
 def test_box_far_from_the_origin():
     """The 4-fillet box moved 1e9 mm away simplifies as at the origin, in seconds (it ran
     past 300 s in validation): the checks work relative to the part, and the deviation is

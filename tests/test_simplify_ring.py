@@ -37,6 +37,8 @@ from medax.geometry.ring_heights import RingFrame, ray_points
 from medax.geometry.surfaces import NurbsSurface
 from medax.geometry.tensor_fit import _knots
 
+pytestmark = pytest.mark.slow  # OCCT-heavy: module fixtures build and simplify parts
+
 
 @pytest.fixture(scope="module")
 def slanted():

@@ -62,3 +62,11 @@ class MedialAxis:
     @property
     def n_points(self) -> int:
         return int(self.points.shape[0])
+
+    def __repr__(self) -> str:
+        d = self.diagonal
+        return (
+            f"MedialAxis(region {self.region.name!r}, pair {self.pair[0]},{self.pair[1]}, "
+            f"{self.method}, {self.n_points} points, max |d1-d2| {self.max_point_error / d:.2e} "
+            f"(points) {self.max_curve_error / d:.2e} (spline) x diagonal {d:.5g})"
+        )

@@ -182,6 +182,14 @@ class Classification:
     tangent_angle: float = 1e-3
     doubts: tuple[Doubt, ...] = ()
 
+    def __repr__(self) -> str:
+        c = self.counts()
+        classes = ", ".join(f"{c[k.value]} {k.value}" for k in FaceClass)
+        return (
+            f"Classification({self.source or 'shape'} solid {self.solid}: {c['faces']} faces: "
+            f"{classes}; {len(self.doubts)} doubts)"
+        )
+
     # ---- access to OCCT shapes ------------------------------------------------------------
     def face(self, i: int) -> Any:
         """The ``TopoDS_Face`` of face ``i``."""

@@ -124,6 +124,12 @@ class PartMesh:
     def gmsh_faces(self) -> tuple[int, ...]:
         return tuple(f.face for f in self.faces if f.kind == "gmsh")
 
+    def __repr__(self) -> str:
+        return (
+            f"PartMesh({len(self.quads)} quads, {len(self.points)} nodes, "
+            f"{len(self.structured_faces)}/{len(self.faces)} faces structured, {self.time_s:.2f} s)"
+        )
+
 
 class _Nodes:
     """The growing node table."""

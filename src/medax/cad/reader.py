@@ -57,6 +57,10 @@ class Part:
     file_unit: str = ""
     notes: tuple[str, ...] = field(default=())
 
+    def __repr__(self) -> str:
+        unit = f", file unit {self.file_unit}" if self.file_unit else ""
+        return f"Part({self.source}: {len(self.solids)} solids, lengths in {self.unit}{unit})"
+
 
 def read_part(path: str | Path, unify: bool = True) -> Part:
     """Read ``path`` (STEP, IGES or BRep by extension) into healed solids.

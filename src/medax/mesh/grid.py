@@ -66,6 +66,12 @@ class QuadMesh:
     def n_quads(self) -> int:
         return self.n1 * self.n2
 
+    def __repr__(self) -> str:
+        return (
+            f"QuadMesh(region {self.region.name!r}, {self.n1}x{self.n2} quads ({self.method}), "
+            f"{self.n_nodes} nodes)"
+        )
+
     def grid(self) -> FloatArray:
         """Space nodes as a grid ``(n2 + 1, n1 + 1, dim)``."""
         return self.points.reshape(self.n2 + 1, self.n1 + 1, -1)

@@ -123,6 +123,14 @@ class SimplifyResult:
         """(after - before) / before."""
         return (self.volume_after - self.volume_before) / self.volume_before
 
+    def __repr__(self) -> str:
+        return (
+            f"SimplifyResult(faces {self.faces_before} -> {self.faces_after}, "
+            f"{len(self.blends_removed)} blends removed, {len(self.blends_kept)} kept, "
+            f"valid {self.valid}, volume change {self.volume_rel_change:.1e}, "
+            f"deviation {self.max_deviation / self.diagonal:.1e} x diagonal, {self.time_s:.2f} s)"
+        )
+
     def report(self) -> dict[str, Any]:
         """The JSON-ready report (keys of the issue)."""
         return {
