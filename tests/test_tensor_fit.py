@@ -166,3 +166,24 @@ def test_a_degenerate_spacing_is_refused_not_raised():
     exceeded', seen on a box with fillets of three radii)."""
     for step in (0.0, 1e-300):
         assert fit_height((0.9, 20.0), (0.9, 20.0), [R], [R], _h, 1e-6, step) is None
+
+
+def test_a_fit_that_cannot_reach_its_tolerance_stops_early(monkeypatch):
+    """Without the breaks at x, y = R the curvature jumps fall inside spans and the error
+    shrinks about 4x per halving: at a tolerance a million times below the first error the
+    rate shows after two levels that the last levels (each ~4x the cost) cannot reach it."""
+    from medax.geometry import tensor_fit as T
+
+    calls = []
+    real = T._fit_once
+    monkeypatch.setattr(T, "_fit_once", lambda *a, **k: calls.append(1) or real(*a, **k))
+    first = fit_height((0.9, 20.0), (0.9, 20.0), [], [], _h, 1.0, R / 4, levels=1)
+    assert first is not None and first.error > 0
+    calls.clear()
+    fit = fit_height((0.9, 20.0), (0.9, 20.0), [], [], _h, 1e-6 * first.error, R / 4, levels=5)
+    assert fit is not None and fit.error > 1e-6 * first.error
+    assert len(calls) < 5  # both directions halved 4 times, or the one-direction tries, cost more
+    monkeypatch.setattr(T, "HOPELESS", float("inf"))  # the rule off: every level is fitted
+    calls.clear()
+    fit_height((0.9, 20.0), (0.9, 20.0), [], [], _h, 1e-6 * first.error, R / 4, levels=5)
+    assert len(calls) > 4

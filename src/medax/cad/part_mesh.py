@@ -148,6 +148,17 @@ class _Nodes:
         return np.concatenate(self.blocks) if self.blocks else np.zeros((0, 3))
 
 
+def surface_area(shape: Any) -> float:
+    """The boundary area of ``shape`` (length unit squared), by OCCT's default integrator:
+    enough to size a mesh."""
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(shape, props)
+    return float(props.Mass())
+
+
 def part_diagonal(shape: Any) -> float:
     """The diagonal of ``shape``'s bounding box (model units)."""
     from OCP.Bnd import Bnd_Box  # noqa: PLC0415

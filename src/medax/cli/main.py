@@ -25,20 +25,14 @@ SUBCOMMANDS = ("axis", "mesh", "classify", "simplify", "samples", "demo")
 
 
 def versions() -> str:
-    """One line: medax's version and those of the libraries whose results it depends on
-    (OpenCASCADE's is the first three numbers of OCP's, which is built against it)."""
+    """One line: medax's version and those of the libraries whose results it depends on."""
     from importlib.metadata import PackageNotFoundError, version
 
     import numpy
 
-    parts = [f"medax {__version__}", f"numpy {numpy.__version__}"]
-    try:
-        import OCP
+    from medax.cad.versions import occt_version
 
-        ocp = str(OCP.__version__)
-        parts.insert(1, f"OpenCASCADE {'.'.join(ocp.split('.')[:3])} (OCP {ocp})")
-    except ImportError:
-        parts.insert(1, "OpenCASCADE: OCP not importable")
+    parts = [f"medax {__version__}", occt_version(), f"numpy {numpy.__version__}"]
     try:
         parts.append(f"gmsh {version('gmsh')}")
     except PackageNotFoundError:

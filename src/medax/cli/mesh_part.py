@@ -73,6 +73,8 @@ def run_part(args: argparse.Namespace) -> int:
         print(f"medax mesh: {msg}", file=sys.stderr, flush=True)
 
     def check_size(shapes: list[Any]) -> None:
+        from medax.cad.part_mesh import surface_area
+
         est = part_estimate(sum(surface_area(sh) for sh in shapes), args.size)
         check_estimate(est, f"--size {args.size:g}", args.force)
 
@@ -132,16 +134,6 @@ def _tolerances(simplify: bool) -> dict[str, float]:
 
         tols |= simplify_tolerances()
     return tols
-
-
-def surface_area(shape: Any) -> float:
-    """The surface area of an OCCT shape (model units^2)."""
-    from OCP.BRepGProp import BRepGProp
-    from OCP.GProp import GProp_GProps
-
-    props = GProp_GProps()
-    BRepGProp.SurfaceProperties_s(shape, props)
-    return float(props.Mass())
 
 
 def _solids(

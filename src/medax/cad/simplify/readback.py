@@ -27,7 +27,7 @@ from OCP.TopAbs import TopAbs_EDGE, TopAbs_SOLID, TopAbs_VERTEX
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS
 
-from medax.cad.simplify.occ import Array, edges_of, faces_of, xyz
+from medax.cad.simplify.occ import Array, count, edges_of, faces_of, xyz
 from medax.cad.simplify.validate import default_volume, face_samples, max_distance
 from medax.errors import CadError
 
@@ -104,8 +104,8 @@ def read_back(
     if back is None:
         raise CadError(f"{label}: the written file holds no shape")
     allowed = max(tol_length, 2.0 * shape_tolerance(shape))
-    n_solids = _count(back, TopAbs_SOLID)
-    want_solids = _count(shape, TopAbs_SOLID)
+    n_solids = count(back, TopAbs_SOLID)
+    want_solids = count(shape, TopAbs_SOLID)
     if n_solids != want_solids:
         raise CadError(f"{label}: the written file holds {n_solids} solids, not {want_solids}")
     old, new = list(faces_of(shape)), list(faces_of(back))
@@ -177,12 +177,3 @@ def boundary_samples(face: Any, n: int) -> Array:
         uvs = [c2.Value(t) for t in ts]  # OCCT evaluations, n per edge
         out.append([xyz(surf.Value(uv.X(), uv.Y())) for uv in uvs])
     return np.array(out, dtype=np.float64).reshape(-1, n, 3)
-
-
-def _count(shape: Any, kind: Any) -> int:
-    exp = TopExp_Explorer(shape, kind)
-    n = 0
-    while exp.More():
-        n += 1
-        exp.Next()
-    return n
