@@ -84,3 +84,29 @@ def test_simplify_takes_a_classification_and_writes(tmp_path):
 def test_part_mesh_repr():
     part = medax.read_part(sample_path("l-bracket.step"))
     one_line(medax.mesh_part(part.solids[0], 3.0), "quads", "faces structured")
+
+
+def test_ocp_is_imported_only_in_the_cad_package():
+    """Every ``import OCP`` / ``from OCP...`` in the package is under ``medax/cad/`` (the
+    numpy core and the CLI reach OpenCASCADE only through it)."""
+    import ast
+    from pathlib import Path
+
+    import medax
+
+    root = Path(medax.__file__).parent
+    offenders = []
+    for path in root.rglob("*.py"):
+        if path.relative_to(root).parts[0] == "cad":
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = (
+                [a.name for a in node.names]
+                if isinstance(node, ast.Import)
+                else [node.module or ""]
+                if isinstance(node, ast.ImportFrom)
+                else []
+            )
+            if any(n == "OCP" or n.startswith("OCP.") for n in names):
+                offenders.append(f"{path.relative_to(root)}:{node.lineno}")
+    assert offenders == []
