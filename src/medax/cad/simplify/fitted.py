@@ -338,9 +338,13 @@ def _frame(
     line; a variable-radius fillet's contact line may be oblique to the face's own edges),
     else along its longest straight edge normal to n (box-like parts: every edge on a knot
     line). Straight: a line, or samples within ``tol`` of their chord."""
-    pl = BRepAdaptor_Surface(plane_face).Plane()
-    o, n = xyz(pl.Location()), xyz(pl.Axis().Direction())
-    ex = xyz(pl.XAxis().Direction())
+    ad = BRepAdaptor_Surface(plane_face)
+    if ad.GetType() == GeomAbs_Plane:
+        pl = ad.Plane()
+        o, n = xyz(pl.Location()), xyz(pl.Axis().Direction())
+        ex = xyz(pl.XAxis().Direction())
+    else:
+        o, n, ex = _mean_plane(ad)
     seen: dict[Any, int] = {}
     edges: list[Any] = []
     for f in members:
@@ -360,6 +364,32 @@ def _frame(
     ex = ex - (ex @ n) * n
     ex /= np.linalg.norm(ex)
     return o, ex, np.cross(n, ex), n
+
+
+def _mean_plane(ad: Any, n: int = 9) -> tuple[Array, Array, Array]:
+    """(origin, normal, x axis) of the plane that a curved supporting face is a height field
+    over: its mean point and unit normal over ``n x n`` samples of its UV box (``ad``:
+    ``BRepAdaptor_Surface``). Whether the merged face really is a graph over it, the fit
+    decides (steep or missing heights refuse it)."""
+    from OCP.gp import gp_Pnt, gp_Vec
+
+    us = np.linspace(ad.FirstUParameter(), ad.LastUParameter(), n)
+    vs = np.linspace(ad.FirstVParameter(), ad.LastVParameter(), n)
+    p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
+    pts, normals = [], []
+    for u in us:
+        for v in vs:
+            ad.D1(float(u), float(v), p, du, dv)
+            c = np.cross(xyz(du), xyz(dv))
+            size = float(np.linalg.norm(c))
+            if size > 0.0:
+                pts.append(xyz(p))
+                normals.append(c / size)
+    mean = np.sum(normals, axis=0)
+    normal = mean / max(float(np.linalg.norm(mean)), 1e-300)
+    ex = np.eye(3)[int(np.argmin(np.abs(normal)))]
+    ex = ex - (ex @ normal) * normal
+    return np.mean(pts, axis=0), normal, ex / float(np.linalg.norm(ex))
 
 
 def _straight_direction(edge: Any, tol: float) -> Array | None:

@@ -484,7 +484,7 @@ def _surface_of(
         ms = merged_surface(support, halves, job.btol)
     except (ValueError, RuntimeError) as err:  # OCCT construction failures
         ms = f"surface construction failed: {err}"
-    if isinstance(ms, str) and (planar or _ring_kind(support)):
+    if isinstance(ms, str) and (planar or _ring_kind(support) or _graph_kind(support)):
         return FITTED
     if isinstance(ms, str):
         kind = str(BRepAdaptor_Surface(support).GetType()).split("_")[-1].lower()
@@ -559,6 +559,13 @@ def _ring_kind(face: Any) -> bool:
     """Whether a supporting face takes only the ring route (a cylinder: see
     :mod:`.ring`)."""
     return BRepAdaptor_Surface(face).GetType() == GeomAbs_Cylinder
+
+
+def _graph_kind(face: Any) -> bool:
+    """Whether a curved supporting face may take the height-field route (over its mean
+    plane): any surface but a cylinder (ring route) that converts to a B-spline; the fit
+    itself refuses a merged face that is no graph."""
+    return BRepAdaptor_Surface(face).GetType() not in (GeomAbs_Plane, GeomAbs_Cylinder)
 
 
 def _ring_applies(why: str) -> bool:

@@ -12,6 +12,7 @@ their (new or original) surface with pcurves projected explicitly, then healed
 from __future__ import annotations
 
 import logging
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -22,6 +23,7 @@ from OCP.GeomProjLib import GeomProjLib
 from OCP.gp import gp_Pnt
 from OCP.ShapeFix import ShapeFix_Shape
 from OCP.TopAbs import TopAbs_REVERSED
+from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shell, TopoDS_Solid, TopoDS_Wire
 
 from medax.cad.simplify.groups import Group
@@ -158,17 +160,32 @@ def _concat_c0(curves: list[tuple[Any, float, float]]) -> Any:
     return Geom2d_BSplineCurve(ap, ak, am, deg)
 
 
-def _add_pcurves(face: Any, surf: Any, tol: float) -> None:
-    """Explicit pcurves of every edge of ``face`` on ``surf``: OCCT's projection, replaced
-    by a fitted one when that is closer (checked at samples against the 3-D curve)."""
-    from OCP.TopLoc import TopLoc_Location
+def _add_pcurves(face: Any, tol: float, old: Sequence[Any] = ()) -> None:
+    """Explicit pcurves of every edge of ``face`` on its surface: OCCT's projection, replaced
+    by a fitted one when that is closer (checked at samples against the 3-D curve).
 
+    ``old``: the faces the new one replaces. Where one of them placed an edge's boundary
+    farther than ``tol`` from its 3-D curve (an input whose pcurves lie within a loose edge
+    tolerance of its curves), the new pcurve follows that boundary, not the 3-D curve: the
+    face then covers what the old faces covered, and the volume and area stay the same."""
     builder = BRep_Builder()
+    surf = BRep_Tool.Surface_s(face)  # placed by the face's location (its parameters kept)
     grid: GridProjection | None = None
     for e in edges_of(face):
-        if BRep_Tool.CurveOnSurface_s(TopoDS.Edge(e), surf, TopLoc_Location(), 0.0, 0.0):
+        if BRep_Tool.CurveOnSurface_s(TopoDS.Edge(e), face, 0.0, 0.0):
             continue  # an original edge of an original surface: its pcurve is there
         c, f, l = edge_curve(e)
+        loose = _loose_boundary(TopoDS.Edge(e), c, f, l, old, tol)
+        if loose is not None:
+            if grid is None:
+                u0, u1, v0, v1 = (float(x) for x in surf.Bounds())
+                grid = GridProjection.of(surf, (u0, u1, v0, v1))
+            pc = _fitted_pcurve(loose, surf, f, l, tol, grid)
+            if pc is not None:
+                _set_pcurve(
+                    builder, TopoDS.Edge(e), face, pc, f, l, _pcurve_error(pc, c, surf, f, l), tol
+                )
+                continue
         pc = _projected_pcurve(c, f, l, surf, tol)
         err = float("inf") if pc is None else _pcurve_error(pc, c, surf, f, l)
         if err > 0.1 * tol:
@@ -180,13 +197,58 @@ def _add_pcurves(face: Any, surf: Any, tol: float) -> None:
                 pc = alt
         if pc is None:
             raise CadError("projecting a boundary edge onto a new surface failed")
-        err = _pcurve_error(pc, c, surf, f, l)
-        edge = TopoDS.Edge(e)
-        builder.UpdateEdge(edge, pc, face, max(tol, 2 * err))
-        # the pcurve is on the edge's own parameter, its error measured: say so
-        builder.Range(edge, face, f, l)
-        builder.SameRange(edge, True)
-        builder.SameParameter(edge, True)
+        _set_pcurve(builder, TopoDS.Edge(e), face, pc, f, l, _pcurve_error(pc, c, surf, f, l), tol)
+
+
+def _set_pcurve(
+    builder: Any, edge: Any, face: Any, pc: Any, f: float, l: float, err: float, tol: float
+) -> None:
+    """Give ``edge`` the pcurve ``pc`` on ``face`` over ``[f, l]``, its tolerance covering
+    the measured distance ``err`` from the 3-D curve."""
+    builder.UpdateEdge(edge, pc, face, max(tol, 2 * err, BRep_Tool.Tolerance_s(edge)))
+    # the pcurve is on the edge's own parameter, its error measured: say so
+    builder.Range(edge, face, f, l)
+    builder.SameRange(edge, True)
+    builder.SameParameter(edge, True)
+
+
+class _BoundaryOnFace:
+    """An edge as an old face's pcurve places it (``Value(t)``: a ``gp_Pnt``), with the
+    3-D curve's knots (``NbKnots``/``Knot``) for :func:`_fitted_pcurve`'s spans."""
+
+    def __init__(self, edge: Any, face: Any, curve: Any) -> None:
+        from OCP.BRepAdaptor import BRepAdaptor_Curve
+
+        self._on = BRepAdaptor_Curve(edge, face)
+        self._curve = curve
+        if hasattr(curve, "NbKnots"):
+            self.NbKnots = curve.NbKnots
+            self.Knot = curve.Knot
+
+    def Value(self, t: float) -> Any:  # noqa: N802 (OCCT's name, for _fitted_pcurve)
+        return self._on.Value(t)
+
+
+def _loose_boundary(
+    edge: Any, c: Any, f: float, l: float, old: Sequence[Any], tol: float
+) -> _BoundaryOnFace | None:
+    """The edge as the first face of ``old`` with a pcurve for it places it, when that
+    boundary lies farther than ``tol`` from the 3-D curve ``c`` on ``[f, l]`` but within the
+    edge's own tolerance (a loose input edge; else None)."""
+    if not BRep_Tool.Tolerance_s(edge) > tol:
+        return None
+    for face in old:
+        pc = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+        if pc is None:
+            continue
+        a, b = BRep_Tool.Range_s(edge, face)
+        if abs(a - f) > 1e-9 * (1 + abs(f)) or abs(b - l) > 1e-9 * (1 + abs(l)):
+            return None  # not on the 3-D curve's parameter
+        on = _BoundaryOnFace(edge, face, c)
+        far = max(on.Value(float(t)).Distance(c.Value(float(t))) for t in np.linspace(f, l, 9))
+        # (beyond the edge's own tolerance the two do not describe one boundary)
+        return on if tol < far <= BRep_Tool.Tolerance_s(edge) else None
+    return None
 
 
 def _projected_pcurve(c: Any, f: float, l: float, surf: Any, tol: float) -> Any:
@@ -298,6 +360,7 @@ def build_solid(
         if g.untouched:
             faces.append(member)
             continue
+        loc = TopLoc_Location()
         if g.support is not None:
             surf = surfaces[g.support]
             ref = next(
@@ -318,15 +381,21 @@ def build_solid(
                     break
             if flip is None:
                 raise CadError(f"face {g.support}: no point with defined normals")
-        else:  # the face's own surface: its orientation says it all
-            surf = BRep_Tool.Surface_s(member)
+        else:  # the face's own surface (and location): its orientation says it all
+            loc = TopLoc_Location()
+            surf = BRep_Tool.Surface_s(member, loc)
             flip = member.Orientation() == TopAbs_REVERSED
-        pole = _pole_face(surf, g, tol)
+        placed = surf if loc.IsIdentity() else BRep_Tool.Surface_s(member)
+        pole = _pole_face(placed, g, tol)
         if pole is not None:
             faces.append(pole.Reversed() if flip else pole)
             continue
         face = TopoDS_Face()
-        builder.MakeFace(face, surf, tol)
+        # an original surface keeps its handle and location, so the unchanged edges keep
+        # their pcurves (a copy would have none: they would be projected again, and on an
+        # input whose pcurves lie up to its edge tolerance from the 3-D curves, that moves
+        # the face's boundary and its volume)
+        builder.MakeFace(face, surf, loc, tol)
         for loop in g.loops:
             edges: list[Any] = []
             for run in loop:
@@ -339,7 +408,8 @@ def build_solid(
                 builder.Add(wire, e)
             wire.Closed(True)
             builder.Add(face, wire)
-        _add_pcurves(face, surf, tol)
+        old = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
+        _add_pcurves(face, tol, old)
         if flip:
             face.Reverse()
         faces.append(face)
