@@ -106,3 +106,16 @@ def test_log_progress_about_ten_messages_and_the_last(caplog):
             log_progress(log, "items", k, 105)
     msgs = [r.getMessage() for r in caplog.records]
     assert msgs[0] == "items 10/105" and msgs[-1] == "items 105/105" and len(msgs) == 11
+
+
+def test_a_command_inside_a_command_keeps_the_outer_levels(samples, tmp_path, capsys):
+    """``medax demo`` runs ``main`` again: its messages are neither doubled nor shown
+    under ``-q``."""
+    from medax.cli.main import configure_logging
+
+    with configure_logging(quiet=1):
+        assert _mesh(samples, tmp_path) == 0
+    assert capsys.readouterr().err == ""
+    with configure_logging():
+        assert _mesh(samples, tmp_path, "-q") == 0
+    assert capsys.readouterr().err.count("medax mesh: region 'wavy'") == 1

@@ -112,12 +112,16 @@ def configure_logging(verbose: int = 0, quiet: int = 0) -> Iterator[None]:
     messages (the ``medax.cli`` loggers at INFO); 1 (``-v``) also the library's progress with
     counts (``medax`` at INFO); 2 (``-vv``) debug messages. The handler writes to the current
     ``sys.stderr`` and is removed on exit, so in-process calls (tests, notebooks) neither
-    accumulate handlers nor leave levels changed.
+    accumulate handlers nor leave levels changed. A command run inside another (``medax
+    demo`` calls :func:`main`) keeps the outer command's handler and levels.
     """
+    lib, cli = logging.getLogger("medax"), logging.getLogger("medax.cli")
+    if any(isinstance(h.formatter, _Prefix) for h in lib.handlers):
+        yield
+        return
     level = verbose - quiet
     lib_level = {1: logging.INFO}.get(level, logging.DEBUG if level > 1 else logging.WARNING)
     cli_level = logging.WARNING if level < 0 else min(lib_level, logging.INFO)
-    lib, cli = logging.getLogger("medax"), logging.getLogger("medax.cli")
     saved = (lib.level, cli.level)
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(_Prefix())
