@@ -1,8 +1,11 @@
-"""MkDocs hook: the README becomes the home page, CHANGELOG.md and LICENSE pages too.
+"""MkDocs hooks: the README becomes the home page, CHANGELOG.md and LICENSE pages too; the
+docstrings' Sphinx roles render as plain code.
 
-They live at the repository's root (where GitHub and PyPI show them), outside ``docs/``; this
-hook adds them to the build and rewrites the README's links, written relative to the root,
-to the site's pages. Nothing is copied into ``docs/``.
+The root files live where GitHub and PyPI show them, outside ``docs/``; :func:`on_files` adds
+them to the build and :func:`on_page_markdown` rewrites the README's links, written relative
+to the root, to the site's pages. Nothing is copied into ``docs/``. The docstrings cite names
+with Sphinx roles (``:func:`~medax.x.f```), which Markdown renders as ``:func:`` followed by
+code; :func:`on_page_content` drops the role and, after ``~``, the module path.
 """
 
 from __future__ import annotations
@@ -34,6 +37,18 @@ def on_files(files: Files, config: Any) -> Files:
         text = wrap.format((ROOT / name).read_text(encoding="utf-8"))
         files.append(File.generated(config, page, content=text))
     return files
+
+
+#: ``:func:<code>~a.b.f</code>`` as rendered -> ``<code>f</code>``
+ROLE = re.compile(r":(?:func|class|mod|meth|attr|data|exc|obj):<code>(~?)([^<]*)</code>")
+
+
+def on_page_content(html: str, page: Any, config: Any, files: Files) -> str:
+    def code(m: re.Match[str]) -> str:
+        name = m.group(2).lstrip(".")
+        return f"<code>{name.rsplit('.', 1)[-1] if m.group(1) else name}</code>"
+
+    return ROLE.sub(code, html)
 
 
 def on_page_markdown(markdown: str, page: Any, config: Any, files: Files) -> str:
