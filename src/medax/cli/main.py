@@ -120,7 +120,7 @@ def configure_logging(verbose: int = 0, quiet: int = 0) -> Iterator[None]:
         yield
         return
     level = verbose - quiet
-    lib_level = {1: logging.INFO}.get(level, logging.DEBUG if level > 1 else logging.WARNING)
+    lib_level = logging.DEBUG if level >= 2 else logging.INFO if level == 1 else logging.WARNING
     cli_level = logging.WARNING if level < 0 else min(lib_level, logging.INFO)
     saved = (lib.level, cli.level)
     handler = logging.StreamHandler(sys.stderr)
