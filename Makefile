@@ -4,10 +4,10 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test quick lint typecheck unit bench bench-axis bench-classify bench-mesh bench-simplify clean
+.PHONY: demo test quick lint typecheck docs unit bench bench-axis bench-classify bench-mesh bench-simplify clean
 
 $(BIN)/python:
-	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found (medax needs Python 3.11)"; exit 1; }
+	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "error: $(PYTHON) not found (medax needs Python 3.11 or newer: make PYTHON=python3.12 ...)"; exit 1; }
 	$(PYTHON) -m venv $(VENV)
 
 # constraints.txt pins exact versions of what pyproject.toml only bounds from below
@@ -28,11 +28,15 @@ lint: $(STAMP)
 typecheck: $(STAMP)
 	$(BIN)/mypy
 
+# the documentation site in build/site; --strict: a broken link, page or API reference fails
+docs: $(STAMP)
+	$(BIN)/mkdocs build --strict --quiet
+
 # test files spread over the cores, one file per worker at a time (module fixtures built once)
 unit: $(STAMP)
 	$(BIN)/python -m pytest -n auto --maxprocesses 4 --dist loadfile
 
-test: lint typecheck unit
+test: lint typecheck docs unit
 
 # the tests not marked slow (OCCT-heavy and long ones), on the cores like unit: under a minute
 quick: $(STAMP)

@@ -1,5 +1,6 @@
-"""A strict check of the docs (there is no docs build): every relative link and every path
-named in backticks resolves, anchors name a heading, and the docs describe the present."""
+"""A strict check of the docs, beside ``make docs`` (the MkDocs build with --strict): every
+relative link and every path named in backticks resolves, anchors name a heading, and the
+docs describe the present."""
 
 import re
 from pathlib import Path

@@ -32,6 +32,7 @@ from OCP.BRepGProp import BRepGProp
 from OCP.GProp import GProp_GProps
 
 from medax import tolerances
+from medax._progress import log_progress
 from medax.cad.face_geometry import (
     WireEdge,
     area_centroid,
@@ -96,6 +97,7 @@ def _classify(solid: Any, angle_tol: float, source: str, unit: str, index: int) 
     wires: dict[int, list[WireEdge]] = {}
     fillets: dict[int, FilletRecord] = {}
     for i in range(topo.n_faces):
+        log_progress(log, f"{source or 'shape'}: faces examined for fillets", i + 1, topo.n_faces)
         if surfaces[i] == "plane":
             continue
         try:

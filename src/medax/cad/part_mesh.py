@@ -45,6 +45,7 @@ from OCP.TopAbs import TopAbs_FORWARD, TopAbs_REVERSED
 from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS
 
+from medax._progress import log_progress
 from medax.cad.edge_counts import division_counts
 from medax.cad.edge_nodes import edge_curve, equal_arc_nodes
 from medax.cad.face_geometry import surface_type
@@ -197,7 +198,8 @@ def mesh_part(
     # 1. 4-sided faces and their regions
     regions: dict[int, _FaceRegion] = {}
     why: dict[int, str] = {}
-    for i in sel:
+    for k, i in enumerate(sel):
+        log_progress(log, "faces examined for 4 sides", k + 1, len(sel))
         f = topo.face(i)
         if not structured:
             why[i] = "structured grid not asked for"

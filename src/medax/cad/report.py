@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from medax import tolerances
+from medax._progress import log_progress
 from medax.axis import MedialAxis
 from medax.cad.model import Classification, FaceClass
 from medax.errors import MedaxError
@@ -51,7 +52,8 @@ def trace_fillet_axes(c: Classification, tol: float = tolerances.CURVE_TOL) -> C
 
     axes: dict[int, MedialAxis] = {}
     errors: dict[int, str] = {}
-    for rec in c.fillets:
+    for k, rec in enumerate(c.fillets):
+        log_progress(log, "fillet axes traced", k + 1, len(c.fillets))
         try:
             axes[rec.face] = fillet_axis(c, rec, tol=tol)
         except MedaxError as err:

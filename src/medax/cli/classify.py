@@ -97,6 +97,7 @@ def classify_part(
     solids = []
     for k, s in enumerate(part.solids):
         c = classify_solid(s, angle, source=part.source, unit=part.unit, index=k)
+        log.info("classify: solid %d: %d faces, %d fillets", k, len(c.faces), len(c.fillets))
         solids.append(trace_fillet_axes(c, tol) if axes else ClassifiedSolid(c))
     report = part_report(solids, part.source, part.unit, part.file_unit, part.notes)
     tols = {"tangent_angle_rad": angle, "axis_curve_tol_rel": tol}

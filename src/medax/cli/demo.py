@@ -8,9 +8,11 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import sys
+import logging
 import time
 from pathlib import Path
+
+log = logging.getLogger(__name__)
 
 DEMO_PARTS = ("demo_axis", "demo_mesh", "demo_cad", "demo_simplify", "demo_part_mesh")
 
@@ -39,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
         t0 = time.perf_counter()
         written = module.demo(outdir)
         dt = time.perf_counter() - t0
-        print(f"[{name.removeprefix('demo_')}] {dt:.1f} s", file=sys.stderr)
+        log.info("demo: [%s] %.1f s", name.removeprefix("demo_"), dt)
         for path in written:
             print(f"wrote {path}")
     return 0

@@ -7,13 +7,15 @@ command, writing a .vtu) on this package's sample regions and parts; see CHANGEL
 
 from __future__ import annotations
 
+import logging
 import math
 import os
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 from medax.errors import InputError
+
+log = logging.getLogger(__name__)
 
 GB = 1e9
 #: region meshes (ratio and angle methods), .vtu or .msh: peak memory of the command
@@ -114,7 +116,7 @@ def check_estimate(est: Estimate, what: str, force: bool, command: str = "mesh")
             f"{what}: {est.text()}, above the limit {_gb(limit)} ({source}); --force runs it anyway"
         )
     if est.bytes > NOTE_BYTES or est.seconds > NOTE_S or est.bytes > limit:
-        print(f"medax {command}: {what}: estimated {est.text()}", file=sys.stderr, flush=True)
+        log.info("%s: %s: estimated %s", command, what, est.text())
 
 
 def _gb(n: float) -> str:

@@ -200,6 +200,7 @@ def run(args: argparse.Namespace) -> int:
         what = f"--size {args.size:g} ({n1}x{n2} quads)"
     est = region_estimate(n1, n2, args.method, args.plot is not None)
     check_estimate(est, what, args.force)
+    log.info("mesh: region '%s', %dx%d quads by the %s method", region.name, n1, n2, args.method)
     mesh = mesh_region(
         region,
         divisions=divisions,

@@ -7,8 +7,8 @@ the whole part is meshed and checked (:func:`medax.cad.part_mesh.mesh_part`).
 from __future__ import annotations
 
 import argparse
+import logging
 import math
-import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -19,6 +19,8 @@ import numpy as np
 from medax.cli.limits import check_estimate, part_estimate
 from medax.errors import InputError
 from medax.schemas import stamp
+
+log = logging.getLogger(__name__)
 
 PLOT_SUFFIXES = (".png", ".svg", ".pdf")
 #: units of the report besides length (angles in degrees, times in seconds)
@@ -70,7 +72,7 @@ def run_part(args: argparse.Namespace) -> int:
     )
 
     def progress(msg: str) -> None:
-        print(f"medax mesh: {msg}", file=sys.stderr, flush=True)
+        log.info("mesh: %s", msg)
 
     def check_size(shapes: list[Any]) -> None:
         from medax.cad.part_mesh import surface_area

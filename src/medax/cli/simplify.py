@@ -8,7 +8,7 @@ Fillets that cannot be simplified are kept and listed with the reason in the rep
 from __future__ import annotations
 
 import argparse
-import sys
+import logging
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +16,8 @@ from medax.cli.options import check_tol
 from medax.cli.outputs import JSON_SUFFIXES, PLOT_SUFFIXES, Output, check_outputs
 from medax.io_utils import staged_outputs, write_json
 from medax.schemas import stamp
+
+log = logging.getLogger(__name__)
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -79,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
     check_tol(args.tol, "--tol", BUILD_TOL)
 
     def progress(msg: str) -> None:
-        print(f"medax simplify: {msg}", file=sys.stderr)
+        log.info("simplify: %s", msg)
 
     classes = classify_file(args.part)
     results = []

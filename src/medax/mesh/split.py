@@ -12,6 +12,7 @@ import logging
 from dataclasses import dataclass
 
 from medax import tolerances
+from medax._progress import log_progress
 from medax.axis import trace_axis
 from medax.errors import InputError
 from medax.geometry._types import FloatArray
@@ -157,6 +158,10 @@ def axis_family(
         p2 = Piece(r2, (piece.b1[0], t1), (t2, piece.b2[1]))
         rec(p1, None if n is None else k, depth + 1)
         out.append(FamilyCurve(side, t1, t2))
+        if divisions is not None:
+            log_progress(log, f"{region.name} pair {pair}: split curves", len(out), divisions - 1)
+        else:
+            log.info("%s pair %s: split curve %d (depth %d)", region.name, pair, len(out), depth)
         rec(p2, None if n is None else n - k, depth + 1)
 
     rec(Piece(region, (0.0, 1.0), (0.0, 1.0)), divisions, 0)

@@ -4,28 +4,38 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from medax.axis.result import MedialAxis
 from medax.geometry.region import Region
+from medax.viz.view3d import new_figure, save
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 _SIDE_COLOURS = ("#1f77b4", "#2ca02c", "#1f77b4", "#2ca02c")
 _AXIS_COLOURS = ("#d62728", "#9467bd")
 
 
 def plot_axes(
-    region: Region, axes: Sequence[MedialAxis], path: str | Path, circles: int = 5
-) -> Path:
+    region: Region,
+    axes: Sequence[MedialAxis],
+    path: str | Path | None = None,
+    circles: int = 5,
+    ax: Axes | None = None,
+) -> Figure:
     """Draw ``region`` (sides labelled S0..S3), each axis as its fitted B-spline with its
     points, and ``circles`` equal-distance circles per axis (centre on the axis, radius
-    ``d1 = d2``, touching both constraints). Writes PNG or SVG by the file's extension."""
-    import matplotlib
+    ``d1 = d2``, touching both constraints) into ``ax`` (a new figure when None); returns
+    the figure, written to ``path`` (PNG, SVG or PDF by the extension) when given."""
+    from matplotlib.patches import Circle
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 7), dpi=110)
+    if ax is None:
+        ax = new_figure((7, 7), 110).add_subplot()
+    fig: Figure = ax.figure  # type: ignore[assignment]
     for k, side in enumerate(region.sides):
         pts = side.sample(400)
         ax.plot(pts[:, 0], pts[:, 1], color=_SIDE_COLOURS[k], lw=2)
@@ -40,7 +50,7 @@ def plot_axes(
         ax.plot(axis.points[:, 0], axis.points[:, 1], ".", color=colour, ms=3)
         idx = np.linspace(0, axis.n_points - 1, circles + 2).round().astype(int)[1:-1]
         for i in idx:
-            c = plt.Circle(
+            c = Circle(
                 axis.points[i], axis.d1[i], fill=False, ls="--", lw=0.8, color=colour, alpha=0.7
             )
             ax.add_patch(c)
@@ -52,7 +62,5 @@ def plot_axes(
     ax.set_title(f"medax: medial axes of '{region.name}'")
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.06), fontsize=8, frameon=False)
     ax.grid(alpha=0.2)
-    out = Path(path)
-    fig.savefig(out, bbox_inches="tight")
-    plt.close(fig)
-    return out
+    save(fig, path, bbox_inches="tight")
+    return fig

@@ -3,26 +3,37 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from medax.mesh.grid import QuadMesh
+from medax.viz.view3d import new_figure, save
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 
-def plot_mesh(mesh: QuadMesh, path: str | Path, title: str | None = None) -> Path:
+def plot_mesh(
+    mesh: QuadMesh,
+    path: str | Path | None = None,
+    title: str | None = None,
+    ax: Axes | None = None,
+) -> Figure:
     """Draw the quads of ``mesh`` (in the parameter plane for a surface region, else in the
     plane) filled by scaled Jacobian (0..1, colour bar), edges in black and the region's sides
-    on top. PNG, SVG or PDF by the file's extension."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    on top, into ``ax`` (a new figure when None); returns the figure, written to ``path``
+    (PNG, SVG or PDF by the extension) when given."""
     from matplotlib.collections import PolyCollection
 
     quality = mesh.quality()
     sj = quality.scaled_jacobian
     polys = list(mesh.params[mesh.quads])  # m arrays (4, 2)
-    fig, ax = plt.subplots(figsize=(7.5, 6.5), dpi=120)
+    own = ax is None
+    if ax is None:
+        ax = new_figure((7.5, 6.5), 120).add_subplot()
+    fig: Figure = ax.figure  # type: ignore[assignment]
     edge_width = float(np.clip(8.0 / max(mesh.n1, mesh.n2), 0.05, 0.8))
     coll = PolyCollection(polys, array=sj, cmap="viridis", edgecolors="k", linewidths=edge_width)
     coll.set_clim(min(0.0, float(sj.min())), 1.0)
@@ -43,7 +54,7 @@ def plot_mesh(mesh: QuadMesh, path: str | Path, title: str | None = None) -> Pat
     ax.autoscale_view()
     ax.set_xlabel("x")
     ax.set_ylabel("y")
-    fig.tight_layout()
-    fig.savefig(str(path))
-    plt.close(fig)
-    return Path(path)
+    if own:
+        fig.tight_layout()
+    save(fig, path)
+    return fig

@@ -3,46 +3,45 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from medax.geometry._types import FloatArray, IntArray
+from medax.viz.view3d import Faces, render_faces, save
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 
 def plot_part_mesh(
     points: FloatArray,
     quads: IntArray,
     values: FloatArray,
-    path: str | Path,
+    path: str | Path | None = None,
     title: str = "",
-) -> Path:
-    """Draw ``quads`` (m, 4) over ``points`` (n, 3) in an axonometric view, filled by
-    ``values`` (m,) (the scaled Jacobian, 0..1, colour bar), thin black edges; PNG, SVG or PDF
-    by the file's extension."""
-    import matplotlib  # noqa: PLC0415
+    ax: Axes | None = None,
+) -> Figure:
+    """Draw ``quads`` (m, 4) over ``points`` (n, 3) in an axonometric view, opaque, filled by
+    ``values`` (m,) (the scaled Jacobian, 0..1, colour bar), quads outlined, into ``ax`` (a
+    new figure when None); returns the figure, written to ``path`` (PNG, SVG or PDF by the
+    extension) when given."""
+    from matplotlib import colormaps
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # noqa: PLC0415
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: PLC0415
-
-    fig = plt.figure(figsize=(8, 6.5), dpi=120)
-    ax = fig.add_subplot(projection="3d")
-    polys = points[quads]
-    width = float(np.clip(30.0 / np.sqrt(max(len(quads), 1)), 0.05, 0.6))
-    coll = Poly3DCollection(polys, cmap="viridis", edgecolors="k", linewidths=width)
-    coll.set_array(np.asarray(values))
-    coll.set_clim(min(0.0, float(np.min(values))) if len(values) else 0.0, 1.0)
-    ax.add_collection3d(coll)
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    mid, half = 0.5 * (lo + hi), 0.5 * float(np.max(hi - lo))
-    for set_lim, c in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), mid, strict=True):
-        set_lim(c - half, c + half)
-    ax.set_box_aspect((1, 1, 1))
-    ax.view_init(elev=25, azim=-60)
-    cbar = fig.colorbar(coll, ax=ax, shrink=0.7)
+    values = np.asarray(values, dtype=np.float64)
+    norm = Normalize(min(0.0, float(values.min())) if len(values) else 0.0, 1.0)
+    cmap = colormaps["viridis"]
+    rgb = cmap(norm(values))[:, :3]
+    tris = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    cells = np.concatenate([np.arange(len(quads))] * 2)
+    faces = [Faces(points, tris, np.concatenate([rgb, rgb]), cells)]
+    fig = render_faces(faces, ax, outline=True, view=(25.0, -60.0), size=(860, 780), light=0.35)
+    ax = ax or fig.axes[0]
+    cbar = fig.colorbar(ScalarMappable(norm, cmap), ax=ax, shrink=0.7)
     cbar.set_label("scaled Jacobian (Verdict)")
     ax.set_title(title, fontsize=9)
-    fig.tight_layout()
-    fig.savefig(str(path))
-    plt.close(fig)
-    return Path(path)
+    save(fig, path)
+    return fig

@@ -1,20 +1,28 @@
-"""Off-screen shaded 3D view of a classified part (matplotlib, Agg; no display needed).
+"""The one 3D renderer of medax: opaque shaded faces, off-screen, into a matplotlib Axes.
 
-Inputs are plain arrays (no OCP here): per face its triangles and class, the edges as
-polylines, the fillet axes as polylines. Faces are coloured by class and shaded by a fixed
-light (Lambert). Hidden surfaces and lines are removed with a small numpy z-buffer (an
-orthographic view), so the picture is correct where matplotlib's painter's algorithm
-would sort badly; edges and axes are drawn only where they are visible.
+Inputs are plain arrays (no OCP here): :class:`Faces` (points, triangles, colours), polylines
+for edges and axes. Triangles are shaded by a fixed light (Lambert) and hidden surfaces and
+lines removed with a small numpy z-buffer (an orthographic view), so the picture is opaque
+and correct where matplotlib's painter's algorithm would sort badly; lines are drawn only
+where they are visible. Cell outlines (quads of a mesh, faces of a part) are drawn where the
+visible cell changes from one pixel to the next. :func:`render_faces` is used by the
+classified part's view (:func:`render_part`), the before/after view and the part mesh plot.
+No backend is selected: figures are :class:`matplotlib.figure.Figure` objects, not pyplot's.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
-from medax.geometry._types import FloatArray
+from medax.geometry._types import FloatArray, IntArray
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 #: face colours by class (RGB, 0-1)
 CLASS_COLOURS = {
@@ -24,11 +32,58 @@ CLASS_COLOURS = {
     "protection": (0.78, 0.78, 0.75),
 }
 AXIS_COLOUR = (0.05, 0.05, 0.05)
+EDGE_COLOUR = (0.1, 0.1, 0.1)
+
+
+class Faces(NamedTuple):
+    """Triangles to render: ``points`` (n, 3), ``triangles`` (m, 3) int, ``colour`` RGB 0-1
+    (3,) or one per triangle (m, 3); ``cells`` (m,) int: outlines are drawn between triangles
+    of different cells (None: one cell, outlined only against other :class:`Faces`)."""
+
+    points: FloatArray
+    triangles: IntArray
+    colour: Any
+    cells: IntArray | None = None
+
+
+def render_faces(
+    faces: Sequence[Faces],
+    ax: Axes | None = None,
+    *,
+    lines: Sequence[tuple[Sequence[FloatArray], tuple[float, float, float], float]] = (),
+    outline: bool = False,
+    view: tuple[float, float] = (28.0, -55.0),
+    size: tuple[int, int] = (960, 720),
+    dpi: int = 120,
+    light: float = 0.7,
+) -> Figure:
+    """Render ``faces`` opaquely into ``ax`` (a new figure of ``size`` pixels when None) and
+    return its figure.
+
+    ``lines``: groups ``(polylines (k, 3), RGB, width)`` drawn where visible; ``outline``:
+    dark pixels where the visible cell changes; ``view`` = (elevation, azimuth) in degrees;
+    ``light``: share of the colour that depends on the light (0: flat colours).
+    """
+    from matplotlib.collections import LineCollection
+
+    fig, ax = _figure_and_axes(ax, size, dpi)
+    cam = _Camera(view, [f.points for f in faces], size)
+    img, zbuf, ids = _rasterise(faces, cam, light)
+    if outline:
+        img[_cell_borders(ids)] *= 0.25
+    ax.imshow(img, origin="upper", interpolation="bilinear")
+    ax.set_xlim(-0.5, size[0] - 0.5)
+    ax.set_ylim(size[1] - 0.5, -0.5)
+    ax.set_axis_off()
+    for polylines, rgb, width in lines:
+        segs = _visible_segments(polylines, cam, zbuf)
+        ax.add_collection(LineCollection(segs, colors=[rgb], lw=width))
+    return fig
 
 
 def render_part(
-    faces: Sequence[tuple[str, FloatArray, np.ndarray]],
-    path: str | Path,
+    faces: Sequence[tuple[str, FloatArray, IntArray]],
+    path: str | Path | None = None,
     edges: Sequence[FloatArray] = (),
     axes: Sequence[FloatArray] = (),
     title: str = "",
@@ -36,34 +91,23 @@ def render_part(
     view: tuple[float, float] = (28.0, -55.0),
     size: tuple[int, int] = (960, 720),
     dpi: int = 120,
-) -> Path:
-    """Render to ``path`` (PNG or SVG by extension).
+    ax: Axes | None = None,
+) -> Figure:
+    """View of a classified part: faces coloured by class, visible edges, fillet axes, a
+    legend with the count per class. Returns the figure; written to ``path`` (PNG, SVG or
+    PDF by extension) when given.
 
     ``faces``: ``(class name, points (n, 3), triangles (m, 3) int)`` per face; ``edges``
     and ``axes``: polylines (k, 3). ``view`` = (elevation, azimuth) in degrees; ``size``
     in pixels.
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.collections import LineCollection
-    from matplotlib.figure import Figure
     from matplotlib.patches import Patch
 
-    cam = _Camera(view, faces, size)
-    img, zbuf = _rasterise(faces, cam)
-
-    fig = Figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
-    FigureCanvasAgg(fig)
-    ax = fig.add_axes((0.0, 0.0, 1.0, 1.0))
-    ax.imshow(img, origin="upper", interpolation="bilinear")
-    ax.set_xlim(-0.5, size[0] - 0.5)
-    ax.set_ylim(size[1] - 0.5, -0.5)
-    ax.set_axis_off()
-    ax.add_collection(
-        LineCollection(_visible_segments(edges, cam, zbuf), colors=[(0.1, 0.1, 0.1)], lw=0.6)
-    )
-    ax.add_collection(
-        LineCollection(_visible_segments(axes, cam, zbuf), colors=[AXIS_COLOUR], lw=2.2)
-    )
+    grey = (0.6, 0.6, 0.6)
+    shaded = [Faces(p, t, CLASS_COLOURS.get(cls, grey)) for cls, p, t in faces]
+    lines = [(edges, EDGE_COLOUR, 0.6), (axes, AXIS_COLOUR, 2.2)]
+    fig = render_faces(shaded, ax, lines=lines, view=view, size=size, dpi=dpi)
+    ax = ax or fig.axes[0]
     counts = counts or {}
     handles = [
         Patch(color=CLASS_COLOURS[k], label=f"{k.replace('_', ' ')} ({counts.get(k, 0)})")
@@ -73,9 +117,30 @@ def render_part(
     ax.legend(handles=handles, loc="upper left", fontsize=8, frameon=False)
     if title:
         ax.text(0.5, 0.98, title, transform=ax.transAxes, ha="center", va="top", fontsize=10)
-    out = Path(path)
-    fig.savefig(out, format=out.suffix.lstrip(".").lower() or "png")
-    return out
+    save(fig, path)
+    return fig
+
+
+def save(fig: Figure, path: str | Path | None, **kwargs: Any) -> None:
+    """Write ``fig`` to ``path`` (format by extension, PNG when none) unless it is None."""
+    if path is not None:
+        out = Path(path)
+        fig.savefig(out, format=out.suffix.lstrip(".").lower() or "png", **kwargs)
+
+
+def new_figure(figsize: tuple[float, float], dpi: int = 100) -> Figure:
+    """A figure not registered with pyplot: no backend is selected or switched, nothing
+    needs closing, and a notebook displays it when it is returned."""
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=figsize, dpi=dpi)
+
+
+def _figure_and_axes(ax: Axes | None, size: tuple[int, int], dpi: int) -> tuple[Figure, Axes]:
+    if ax is not None:
+        return ax.figure, ax  # type: ignore[return-value]
+    fig = new_figure((size[0] / dpi, size[1] / dpi), dpi)
+    return fig, fig.add_axes((0.0, 0.0, 1.0, 1.0))
 
 
 class _Camera:
@@ -84,7 +149,7 @@ class _Camera:
     def __init__(
         self,
         view: tuple[float, float],
-        faces: Sequence[tuple[str, FloatArray, np.ndarray]],
+        points: Sequence[FloatArray],
         size: tuple[int, int],
     ) -> None:
         elev, azim = np.radians(view[0]), np.radians(view[1])
@@ -94,8 +159,7 @@ class _Camera:
         right = np.cross([0.0, 0.0, 1.0], self.eye)
         self.right = right / np.linalg.norm(right)
         self.up = np.cross(self.eye, self.right)
-        pts = [p for _, p, t in faces if len(t)]
-        allp = np.concatenate(pts) if pts else np.zeros((1, 3))
+        allp = np.concatenate(points) if len(points) else np.zeros((1, 3))
         self.w, self.h = size
         sx, sy = allp @ self.right, allp @ self.up
         self.cx, self.cy = 0.5 * (sx.min() + sx.max()), 0.5 * (sy.min() + sy.max())
@@ -112,29 +176,56 @@ class _Camera:
 
 
 def _rasterise(
-    faces: Sequence[tuple[str, FloatArray, np.ndarray]], cam: _Camera
-) -> tuple[FloatArray, FloatArray]:
-    """Colour image (h, w, 3) and depth buffer (h, w) (-inf where empty)."""
+    faces: Sequence[Faces], cam: _Camera, light: float = 0.7
+) -> tuple[FloatArray, FloatArray, IntArray]:
+    """Colour image (h, w, 3), depth buffer (h, w) (-inf where empty) and cell buffer (h, w)
+    (-1 where empty; cells numbered over all ``faces``)."""
     img = np.ones((cam.h, cam.w, 3))
     zbuf = np.full((cam.h, cam.w), -np.inf)
-    light = cam.eye + 0.5 * cam.up + 0.3 * cam.right
-    light /= np.linalg.norm(light)
-    for cls, pts, tris in faces:
+    ids = np.full((cam.h, cam.w), -1, dtype=np.int64)
+    towards = cam.eye + 0.5 * cam.up + 0.3 * cam.right
+    towards /= np.linalg.norm(towards)
+    first = 0
+    for face in faces:
+        pts, tris = np.asarray(face.points, dtype=np.float64), np.asarray(face.triangles)
         if len(tris) == 0:
             continue
         t = pts[tris]
         n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
         n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-        shade = 0.3 + 0.7 * np.abs(n @ light)
-        base = np.array(CLASS_COLOURS.get(cls, (0.6, 0.6, 0.6)))
+        shade = (1.0 - light) + light * np.abs(n @ towards)
+        rgb = np.broadcast_to(np.asarray(face.colour, dtype=np.float64), (len(tris), 3))
+        rgb = shade[:, None] * rgb
+        cells = np.zeros(len(tris), np.int64) if face.cells is None else np.asarray(face.cells)
         col, row, dep = cam.project(pts)
-        for k, (a, b, c) in enumerate(tris):
-            _triangle(img, zbuf, col[[a, b, c]], row[[a, b, c]], dep[[a, b, c]], shade[k] * base)
-    return img, zbuf
+        for k, (a, b, c) in enumerate(tris.tolist()):
+            idx = [a, b, c]
+            _triangle(img, zbuf, ids, col[idx], row[idx], dep[idx], rgb[k], first + int(cells[k]))
+        first += int(cells.max()) + 1
+    return img, zbuf, ids
+
+
+def _cell_borders(ids: IntArray) -> np.ndarray:
+    """Pixels (h, w) bool of a cell next to another cell or to the background, one wide."""
+    border = np.zeros(ids.shape, dtype=bool)
+    dx, dy = ids[:, 1:] != ids[:, :-1], ids[1:, :] != ids[:-1, :]
+    empty_x, empty_y = ids[:, 1:] < 0, ids[1:, :] < 0
+    border[:, 1:] |= dx & ~empty_x  # one pixel wide: the right / lower cell's
+    border[:, :-1] |= dx & empty_x  # against the background: the cell's own
+    border[1:, :] |= dy & ~empty_y
+    border[:-1, :] |= dy & empty_y
+    return border
 
 
 def _triangle(
-    img: FloatArray, zbuf: FloatArray, x: FloatArray, y: FloatArray, z: FloatArray, rgb: FloatArray
+    img: FloatArray,
+    zbuf: FloatArray,
+    ids: IntArray,
+    x: FloatArray,
+    y: FloatArray,
+    z: FloatArray,
+    rgb: FloatArray,
+    cell: int,
 ) -> None:
     h, w = zbuf.shape
     x0, x1 = max(int(np.floor(x.min())), 0), min(int(np.ceil(x.max())), w - 1)
@@ -157,6 +248,7 @@ def _triangle(
     win = inside & (depth > sub)
     sub[win] = depth[win]
     img[y0 : y1 + 1, x0 : x1 + 1][win] = rgb
+    ids[y0 : y1 + 1, x0 : x1 + 1][win] = cell
 
 
 def _visible_segments(

@@ -25,6 +25,7 @@ from OCP.GeomAbs import GeomAbs_Cylinder, GeomAbs_Plane
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_SHELL
 from OCP.TopoDS import TopoDS
 
+from medax._progress import log_progress
 from medax.cad.simplify.bridge import bridge_edge
 from medax.cad.simplify.corner import corner_arcs, plane_normal
 from medax.cad.simplify.fitted import FittedSurface, graph_surface
@@ -269,7 +270,8 @@ def simplify(
         dict(blends.refused),
     )
     nfaces, kept, diag = fmap.Size(), job.kept, job.diag
-    for spec in blends.fillets:
+    for i, spec in enumerate(blends.fillets):
+        log_progress(log, "medial curves of the fillets:", i + 1, len(blends.fillets))
         side0, side1 = (
             [TopoDS.Edge(job.emap.FindKey(i + 1)) for i in spec.side_edges(k)] for k in (0, 1)
         )
@@ -738,7 +740,8 @@ def _validated(
     dev = 0.0
     kinds: dict[int, str] = {}
     far: list[Group] = []
-    for g, face in merged:
+    for i, (g, face) in enumerate(merged):
+        log_progress(log, "validation: deviation sampled on merged faces", i + 1, len(merged))
         assert g.support is not None
         ms = surfaces[g.support]
         kinds[g.id] = FITTED if isinstance(ms, str) else ms.kind

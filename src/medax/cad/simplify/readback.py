@@ -15,6 +15,7 @@ held to less than the tolerance its own geometry carries.
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -27,9 +28,12 @@ from OCP.TopAbs import TopAbs_EDGE, TopAbs_SOLID, TopAbs_VERTEX
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS
 
+from medax._progress import log_progress
 from medax.cad.simplify.occ import Array, count, edges_of, faces_of, xyz
 from medax.cad.simplify.validate import default_volume, face_samples, max_distance
 from medax.errors import CadError
+
+log = logging.getLogger(__name__)
 
 #: samples per face (n x n UV grid, kept inside the face)
 SAMPLES = 5
@@ -116,6 +120,7 @@ def read_back(
         raise CadError(f"{label}: the written file does not read back as a valid solid")
     dev = 0.0
     for k, (a, b) in enumerate(zip(old, new, strict=True)):
+        log_progress(log, f"{label}: faces read back and sampled", k + 1, len(old))
         d = _face_deviation(a, b, old, allowed)
         if d > allowed:
             raise CadError(

@@ -8,11 +8,14 @@ its own reason. Bookkeeping over face indices only: the rebuild is the caller's 
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Callable, Iterable
 from typing import TypeVar
 
 from medax.cad.simplify.specs import FilletSpec
+
+log = logging.getLogger(__name__)
 
 #: What a successful ``attempt`` returns (the pipeline's rebuilt and validated solid).
 A = TypeVar("A")
@@ -110,6 +113,7 @@ def isolate(
             for f in fillets:
                 kept[f] = "not tried alone: the time for finding the failing fillets ran out"
             return
+        log.info("isolating: trying %d, %d/%d accepted", len(fillets), len(accepted), len(order))
         r = attempt({**accepted, **{f: specs[f] for f in fillets}}) if known is None else known
         if not isinstance(r, str):
             accepted.update({f: specs[f] for f in fillets})
