@@ -387,3 +387,42 @@ def test_flat_top_boss_cylinder_half_by_ring_top_refused_cleanly():
     r = simplify(cls.shape, specs)
     assert r.faces_after == r.faces_before and not r.blends_removed and r.valid
     assert BRepCheck_Analyzer(r.shape).IsValid()
+
+
+@pytest.fixture(scope="module")
+def hole():
+    cls = classify_solid(parts.slanted_hole().shape)
+    specs = specs_from_classification(cls)
+    return cls, specs, simplify(cls.shape, specs)
+
+
+def test_slanted_hole_loses_both_rim_blends(hole):
+    """Both rims of a slanted hole filleted (two B-spline blends on one cylinder): the
+    cylinder takes both its halves on one ring surface with two C1 knot lines, each plate
+    its own half (9 -> 7 faces); OCCT's checks, volumes and distances both ways."""
+    cls, specs, r = hole
+    assert len(specs.fillets) == 2
+    assert (r.faces_before, r.faces_after) == (9, 7) and r.valid and not r.blends_kept
+    (cylinder,) = {
+        s
+        for spec in specs.fillets
+        for s in spec.supporting
+        if sum(s in other.supporting for other in specs.fillets) == 2
+    }
+    group = next(g for g in r.face_groups if cylinder in g.whole)
+    assert sorted(group.halves) == sorted(spec.face for spec in specs.fillets)
+    assert BRepCheck_Analyzer(r.shape).IsValid()
+    assert _count(r.shape, TopAbs_SHELL) == 1
+    v0, v1 = _volume(cls.shape), _volume(r.shape)
+    assert abs(v1 - v0) <= 1e-6 * v0
+    rng = np.random.default_rng(11)
+    old = _faces(cls.shape)
+    old_pts = np.vstack(
+        [_face_points(old[k], 30, rng) for k in (cylinder, *(s.face for s in specs.fillets))]
+    )
+    new = _faces(r.shape)
+    ring = [f for f in new if BRepAdaptor_Surface(f).GetType().name == "GeomAbs_BSplineSurface"]
+    new_pts = np.vstack([_face_points(f, 30, rng) for f in ring])
+    tol = 1e-5 * r.diagonal
+    assert _distance(old_pts, r.shape) <= tol
+    assert _distance(new_pts, cls.shape) <= tol

@@ -290,6 +290,19 @@ def slanted_boss(radius: float = 2.0) -> BuiltPart:
     return fillet(_solid(body), _select(body, root), radius, "slanted_boss")
 
 
+def slanted_hole(radius: float = 1.5) -> BuiltPart:
+    """A plate with a slanted cylindrical hole through it, both rims filleted: two B-spline
+    rolling-ball blends on the one cylinder face, their contact curves in parallel planes."""
+    plate = BRepPrimAPI_MakeBox(60.0, 60.0, 5.0).Shape()
+    axis = gp_Ax2(gp_Pnt(30.0, 30.0, -5.0), gp_Dir(0.3, 0.0, 1.0))
+    body = BRepAlgoAPI_Cut(plate, BRepPrimAPI_MakeCylinder(axis, 8.0, 25.0).Shape()).Shape()
+
+    def rim(m: np.ndarray) -> bool:
+        return 10.0 < m[0] < 50.0 and 10.0 < m[1] < 50.0
+
+    return fillet(_solid(body), _select(body, rim), radius, "slanted_hole")
+
+
 def oblique_end_fillet(radius: float = 2.0) -> BuiltPart:
     """A prism on the quadrilateral (0, 0), (30, 0), (25, 20), (0, 20), 10 high, its top
     front edge filleted: the fillet runs into the oblique end face, so its two smooth edges

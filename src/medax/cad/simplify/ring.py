@@ -21,7 +21,7 @@ the contact curve (a boss top) is refused: the polar frame's pole would be on th
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -53,6 +53,9 @@ CURVE_SAMPLES = 720
 BEYOND_MEDIAL = 0.1
 #: Spacing of the first level, as a share of the half's smallest width; halvings at most.
 FIRST_SPACING, LEVELS = 0.5, 5
+#: A cylinder's second blend half is taken when its contact curve lies on a line ``sigma =
+#: const`` of the first half's frame to within this share of its width.
+PARALLEL_SHARE = 0.01
 #: How a refusal begins when the group is no ring at all (another route's business).
 NOT_A_RING = "not a ring: "
 
@@ -122,19 +125,33 @@ def ring_surface(
     kind = ad.GetType()
     if kind not in (GeomAbs_Plane, GeomAbs_Cylinder):
         return f"{NOT_A_RING}the ring route takes planes and cylinders only"
-    if len(members) != 2:
-        return f"{NOT_A_RING}the ring route takes one support piece and one blend half"
+    most = 2 if kind == GeomAbs_Cylinder else 1  # a plane's support piece is the last span
+    if not 2 <= len(members) <= most + 1:
+        return f"{NOT_A_RING}the ring route takes one support piece and one blend half" + (
+            " or two (one at each end of the cylinder)" if most == 2 else ""
+        )
     kinds = [BRepAdaptor_Surface(m).GetType() for m in members]
-    if kinds.count(kind) != 1 or GeomAbs_BSplineSurface not in kinds:
-        return f"{NOT_A_RING}the ring route takes one support piece and one B-spline blend half"
+    blends = [m for m, k in zip(members, kinds, strict=True) if k == GeomAbs_BSplineSurface]
+    if kinds.count(kind) != 1 or len(blends) != len(members) - 1:
+        return f"{NOT_A_RING}the ring route takes one support piece and B-spline blend halves"
     piece = members[kinds.index(kind)]
-    blend = members[kinds.index(GeomAbs_BSplineSurface)]
+    blend = blends[0]
     contact = _loop_samples(_shared_edges(piece, blend), CURVE_SAMPLES)
     medial = _loop_samples(
         [e for e in edges_of(blend) if not _left_out(piece, blend, e)], CURVE_SAMPLES
     )
     if contact is None or medial is None:
         return f"{NOT_A_RING}the blend half's contact or medial edges are no closed loop"
+    far_loops: tuple[Array, Array] | None = None
+    if len(blends) == 2:
+        far_contact = _loop_samples(_shared_edges(piece, blends[1]), CURVE_SAMPLES)
+        far_medial = _loop_samples(
+            [e for e in edges_of(blends[1]) if not _left_out(piece, blends[1], e)],
+            CURVE_SAMPLES,
+        )
+        if far_contact is None or far_medial is None:
+            return f"{NOT_A_RING}the blend half's contact or medial edges are no closed loop"
+        far_loops = (far_contact, far_medial)
     if kind == GeomAbs_Plane:
         pl = ad.Plane()
         n, ex = xyz(pl.Axis().Direction()), xyz(pl.XAxis().Direction())
@@ -180,6 +197,14 @@ def ring_surface(
         return "a B-spline blend without a NURBS embedding"
     nurbs = replace(emb, extrapolate=True)
     uv_box = uv_bounds(blend)
+    far: _FarHalf | None = None
+    if far_loops is not None:
+        got = _far_half(frame, blends[1], far_loops[0], far_loops[1], geom_tol)
+        if isinstance(got, str):
+            return got
+        far = got
+        s_hi = far.s_hi
+        width = min(width, far.width)
 
     last: dict[bytes, tuple[Array, np.ndarray, np.ndarray]] = {}
 
@@ -195,12 +220,24 @@ def ring_surface(
         sm = _at(sigma_m, t)
         inside = s >= sm
         ok = s >= sm - margin
+        if far is not None:
+            sf = _at(far.medial, t)
+            inside &= s <= sf
+            ok &= s <= sf + far.margin
         pts = frame.point(t, s, 0.0)
         over = np.flatnonzero((s < 0) & ok)
         if over.size:
             x, found = ray_points(nurbs, frame, t[over], s[over], uv_box, 1e-2 * fit_tol)
             pts[over] = x
             ok[over] = found
+        if far is not None:
+            beyond = np.flatnonzero((s > far.contact) & ok)
+            if beyond.size:
+                x, found = ray_points(
+                    far.nurbs, frame, t[beyond], s[beyond], far.uv_box, 1e-2 * fit_tol
+                )
+                pts[beyond] = x
+                ok[beyond] = found
         shape = th.shape
         return pts.reshape((*shape, 3)), ok.reshape(shape), inside.reshape(shape)
 
@@ -218,13 +255,13 @@ def ring_surface(
     radius = float(np.mean(np.linalg.norm(np.cross(contact - frame.origin, frame.axis), axis=1)))
     fit = fit_radial_height(
         (s_lo, s_hi),
-        [0.0],
+        [0.0] if far is None else [0.0, far.contact],
         local,
         fit_tol,
         FIRST_SPACING * width,
         radius,
         levels=1 if probe else LEVELS,
-        s_fine=[True, False],
+        s_fine=[True, False] if far is None else [True, False, True],
         zero_last=2 if planar else None,
     )
     if fit is None:
@@ -238,6 +275,62 @@ def ring_surface(
     dv = _volume_change(fit, h, support, inside_pt, frame)
     spacing = float(np.diff(np.unique(fit.ts)).min())  # the blend side's spans
     return FittedSurface(surface, fit.error, spacing, dv)
+
+
+@dataclass(frozen=True)
+class _FarHalf:
+    """The second blend half of a cylinder (at its other end), in the ring frame of the
+    first: its contact line ``sigma = contact``, its medial curve ``sigma(theta)``
+    (``medial``, a periodic spline), the data ``margin`` past it, the fit's ``s_hi``, its
+    smallest ``width`` and the blend's NURBS copy with its UV box."""
+
+    contact: float
+    medial: CubicSpline
+    margin: float
+    s_hi: float
+    width: float
+    nurbs: NurbsSurface
+    uv_box: tuple[float, float, float, float]
+
+
+def _far_half(
+    frame: RingFrame, blend: Any, contact: Array, medial: Array, geom_tol: float
+) -> _FarHalf | str:
+    """The second half of a cylinder's ring (see :class:`_FarHalf`), or why the route does
+    not take it: its contact must be a line ``sigma = const`` of the first half's frame
+    (parallel contact curves: the knot line of the fit), beyond the support."""
+    th_c, sg_c, _ = frame.coords(contact)
+    at = float(np.mean(sg_c))
+    if not at > 0.0:
+        return f"{NOT_A_RING}the second blend half is not at the far end of the support"
+    th_m, sg_m, _ = frame.coords(medial)
+    why = goes_round(th_m)
+    if why:
+        return f"the far medial curve {why}"
+    if np.any(sg_m <= at):
+        return "the far medial curve is not on the blend side of its contact curve"
+    width = float(np.min(sg_m - at))
+    # the contact edges of imported or built blends are approximations (to their edge
+    # tolerance): off the knot line by a small share of the half's width, the curvature
+    # jump costs the fit little, and its measured error decides
+    if float(np.ptp(sg_c)) > PARALLEL_SHARE * width + geom_tol:
+        return (
+            f"{NOT_A_RING}the two blend halves' contact curves are not parallel "
+            f"(the far one spans {float(np.ptp(sg_c)):.2e} across the ring frame)"
+        )
+    emb = surface_embedding(blend)
+    if not isinstance(emb, NurbsSurface):
+        return "a B-spline blend without a NURBS embedding"
+    margin = BEYOND_MEDIAL * width
+    return _FarHalf(
+        at,
+        _periodic_spline(th_m, sg_m),
+        margin,
+        float(np.max(sg_m)) + margin,
+        width,
+        replace(emb, extrapolate=True),
+        uv_bounds(blend),
+    )
 
 
 def _left_out(piece: Any, blend: Any, edge: Any) -> bool:
