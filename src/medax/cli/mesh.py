@@ -207,6 +207,7 @@ def run(args: argparse.Namespace) -> int:
         method=args.method,
         tol=args.tol,
         boundary=args.boundary or "arclength",
+        allow_inverted=args.allow_inverted,
     )
     time_s = float(mesh.info["time_s"])
     rep = report(mesh, time_s)
