@@ -47,7 +47,7 @@ from medax.mesh.quality import quad_quality
 from medax.mesh.ratio_field import facing
 from medax.mesh.ratio_grid import ratio_grid
 from medax.mesh.split import FamilyCurve, axis_family
-from medax.mesh.untangle import untangle_grid
+from medax.mesh.untangle import smooth_grid, untangle_grid
 
 log = logging.getLogger(__name__)
 
@@ -87,6 +87,7 @@ def mesh_region(
     boundary: str = "arclength",
     fractions: Sequence[FloatArray] | None = None,
     allow_inverted: bool = False,
+    smooth: bool = False,
 ) -> QuadMesh:
     """A structured quad mesh of ``region`` with ``divisions = (n1, n2)`` (along S0, along S1)
     or edges of about ``size`` (region units). ``tol`` (relative to the diagonal) bounds the
@@ -108,7 +109,9 @@ def mesh_region(
     ``fractions`` fix them); where the ratio grid cannot be solved, the stage starts from
     the transfinite patch of the boundary nodes (``info["interior"] = "untangled"``). A grid
     still inverted raises :class:`MeshError` naming the obstacle (a corner, a side), unless
-    ``allow_inverted``."""
+    ``allow_inverted``. ``smooth`` (planar regions): the quality pass
+    :func:`~medax.mesh.untangle.smooth_grid` (Winslow on the interior nodes, kept only where
+    it raises the 5th-percentile scaled Jacobian; ``info["smooth"]``)."""
     if method not in METHODS:
         raise InputError(f"unknown mesh method '{method}' (known: {', '.join(METHODS)})")
     if boundary not in BOUNDARY_RULES:
@@ -162,12 +165,16 @@ def mesh_region(
             if not allow_inverted:
                 _refuse_stuck_corner(region, params, n1, n2, work.sides, fractions is None)
             params = untangle_grid(params, n1, n2, slide, info=info)
+            if smooth:
+                params = smooth_grid(params, n1, n2, info)
         params = params * scale + offset
     else:
         params, n1, n2 = _paper_grid(region, n1, n2, size, tol)
         if region.embedding.is_identity:
             work, offset, scale = normalised_region(region)
             local = untangle_grid((params - offset) / scale, n1, n2, work.sides, info=info)
+            if smooth:
+                local = smooth_grid(local, n1, n2, info)
             params = local * scale + offset
     info["time_s"] = time.perf_counter() - t0
     info["tol"] = tol

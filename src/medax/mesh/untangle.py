@@ -43,7 +43,12 @@ HALOS = (2, 4, 8, 16)
 #: Knupp's untangling targets, in turn while the grid stays tangled (continuation):
 #: beta_c = share x |a| |b| of the start
 UNTANGLE_BETA = (0.2, 0.05, 0.0125)
+#: the quality pass (:func:`smooth_grid`): Winslow sweeps at most, and the move (x the
+#: grid's extent) below which they stop
+SMOOTH_SWEEPS = 4000
+SMOOTH_TOL = 1e-7
 _LBFGS_MEMORY = 8
+_SLIDE_SHARE = 0.4
 _UNTANGLE_ITERS = 400
 
 
@@ -51,11 +56,14 @@ _UNTANGLE_ITERS = 400
 class Sliding:
     """Boundary nodes that slide: ``index`` (b,) node indices, ``side`` (b,) side numbers,
     ``t`` (b,) their parameters on ``curves[side]`` (the four side curves, in the grid's
-    plane)."""
+    plane), each kept in ``[lo, hi]`` (b,): up to 0.4 of the way to its neighbours' start
+    parameters, so that nodes keep their order and never meet or reach a corner."""
 
     index: IntArray
     side: IntArray
     t: FloatArray
+    lo: FloatArray
+    hi: FloatArray
     curves: Sequence[Curve]
 
 
@@ -129,9 +137,11 @@ class _Variables:
         if sliding is not None:
             on = np.isin(sliding.index, free)
             self.bidx, self.bside, t0 = sliding.index[on], sliding.side[on], sliding.t[on]
+            self.lo, self.hi = sliding.lo[on], sliding.hi[on]
             self.curves: Sequence[Curve] = sliding.curves
         else:
             self.bidx, self.bside, t0 = np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0)
+            self.lo, self.hi = np.zeros(0), np.zeros(0)
             self.curves = ()
         self.inner = np.setdiff1d(free, rim)
         self.z0 = np.concatenate((p[self.inner].ravel(), t0))
@@ -143,7 +153,7 @@ class _Variables:
         k = 2 * len(self.inner)
         p[self.inner] = z[:k].reshape(-1, 2)
         tan = np.zeros((len(self.bidx), 2))
-        t = np.clip(z[k:], 0.0, 1.0)
+        t = np.clip(z[k:], self.lo, self.hi)
         for s in np.unique(self.bside):
             sel = self.bside == s
             p[self.bidx[sel]] = self.curves[s].evaluate(t[sel])
@@ -261,10 +271,13 @@ def knupp(p: FloatArray, n1: int, n2: int, free: IntArray, sliding: Sliding | No
     return var.points(z)[0]
 
 
-def winslow(p: FloatArray, n1: int, n2: int, free: IntArray, sweeps: int = 400) -> FloatArray:
+def winslow(
+    p: FloatArray, n1: int, n2: int, free: IntArray, sweeps: int = 400, tol: float = 1e-10
+) -> FloatArray:
     """Winslow's equations ``g22 x_ss - 2 g12 x_st + g11 x_tt = 0`` by Jacobi sweeps on the
     ``free`` interior nodes of the ``(n2 + 1) x (n1 + 1)`` grid (boundary nodes fixed),
-    started from ``p`` (n, 2); returns the new nodes (n, 2)."""
+    started from ``p`` (n, 2), until no node moves by more than ``tol`` x the grid's extent
+    or after ``sweeps``; returns the new nodes (n, 2)."""
     g = p.reshape(n2 + 1, n1 + 1, 2).copy()
     mask = np.zeros((n2 + 1, n1 + 1), dtype=bool)
     mask.flat[free] = True
@@ -272,7 +285,7 @@ def winslow(p: FloatArray, n1: int, n2: int, free: IntArray, sweeps: int = 400) 
     m = mask[1:-1, 1:-1]
     if not m.any():
         return p.copy()
-    tol = 1e-10 * float(np.ptp(p, axis=0).max())
+    tol = tol * float(np.ptp(p, axis=0).max())
     for _ in range(sweeps):
         xs = 0.5 * (g[1:-1, 2:] - g[1:-1, :-2])
         xt = 0.5 * (g[2:, 1:-1] - g[:-2, 1:-1])
@@ -319,16 +332,22 @@ def free_nodes(bad: np.ndarray, n1: int, n2: int, rings: int) -> IntArray:
 def sliding_nodes(p: FloatArray, n1: int, n2: int, curves: Sequence[Curve]) -> Sliding:
     """The boundary nodes but the corners as :class:`Sliding` on ``curves`` (the four
     sides), their parameters from the sides' closest points."""
-    idx, side, t = [], [], []
+    idx, side, t, lo, hi = [], [], [], [], []
     for k, nodes in enumerate(boundary_indices(n1, n2)):
         inner = nodes[1:-1]
         if inner.size:
+            tk = curves[k].closest(p[inner]).t
+            ends = np.concatenate(([0.0], tk, [1.0]))
             idx.append(inner)
             side.append(np.full(inner.size, k, dtype=np.int64))
-            t.append(curves[k].closest(p[inner]).t)
+            t.append(tk)
+            lo.append(tk - _SLIDE_SHARE * (tk - ends[:-2]))
+            hi.append(tk + _SLIDE_SHARE * (ends[2:] - tk))
     if not idx:
-        return Sliding(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0), curves)
-    return Sliding(np.concatenate(idx), np.concatenate(side), np.concatenate(t), curves)
+        e = np.zeros(0)
+        return Sliding(np.zeros(0, np.int64), np.zeros(0, np.int64), e, e, e, curves)
+    cat = np.concatenate
+    return Sliding(cat(idx), cat(side), cat(t), cat(lo), cat(hi), curves)
 
 
 def _score(p: FloatArray, quads: IntArray) -> tuple[float, float]:
@@ -379,7 +398,7 @@ def untangle_grid(
     n1: int,
     n2: int,
     curves: Sequence[Curve] | None,
-    options: Sequence[str] = OPTIONS,
+    options: Sequence[str] | None = None,
     threshold: float = DEGENERATE_SJ,
     coons: bool = True,
     info: dict | None = None,
@@ -390,7 +409,9 @@ def untangle_grid(
     stay). When no result from ``p`` is valid and ``coons``, the same from the transfinite
     (Coons) patch of ``p``'s boundary nodes. Returns the best result (highest minimum, then
     5th-percentile scaled Jacobian) among those with no inverted quad and a higher minimum
-    than ``p``'s, else ``p`` unchanged. ``info`` gets ``untangle`` (what was done)."""
+    than ``p``'s, else ``p`` unchanged. ``info`` gets ``untangle`` (what was done).
+    ``options`` default: :data:`OPTIONS` at the time of the call."""
+    options = OPTIONS if options is None else options
     quads = structured_quads(n1, n2)
     sj = scaled_jacobian(p, quads)
     start = (float(sj.min()), float(np.percentile(sj, 5.0)))
@@ -414,6 +435,29 @@ def untangle_grid(
     return best
 
 
+def smooth_grid(
+    p: FloatArray, n1: int, n2: int, info: dict | None = None, tol: float = SMOOTH_TOL
+) -> FloatArray:
+    """Opt-in quality pass: Winslow's equations on every interior node of the grid ``p``
+    ((n1 + 1) * (n2 + 1), 2), boundary nodes fixed (:func:`winslow`, to ``tol`` x extent,
+    at most :data:`SMOOTH_SWEEPS` sweeps), kept only when no quad is inverted, the
+    5th-percentile scaled Jacobian rises and the minimum does not fall (an exact polar grid
+    stays as it is). ``info`` gets ``smooth`` (before, after, kept)."""
+    quads = structured_quads(n1, n2)
+    before = _score(p, quads)
+    free = np.arange(len(p))
+    out = winslow(p, n1, n2, free, sweeps=SMOOTH_SWEEPS, tol=tol)
+    after = _score(out, quads)
+    kept = after[0] > 0.0 and after[0] >= before[0] and after[1] > before[1]
+    if info is not None:
+        info["smooth"] = {
+            "min_sj": [before[0], after[0]],
+            "p5_sj": [before[1], after[1]],
+            "kept": bool(kept),
+        }
+    return out if kept else p
+
+
 __all__ = [
     "DEGENERATE_SJ",
     "OPTIONS",
@@ -422,6 +466,7 @@ __all__ = [
     "free_nodes",
     "knupp",
     "scaled_jacobian",
+    "smooth_grid",
     "sliding_nodes",
     "untangle_grid",
     "winslow",
