@@ -24,6 +24,7 @@ import argparse
 import logging
 import sys
 import time
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -78,6 +79,7 @@ def main() -> int:
     results: dict[str, list[np.ndarray | None]] = {m: [] for m in MESHERS}
     times = dict.fromkeys(MESHERS, 0.0)
     staged: list[tuple[int, int, int]] = []  # (case, n1, n2) where the stage ran
+    kept: Counter[str] = Counter()  # the option kept where the stage ran
     refusals: list[str] = []
     case = 0
     for seed, _, region in regions:
@@ -90,6 +92,7 @@ def main() -> int:
                 refusals.append(f"  region {seed} {n1}x{n2}: {info['refused']}")
             if "untangle" in info:
                 staged.append((case, n1, n2))
+                kept[info["untangle"].get("option", "").split(",")[0] or "none valid"] += 1
             t0 = time.perf_counter()
             results["medax smooth"].append(_medax(region, n1, n2, smooth=True)[0])
             times["medax smooth"] += time.perf_counter() - t0
@@ -109,7 +112,7 @@ def main() -> int:
     print("\ntime (s, all meshes): " + ", ".join(f"{m} {t:.1f}" for m, t in times.items()))
     print(f"\nmedax refusals ({len(refusals)}):")
     print("\n".join(refusals) or "  none")
-    print(f"\nthe untangling stage ran on {len(staged)} meshes")
+    print(f"\nthe untangling stage ran on {len(staged)} meshes; option kept: {dict(kept)}")
     if args.options:
         by_case = [(r, d) for r in regions for d in DIVISIONS]
         saved = untangle_mod.OPTIONS

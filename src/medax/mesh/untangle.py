@@ -46,7 +46,10 @@ UNTANGLE_BETA = (0.2, 0.05, 0.0125)
 #: the quality pass (:func:`smooth_grid`): Winslow sweeps at most, and the move (x the
 #: grid's extent) below which they stop
 SMOOTH_SWEEPS = 4000
-SMOOTH_TOL = 1e-7
+SMOOTH_TOL = 1e-6
+#: its over-relaxation (red-black SOR; 1.7 diverged on wavy at 128x128, 1.5 took 2.5x
+#: fewer sweeps than plain Gauss-Seidel there, same quality to 3e-4)
+SMOOTH_OMEGA = 1.5
 _LBFGS_MEMORY = 8
 _SLIDE_SHARE = 0.4
 _UNTANGLE_ITERS = 400
@@ -272,12 +275,19 @@ def knupp(p: FloatArray, n1: int, n2: int, free: IntArray, sliding: Sliding | No
 
 
 def winslow(
-    p: FloatArray, n1: int, n2: int, free: IntArray, sweeps: int = 400, tol: float = 1e-10
+    p: FloatArray,
+    n1: int,
+    n2: int,
+    free: IntArray,
+    sweeps: int = 400,
+    tol: float = 1e-10,
+    omega: float = 1.0,
 ) -> FloatArray:
-    """Winslow's equations ``g22 x_ss - 2 g12 x_st + g11 x_tt = 0`` by Jacobi sweeps on the
-    ``free`` interior nodes of the ``(n2 + 1) x (n1 + 1)`` grid (boundary nodes fixed),
-    started from ``p`` (n, 2), until no node moves by more than ``tol`` x the grid's extent
-    or after ``sweeps``; returns the new nodes (n, 2)."""
+    """Winslow's equations ``g22 x_ss - 2 g12 x_st + g11 x_tt = 0`` on the ``free`` interior
+    nodes of the ``(n2 + 1) x (n1 + 1)`` grid (boundary nodes fixed), started from ``p``
+    (n, 2): red-black Gauss-Seidel sweeps over-relaxed by ``omega`` (1: none), until no
+    node moves by more than ``tol`` x the grid's extent or after ``sweeps``; returns the new
+    nodes (n, 2)."""
     g = p.reshape(n2 + 1, n1 + 1, 2).copy()
     mask = np.zeros((n2 + 1, n1 + 1), dtype=bool)
     mask.flat[free] = True
@@ -285,20 +295,25 @@ def winslow(
     m = mask[1:-1, 1:-1]
     if not m.any():
         return p.copy()
+    jj, ii = np.indices(m.shape)
+    colours = [(m & ((ii + jj) % 2 == c))[..., None] for c in (0, 1)]
     tol = tol * float(np.ptp(p, axis=0).max())
+    inner = g[1:-1, 1:-1]
     for _ in range(sweeps):
-        xs = 0.5 * (g[1:-1, 2:] - g[1:-1, :-2])
-        xt = 0.5 * (g[2:, 1:-1] - g[:-2, 1:-1])
-        a = np.sum(xt * xt, axis=-1)[..., None]
-        c = np.sum(xs * xs, axis=-1)[..., None]
-        b = np.sum(xs * xt, axis=-1)[..., None]
-        cross = g[2:, 2:] - g[2:, :-2] - g[:-2, 2:] + g[:-2, :-2]
-        new = (a * (g[1:-1, 2:] + g[1:-1, :-2]) + c * (g[2:, 1:-1] + g[:-2, 1:-1])
-               - 0.5 * b * cross) / np.maximum(2.0 * (a + c), 1e-300)  # fmt: skip
-        inner = g[1:-1, 1:-1]
-        move = np.where(m[..., None], new - inner, 0.0)
-        inner += move
-        if float(np.abs(move).max()) < tol:
+        largest = 0.0
+        for colour in colours:
+            xs = 0.5 * (g[1:-1, 2:] - g[1:-1, :-2])
+            xt = 0.5 * (g[2:, 1:-1] - g[:-2, 1:-1])
+            a = np.sum(xt * xt, axis=-1)[..., None]
+            c = np.sum(xs * xs, axis=-1)[..., None]
+            b = np.sum(xs * xt, axis=-1)[..., None]
+            cross = g[2:, 2:] - g[2:, :-2] - g[:-2, 2:] + g[:-2, :-2]
+            new = (a * (g[1:-1, 2:] + g[1:-1, :-2]) + c * (g[2:, 1:-1] + g[:-2, 1:-1])
+                   - 0.5 * b * cross) / np.maximum(2.0 * (a + c), 1e-300)  # fmt: skip
+            move = np.where(colour, omega * (new - inner), 0.0)
+            inner += move
+            largest = max(largest, float(np.abs(move).max()))
+        if largest < tol:
             break
     return g.reshape(-1, 2)
 
@@ -439,14 +454,16 @@ def smooth_grid(
     p: FloatArray, n1: int, n2: int, info: dict | None = None, tol: float = SMOOTH_TOL
 ) -> FloatArray:
     """Opt-in quality pass: Winslow's equations on every interior node of the grid ``p``
-    ((n1 + 1) * (n2 + 1), 2), boundary nodes fixed (:func:`winslow`, to ``tol`` x extent,
-    at most :data:`SMOOTH_SWEEPS` sweeps), kept only when no quad is inverted, the
+    ((n1 + 1) * (n2 + 1), 2), boundary nodes fixed (:func:`winslow`, over-relaxed by
+    :data:`SMOOTH_OMEGA`, to ``tol`` x extent, at most :data:`SMOOTH_SWEEPS` sweeps), kept
+    only when no quad is inverted, the
     5th-percentile scaled Jacobian rises and the minimum does not fall (an exact polar grid
     stays as it is). ``info`` gets ``smooth`` (before, after, kept)."""
     quads = structured_quads(n1, n2)
     before = _score(p, quads)
     free = np.arange(len(p))
-    out = winslow(p, n1, n2, free, sweeps=SMOOTH_SWEEPS, tol=tol)
+    with np.errstate(all="ignore"):  # (a diverging run is refused by the guard below)
+        out = winslow(p, n1, n2, free, sweeps=SMOOTH_SWEEPS, tol=tol, omega=SMOOTH_OMEGA)
     after = _score(out, quads)
     kept = after[0] > 0.0 and after[0] >= before[0] and after[1] > before[1]
     if info is not None:
