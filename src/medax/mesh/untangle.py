@@ -1,24 +1,30 @@
 """Untangling and quality stage of a structured quad grid (numpy only).
 
-Applied after the medial grid where it has inverted or near-degenerate quads: only the nodes
-of the bad quads and a halo around them move (the halo grows, 2, 4, 8, ... node rings, up
-to the whole grid, until the result is valid), corners stay, boundary nodes slide along
-their sides (their side parameter is a variable: the node is the side's point there, so it
-stays on the side exactly), every other node keeps its medial place.
+Applied after the medial grid where it has inverted or near-degenerate quads (scaled
+Jacobian at most :data:`DEGENERATE_SJ`): only the nodes of the bad quads and a halo around
+them move (2, 4, 8, 16 node rings, then the whole grid, until a result is valid), corners
+stay, boundary nodes slide along their sides (their side parameter is the variable, so a
+node stays on its side exactly; each kept within 0.4 of the way to its neighbours' start
+parameters), every other node keeps its medial place.
 
-Two options, both measured on the random regions (``docs/algorithms/mesh.md``):
+Options (:data:`OPTIONS`), all run on each halo and the best result kept; measured on the
+random regions in ``docs/benchmarks.md``:
 
 - ``"knupp"``: Knupp's untangling objective ``sum_c max(0, beta_c - alpha_c)^2`` over the
-  corner areas ``alpha_c`` (the cross product of a corner's two edges; ``beta_c`` 0.2 x
-  the product of their lengths at the start), then, once every corner is positive, a
-  barrier objective: the sum over corners of ``(|a|^2 + |b|^2) / (2 alpha_c)`` (the
-  condition number of the corner's Jacobian, 1 for a square corner, infinite when flat),
-  both by L-BFGS with a backtracking line search that refuses steps to a tangled mesh.
-- ``"winslow"``: the Winslow (elliptic) equations started from the medial grid, Jacobi
-  sweeps on the free nodes with the boundary nodes fixed.
+  corner areas ``alpha_c`` (the cross product of a corner's two edges; ``beta_c`` a share
+  :data:`UNTANGLE_BETA` of the product of their lengths at the start, lowered while the
+  grid stays tangled), then, once every corner is positive, a barrier objective: the sum
+  over corners of ``(|a|^2 + |b|^2) / (2 alpha_c)`` (the condition number of the corner's
+  Jacobian, 1 for a square corner, infinite when flat), both by L-BFGS with a
+  backtracking line search that refuses steps to a tangled mesh; boundary nodes sliding.
+- ``"knupp-fixed"``: the same with the boundary nodes fixed.
+- ``"winslow"``: the Winslow (elliptic) equations started from the grid, red-black sweeps
+  on the free nodes with the boundary nodes fixed.
 
 Every result is guarded: it replaces the grid only when it has no inverted quad and a
-higher minimum scaled Jacobian than the grid had.
+higher minimum scaled Jacobian than the grid had. :func:`smooth_grid` is the opt-in
+quality pass (``medax mesh --smooth``): Winslow on the whole grid, guarded the same way on
+the 5th-percentile scaled Jacobian.
 """
 
 from __future__ import annotations
@@ -29,6 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from medax.errors import InputError
 from medax.geometry._types import FloatArray, IntArray
 from medax.geometry.curve import Curve
 from medax.mesh.grid import boundary_indices, structured_quads, transfinite_grid
@@ -398,7 +405,7 @@ def _attempt(
             elif opt == "winslow":
                 cand = winslow(p, n1, n2, free)
             else:
-                raise ValueError(f"unknown untangling option '{opt}' (known: {OPTIONS})")
+                raise InputError(f"unknown untangling option '{opt}' (known: {OPTIONS})")
             score = _score(cand, quads)
             log.debug("untangle %s, halo %d: min sj %.4f p5 %.4f", opt, rings, *score)
             if score[0] > 0.0 and score > best_score:
