@@ -36,6 +36,20 @@ def boundary_indices(n1: int, n2: int) -> tuple[IntArray, IntArray, IntArray, In
     return s0, s1, s2, s3
 
 
+def transfinite_grid(params: FloatArray, n1: int, n2: int) -> FloatArray:
+    """The transfinite (Coons) patch ((n1 + 1) * (n2 + 1), 2) of a grid's boundary nodes
+    (node ``(i, j)`` at row ``j * (n1 + 1) + i``), blended linearly in ``i / n1`` and
+    ``j / n2`` (the boundary nodes divide their sides into equal arc lengths)."""
+    g = params.reshape(n2 + 1, n1 + 1, -1)
+    u = (np.arange(n1 + 1) / n1)[None, :, None]
+    v = (np.arange(n2 + 1) / n2)[:, None, None]
+    c00, c10, c01, c11 = g[0, 0], g[0, -1], g[-1, 0], g[-1, -1]
+    out = (1 - v) * g[:1] + v * g[-1:] + (1 - u) * g[:, :1] + u * g[:, -1:]
+    out -= (1 - u) * (1 - v) * c00 + u * (1 - v) * c10 + (1 - u) * v * c01 + u * v * c11
+    out[0], out[-1], out[:, 0], out[:, -1] = g[0], g[-1], g[:, 0], g[:, -1]  # exact rims
+    return out.reshape(params.shape)
+
+
 @dataclass(frozen=True)
 class QuadMesh:
     """A structured quad mesh of ``region``.

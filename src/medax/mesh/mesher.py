@@ -36,14 +36,18 @@ import numpy as np
 from medax import tolerances
 from medax.errors import InputError, MeshError
 from medax.geometry._types import FloatArray
+from medax.geometry.curve import Curve
 from medax.geometry.region import Region, normalised_region
+from medax.mesh.arclength import arclength_params
 from medax.mesh.boundary_nodes import RULES as BOUNDARY_RULES
 from medax.mesh.crossings import family_crossings
-from medax.mesh.grid import QuadMesh, boundary_indices, structured_quads
+from medax.mesh.grid import QuadMesh, boundary_indices, structured_quads, transfinite_grid
+from medax.mesh.obstacles import corner_angles, corner_quad_angle, obstacle, stuck_corner
 from medax.mesh.quality import quad_quality
 from medax.mesh.ratio_field import facing
 from medax.mesh.ratio_grid import ratio_grid
 from medax.mesh.split import FamilyCurve, axis_family
+from medax.mesh.untangle import smooth_grid, untangle_grid
 
 log = logging.getLogger(__name__)
 
@@ -82,6 +86,8 @@ def mesh_region(
     tol: float | None = None,
     boundary: str = "arclength",
     fractions: Sequence[FloatArray] | None = None,
+    allow_inverted: bool = False,
+    smooth: bool = False,
 ) -> QuadMesh:
     """A structured quad mesh of ``region`` with ``divisions = (n1, n2)`` (along S0, along S1)
     or edges of about ``size`` (region units). ``tol`` (relative to the diagonal) bounds the
@@ -96,7 +102,16 @@ def mesh_region(
     :mod:`medax.mesh.boundary_nodes`. ``fractions`` (``"ratio"`` and ``"angle"``, rule
     ``"arclength"``, with ``divisions``): per side the arc-length fractions (n + 1,) of its
     boundary nodes, from 0 to 1 in the side's direction (default ``k / n``), e.g. to put
-    nodes on the vertices inside a side made of several CAD edges."""
+    nodes on the vertices inside a side made of several CAD edges.
+
+    Planar grids with inverted or near-degenerate quads then go through the untangling
+    stage (:mod:`medax.mesh.untangle`; boundary nodes slide along their sides unless
+    ``fractions`` fix them); where the ratio grid cannot be solved, the stage starts from
+    the transfinite patch of the boundary nodes (``info["interior"] = "untangled"``). A grid
+    still inverted raises :class:`MeshError` naming the obstacle (a corner, a side), unless
+    ``allow_inverted``. ``smooth`` (planar regions): the quality pass
+    :func:`~medax.mesh.untangle.smooth_grid` (Winslow on the interior nodes, kept only where
+    it raises the 5th-percentile scaled Jacobian; ``info["smooth"]``)."""
     if method not in METHODS:
         raise InputError(f"unknown mesh method '{method}' (known: {', '.join(METHODS)})")
     if boundary not in BOUNDARY_RULES:
@@ -130,36 +145,90 @@ def mesh_region(
         # tolerance (down to 1e-13 x diagonal) is still above round-off
         work, offset, scale = normalised_region(region)
         point_tol = min(tol or tolerances.POINT_TOL, tolerances.POINT_TOL)
-        params, info = ratio_grid(
-            work, n1, n2, point_tol, weighting, boundary, node_tol=tol, fractions=fractions
-        )
-        if work.embedding.is_identity and any(not facing(work, a, a + 2) for a in (0, 1)):
+        planar = work.embedding.is_identity
+        try:
+            params, info = ratio_grid(
+                work, n1, n2, point_tol, weighting, boundary, node_tol=tol, fractions=fractions
+            )
+        except MeshError as err:
+            if not planar:
+                raise
+            # the ratio curves do not cross everywhere: the boundary nodes at equal arc
+            # length and the untangling stage from their transfinite patch
+            log.info("region '%s': %s; untangling the transfinite patch", region.name, err)
+            params = transfinite_grid(_arclength_rim(work, n1, n2, fractions), n1, n2)
+            info = {"interior": "untangled", "ratio_grid": str(err)}
+        if planar and any(not facing(work, a, a + 2) for a in (0, 1)):
             params = _not_below_transfinite(params, n1, n2, info)
+        if planar:
+            slide = None if fractions is not None else work.sides
+            if not allow_inverted:
+                _refuse_stuck_corner(region, params, n1, n2, work.sides, fractions is None)
+            params = untangle_grid(params, n1, n2, slide, info=info)
+            if smooth:
+                params = smooth_grid(params, n1, n2, info)
         params = params * scale + offset
     else:
         params, n1, n2 = _paper_grid(region, n1, n2, size, tol)
+        if region.embedding.is_identity:
+            work, offset, scale = normalised_region(region)
+            local = untangle_grid((params - offset) / scale, n1, n2, work.sides, info=info)
+            if smooth:
+                local = smooth_grid(local, n1, n2, info)
+            params = local * scale + offset
     info["time_s"] = time.perf_counter() - t0
     info["tol"] = tol
     points = region.embedding.evaluate(params)
     mesh = QuadMesh(region, params, points, n1, n2, method, info)
     bad = _inverted_count(mesh)
     if bad:
+        if not allow_inverted:
+            angles = corner_angles(region) if region.embedding.is_identity else None
+            why = obstacle(params, n1, n2, angles) if region.embedding.is_identity else ""
+            raise MeshError(
+                f"region '{region.name}': no valid structured {n1}x{n2} grid found, "
+                f"{bad} quads inverted{': ' + why if why else ''}"
+            )
         log.warning("region '%s': %d inverted quads", region.name, bad)
     return mesh
 
 
-def transfinite_grid(params: FloatArray, n1: int, n2: int) -> FloatArray:
-    """The transfinite (Coons) patch ((n1 + 1) * (n2 + 1), 2) of a grid's boundary nodes
-    (node ``(i, j)`` at row ``j * (n1 + 1) + i``), blended linearly in ``i / n1`` and
-    ``j / n2`` (the boundary nodes divide their sides into equal arc lengths)."""
-    g = params.reshape(n2 + 1, n1 + 1, -1)
-    u = (np.arange(n1 + 1) / n1)[None, :, None]
-    v = (np.arange(n2 + 1) / n2)[:, None, None]
-    c00, c10, c01, c11 = g[0, 0], g[0, -1], g[-1, 0], g[-1, -1]
-    out = (1 - v) * g[:1] + v * g[-1:] + (1 - u) * g[:, :1] + u * g[:, -1:]
-    out -= (1 - u) * (1 - v) * c00 + u * (1 - v) * c10 + (1 - u) * v * c01 + u * v * c11
-    out[0], out[-1], out[:, 0], out[:, -1] = g[0], g[-1], g[:, 0], g[:, -1]  # exact rims
-    return out.reshape(params.shape)
+def _refuse_stuck_corner(
+    region: Region, params: FloatArray, n1: int, n2: int, sides: Sequence[Curve], slide: bool
+) -> None:
+    """:class:`MeshError` before any untangling when a corner's quad cannot be convex (its
+    angle 180 degrees or more wherever the first boundary nodes slide; with ``slide``
+    False where they are)."""
+    if slide:
+        hit = stuck_corner(params, n1, n2, sides)
+    else:
+        quad = [corner_quad_angle(params, n1, n2, k) for k in range(4)]
+        k = int(np.argmax(quad))
+        hit = (k, quad[k]) if quad[k] >= 180.0 else None
+    if hit is None:
+        return
+    k, ang = hit
+    own = corner_angles(region)[k]
+    kind = "reflex corner" if own >= 180.0 else "corner"
+    raise MeshError(
+        f"region '{region.name}': no valid structured {n1}x{n2} grid: {kind} {k} between "
+        f"sides {(k - 1) % 4} and {k} ({own:.1f} degrees between the sides' tangents): its "
+        f"quad's angle there is at least {ang:.1f} degrees wherever the boundary nodes slide "
+        "(a structured grid's corner quad takes the corner's angle)"
+    )
+
+
+def _arclength_rim(
+    region: Region, n1: int, n2: int, fractions: Sequence[FloatArray] | None
+) -> FloatArray:
+    """A grid ((n1 + 1) * (n2 + 1), 2) with its boundary nodes at equal arc length (or at
+    ``fractions`` of it) on each side of the planar ``region`` and NaN inside."""
+    params = np.full(((n1 + 1) * (n2 + 1), 2), np.nan)
+    for k, idx in enumerate(boundary_indices(n1, n2)):
+        n = n1 if k % 2 == 0 else n2
+        fr = np.arange(n + 1) / n if fractions is None else np.asarray(fractions[k], float)
+        params[idx] = region.sides[k].evaluate(arclength_params(region.sides[k], fr))
+    return params
 
 
 def _not_below_transfinite(params: FloatArray, n1: int, n2: int, info: dict) -> FloatArray:

@@ -749,4 +749,7 @@ def _newton(
             if todo.size == 0:
                 break
             lam[todo] *= 0.5
+        # a row with no acceptable step left its state unchanged: the next iteration would
+        # repeat the same step and fail again (it stays unconverged, for the global rounds)
+        active = np.setdiff1d(active, active[todo], assume_unique=True)
     return p, it, res
