@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from medax import __version__
 from medax.errors import MedaxError
 
-SUBCOMMANDS = ("axis", "mesh", "classify", "simplify", "samples", "demo")
+SUBCOMMANDS = ("axis", "mesh", "classify", "simplify", "batch", "samples", "demo")
 
 
 def versions() -> str:

@@ -1,0 +1,202 @@
+"""``medax batch`` on a Dask LocalCluster started here on 127.0.0.1: records, outputs equal
+to the single-part commands', resume, a part that hangs and a worker killed mid-task."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from medax.batch import BatchOptions, run_batch
+from medax.batch.inputs import collect_inputs, part_dirs
+from medax.batch.records import RECORDS, append_record, read_records
+from medax.cli.main import main
+from medax.errors import InputError
+from medax.schemas import validation_errors
+
+distributed = pytest.importorskip("distributed")
+
+
+@pytest.fixture(scope="module")
+def parts(tmp_path_factory) -> Path:
+    """Two filleted STEP parts built with OCCT and a file that is not a part."""
+    from medax.cad.parts import l_bracket
+    from medax.cad.simplify import parts as P
+    from medax.cad.simplify.step_out import write_step
+
+    d = tmp_path_factory.mktemp("parts")
+    write_step(P.box_vertical_fillets().shape, d / "box4.step")
+    sub = d / "sub"
+    sub.mkdir()
+    write_step(l_bracket().shape, sub / "bracket.step")
+    (d / "broken.stp").write_text("ISO-10303-21;\nnot a part\n")
+    (d / "notes.txt").write_text("not an input")
+    return d
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """One worker process (one thread) on 127.0.0.1; a killed part is retried once."""
+    import dask
+
+    config = {"distributed.worker.daemon": False, "distributed.scheduler.allowed-failures": 1}
+    with dask.config.set(config):
+        c = distributed.LocalCluster(
+            n_workers=1,
+            threads_per_worker=1,
+            processes=True,
+            host="127.0.0.1",
+            dashboard_address="127.0.0.1:0",
+        )
+        with c:
+            yield c
+
+
+def lines(outdir: Path) -> list[dict]:
+    return [json.loads(x) for x in (outdir / RECORDS).read_text().splitlines()]
+
+
+def test_inputs_folders_globs_and_refusals(parts, tmp_path):
+    found = collect_inputs([str(parts)])
+    assert [p.name for p in found] == ["box4.step", "broken.stp", "bracket.step"]
+    assert [p.name for p in collect_inputs([str(parts / "**" / "*.step")])] == [
+        "box4.step",
+        "bracket.step",
+    ]
+    # a file given twice (or through a folder and by name) is one part
+    assert len(collect_inputs([str(parts / "box4.step"), str(parts)])) == 3
+    with pytest.raises(InputError, match="no such file"):
+        collect_inputs([str(tmp_path / "missing.step")])
+    with pytest.raises(InputError, match="matches no"):
+        collect_inputs([str(tmp_path / "*.step")])
+    # the output folder is never searched
+    assert collect_inputs([str(parts)], exclude=parts / "sub")[-1].name == "broken.stp"
+    assert part_dirs([Path("a/x.step"), Path("b/x.stp")], ["1" * 64, "2" * 64]) == [
+        "x-11111111",
+        "x-22222222",
+    ]
+
+
+def test_options_are_checked_before_any_work(parts, tmp_path):
+    with pytest.raises(InputError, match="mesh-size"):
+        run_batch([str(parts)], tmp_path / "o", BatchOptions(do=("mesh",)))
+    with pytest.raises(InputError, match="--do"):
+        run_batch([str(parts)], tmp_path / "o", BatchOptions(do=("fillet",)))
+    assert main(["batch", str(parts), "-o", str(tmp_path / "o"), "--timeout", "-1"]) == 1
+    assert not (tmp_path / "o" / RECORDS).exists()
+
+
+def test_journal_skips_a_torn_line(tmp_path):
+    append_record(tmp_path, {"sha256": "a", "options_key": "k", "status": "ok"})
+    with open(tmp_path / RECORDS, "a") as f:
+        f.write('{"sha256": "b", "opt')  # a crash mid-line
+    assert [r["sha256"] for r in read_records(tmp_path)] == ["a"]
+
+
+@pytest.mark.slow
+def test_batch_records_outputs_and_resume(parts, cluster, tmp_path, capsys):
+    out = tmp_path / "out"
+    argv = ["batch", str(parts), "-o", str(out), "--scheduler", cluster.scheduler_address]
+    assert main([*argv, "--do", "classify,simplify"]) == 0  # a refused part is not a failure
+    recs = {r["part_dir"]: r for r in lines(out)}
+    assert set(recs) == {"box4", "bracket", "broken"}
+    for r in recs.values():
+        assert validation_errors(r, "batch-record") == []
+    assert recs["broken"]["status"] == "refused" and "classify" in recs["broken"]["error"]
+    box = recs["box4"]
+    assert box["status"] == "ok" and box["steps"]["simplify"]["status"] == "ok"
+    assert box["counts"]["faces_before"] == 10 and box["counts"]["blends_removed"] == 4
+    assert box["counts"]["faces_after"] == 6 and box["kept_reasons"] == {}
+    for rel in box["outputs"].values():
+        assert (out / rel).is_file()
+    # the batch's outputs are the single-part command's
+    single = tmp_path / "single.json"
+    assert main(["classify", str(parts / "box4.step"), "--report", str(single)]) == 0
+    mine, theirs = (
+        json.loads((out / "box4" / "classify.json").read_text()),
+        json.loads(single.read_text()),
+    )
+    assert mine["summary"] == theirs["summary"] and mine["solids"] == theirs["solids"]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == {"ok": 2, "refused": 1, "failed": 0, "timeout": 0}
+    assert validation_errors(summary, "batch-summary") == []
+    text = capsys.readouterr()
+    assert "3 parts (0 skipped" in text.out and "ETA" in text.err
+    assert not list(out.rglob(".*.tmp*"))
+    # resume: nothing runs again, and nothing is appended
+    assert main([*argv, "--do", "classify,simplify"]) == 0
+    assert len(lines(out)) == 3
+    assert "3 parts (3 skipped" in capsys.readouterr().out
+    # a part whose output was removed runs again; the others are skipped
+    (out / "bracket" / "simplify.json").unlink()
+    res = run_batch([str(parts)], out, BatchOptions(scheduler=cluster.scheduler_address))
+    ran = [r["part_dir"] for r in res.records if not r.get("skipped")]
+    assert ran == ["bracket"] and res.exit_code == 0
+    # other options: everything runs again
+    res = run_batch(
+        [str(parts / "box4.step")],
+        out,
+        BatchOptions(do=("classify",), scheduler=cluster.scheduler_address),
+    )
+    assert [r.get("skipped", False) for r in res.records] == [False]
+
+
+@pytest.mark.slow
+def test_a_hanging_part_times_out_and_the_batch_completes(parts, tmp_path):
+    src = tmp_path / "in"
+    src.mkdir()
+    shutil.copy(parts / "box4.step", src / "box4.step")
+    shutil.copy(parts / "sub" / "bracket.step", src / "hang.step")
+    opts = BatchOptions(do=("classify",), workers=2, timeout=8.0, hook="batch_hooks:hang_if_named")
+    res = run_batch([str(src)], tmp_path / "out", opts)  # the default: a local cluster
+    status = {r["part_dir"]: r["status"] for r in res.records}
+    assert status == {"box4": "ok", "hang": "timeout"} and res.exit_code == 3
+    pid = int((src / "hang.step.pid").read_text())
+    with pytest.raises(ProcessLookupError):
+        os.kill(pid, 0)  # killed, and reaped
+    rec = next(r for r in res.records if r["status"] == "timeout")
+    assert "timeout" in rec["error"] and not list((tmp_path / "out").rglob(".*.tmp*"))
+    assert res.summary["status"]["timeout"] == 1
+
+
+@pytest.mark.slow
+def test_a_killed_worker_does_not_stop_the_batch(parts, cluster, tmp_path):
+    src = tmp_path / "in"
+    src.mkdir()
+    shutil.copy(parts / "box4.step", src / "slow.step")
+    opts = BatchOptions(
+        do=("classify",), scheduler=cluster.scheduler_address, hook="batch_hooks:slow_once"
+    )
+    result: dict = {}
+    thread = threading.Thread(
+        target=lambda: result.update(res=run_batch([str(src)], tmp_path / "out", opts))
+    )
+    thread.start()
+    marker = src / "slow.step.started"
+    deadline = time.monotonic() + 120
+    while not marker.exists() and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert marker.exists()
+    with distributed.Client(cluster.scheduler_address) as client:
+        (pid,) = client.run(os.getpid).values()
+    os.kill(pid, signal.SIGKILL)  # the worker, mid-task
+    thread.join(180)
+    assert not thread.is_alive()
+    (rec,) = result["res"].records
+    assert rec["status"] == "ok"  # retried on the restarted worker
+    child = int(marker.read_text())
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:  # the part's process dies with its worker
+        try:
+            os.kill(child, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.2)
+    else:
+        pytest.fail("the killed worker's part process is still running")
