@@ -20,3 +20,13 @@ def slow_once(path: str) -> None:
     if Path(path).name.startswith("slow") and not marker.exists():
         marker.write_text(str(os.getpid()))
         time.sleep(3600)
+
+
+def kill_worker(path: str) -> None:
+    """A part whose name starts with ``crash`` kills its Dask worker (the parent of this
+    process's parent, the fork server) every time it runs."""
+    if Path(path).name.startswith("crash"):
+        server = os.getppid()
+        worker = int(Path(f"/proc/{server}/stat").read_text().rsplit(")", 1)[1].split()[1])
+        os.kill(worker, 9)
+        time.sleep(60)

@@ -200,3 +200,20 @@ def test_a_killed_worker_does_not_stop_the_batch(parts, cluster, tmp_path):
         time.sleep(0.2)
     else:
         pytest.fail("the killed worker's part process is still running")
+
+
+@pytest.mark.slow
+def test_a_part_that_kills_its_worker_twice_is_recorded_as_failed(parts, cluster, tmp_path):
+    src = tmp_path / "in"
+    src.mkdir()
+    shutil.copy(parts / "box4.step", src / "crash.step")
+    shutil.copy(parts / "sub" / "bracket.step", src / "bracket.step")
+    opts = BatchOptions(
+        do=("classify",), scheduler=cluster.scheduler_address, hook="batch_hooks:kill_worker"
+    )
+    res = run_batch([str(src)], tmp_path / "out", opts)
+    status = {r["part_dir"]: r["status"] for r in res.records}
+    assert status == {"bracket": "ok", "crash": "failed"} and res.exit_code == 3
+    crash = next(r for r in res.records if r["part_dir"] == "crash")
+    assert "KilledWorker" in crash["error"]
+    assert [r["part_dir"] for r in lines(tmp_path / "out")] == list(status)
