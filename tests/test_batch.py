@@ -14,8 +14,9 @@ from pathlib import Path
 import pytest
 
 from medax.batch import BatchOptions, run_batch
+from medax.batch.html import report_html, write_report
 from medax.batch.inputs import collect_inputs, part_dirs
-from medax.batch.records import RECORDS, append_record, read_records
+from medax.batch.records import RECORDS, append_record, read_records, summarize
 from medax.cli.main import main
 from medax.errors import InputError
 from medax.schemas import validation_errors
@@ -99,6 +100,34 @@ def test_journal_skips_a_torn_line(tmp_path):
     assert [r["sha256"] for r in read_records(tmp_path)] == ["a"]
 
 
+def test_html_report_is_one_file_with_pictures_inlined(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    (tmp_path / "p").mkdir()
+    plt.figure(figsize=(1, 1))
+    plt.savefig(tmp_path / "p" / "classify.png")
+    plt.close("all")
+    rec = {
+        "input": "<p>.step",
+        "part_dir": "p",
+        "status": "ok",
+        "steps": {"classify": {"status": "ok", "time_s": 1.0}},
+        "counts": {"faces": 7, "blends_kept": 1},
+        "kept_reasons": {"too_narrow": 1},
+        "outputs": {"classify_png": "p/classify.png"},
+        "time_s": 1.0,
+    }
+    summary = summarize([rec], 2.0)
+    page = report_html([rec], summary, tmp_path)
+    assert "data:image/png;base64," in page and "&lt;p&gt;.step" in page
+    assert "too_narrow" in page and "<script>" in page
+    assert "http://" not in page and "https://" not in page and 'src="http' not in page
+    assert write_report([rec], summary, tmp_path).read_text() == page
+
+
 @pytest.mark.slow
 def test_batch_records_outputs_and_resume(parts, cluster, tmp_path, capsys):
     out = tmp_path / "out"
@@ -129,6 +158,8 @@ def test_batch_records_outputs_and_resume(parts, cluster, tmp_path, capsys):
     text = capsys.readouterr()
     assert "3 parts (0 skipped" in text.out and "ETA" in text.err
     assert not list(out.rglob(".*.tmp*"))
+    page = (out / "report.html").read_text()
+    assert page.count("<tr class=") == 3 and 'href="box4/simplify.json"' in page
     # resume: nothing runs again, and nothing is appended
     assert main([*argv, "--do", "classify,simplify"]) == 0
     assert len(lines(out)) == 3

@@ -139,8 +139,10 @@ def run_batch(
 ) -> BatchResult:
     """Run ``options.do`` on every part of ``inputs`` (files, folders, globs), outputs in
     ``outdir/<part>/``, records in ``outdir/records.jsonl``; returns the records and the
-    summary (also written to ``outdir/summary.json``). Parts already finished with the same
+    summary (also written to ``outdir/summary.json``, and with the records to
+    ``outdir/report.html``). Parts already finished with the same
     bytes and options are skipped. :class:`InputError` before any work for bad options."""
+    from medax.batch.html import write_report
     from medax.io_utils import write_json
     from medax.schemas import stamp
 
@@ -175,6 +177,7 @@ def run_batch(
     unit = units.pop() if len(units) == 1 else ("mixed" if units else "unspecified")
     stamped = stamp("batch-summary", data, unit, tolerances_of(step_opts), time="s")
     write_json(out / SUMMARY, stamped, "summary")
+    write_report(records, summary, out)
     return BatchResult(records, summary, out)
 
 

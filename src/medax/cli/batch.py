@@ -25,7 +25,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "the PNG views with --pictures, batch.log), the same files the single-part commands "
         "write; one JSON line per part is appended to OUTDIR/records.jsonl (status ok, "
         "refused, failed or timeout, counts, kept-blend reasons, times, outputs) and the "
-        "totals to OUTDIR/summary.json. Run the same command again to resume: parts whose "
+        "totals to OUTDIR/summary.json, and OUTDIR/report.html shows them (one self-contained "
+        "file: a sortable table, the kept-blend reasons, the pictures). Run the same "
+        "command again to resume: parts whose "
         "bytes and options match a finished record (ok or refused) are skipped. Progress "
         "(rate and time left) goes to stderr, a summary table to stdout. Exit code: 0 when "
         "every part is ok or refused, 3 when any part failed or timed out, 1 when the batch "
@@ -96,7 +98,8 @@ def run(args: argparse.Namespace) -> int:
     result = run_batch(args.inputs, args.outdir, opts, progress=ProgressLine())
     for line in summary_table(result.summary, result.records):
         print(line)
-    print(f"wrote {result.outdir / 'records.jsonl'} and {result.outdir / 'summary.json'}")
+    for name in ("records.jsonl", "summary.json", "report.html"):
+        print(f"wrote {result.outdir / name}")
     return result.exit_code
 
 
