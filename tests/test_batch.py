@@ -248,3 +248,17 @@ def test_a_part_that_kills_its_worker_twice_is_recorded_as_failed(parts, cluster
     crash = next(r for r in res.records if r["part_dir"] == "crash")
     assert "KilledWorker" in crash["error"]
     assert [r["part_dir"] for r in lines(tmp_path / "out")] == list(status)
+
+
+def test_a_second_batch_into_the_same_folder_is_refused(parts, tmp_path):
+    import fcntl
+
+    from medax.batch.run import LOCK
+
+    out = tmp_path / "out"
+    out.mkdir()
+    with open(out / LOCK, "w") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        with pytest.raises(InputError, match="another medax batch"):
+            run_batch([str(parts)], out, BatchOptions(do=("classify",)))
+    assert not (out / RECORDS).exists()

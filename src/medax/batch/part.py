@@ -136,6 +136,7 @@ def _child(task: PartTask, conn: Connection) -> None:
     except BaseException as err:  # noqa: B036 - reported, never raised in a child
         traceback.print_exc()
         record = _finish(_base_record(task), "failed", start, _one_line(err))
+    record["cpu_s"] = round(time.process_time(), 3)  # this process's, since its fork
     sys.stdout.flush()
     sys.stderr.flush()
     conn.send(record)

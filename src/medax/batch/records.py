@@ -123,5 +123,6 @@ def summarize(records: Iterable[Mapping[str, Any]], wall_s: float) -> dict[str, 
         "kept_reasons": dict(reasons.most_common()),
         "wall_s": round(wall_s, 3),
         "part_s": round(sum(float(r.get("time_s", 0.0)) for r in run), 3),
+        "part_cpu_s": round(sum(float(r.get("cpu_s", 0.0)) for r in run), 3),
         "parts_per_min": round(60.0 * len(run) / wall_s, 2) if wall_s > 0 and run else 0.0,
     }

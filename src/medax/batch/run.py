@@ -34,6 +34,7 @@ from medax.errors import InputError
 log = logging.getLogger(__name__)
 
 SUMMARY = "summary.json"
+LOCK = ".medax-batch.lock"
 #: seconds a part may take by default before its process is killed
 DEFAULT_TIMEOUT = 900.0
 
@@ -142,13 +143,23 @@ def run_batch(
     summary (also written to ``outdir/summary.json``, and with the records to
     ``outdir/report.html``). Parts already finished with the same
     bytes and options are skipped. :class:`InputError` before any work for bad options."""
+    opts = options or BatchOptions()
+    opts.check()
+    out = _output_folder(outdir)
+    with _lock(out):
+        return _run_locked(inputs, out, opts, progress)
+
+
+def _run_locked(
+    inputs: Sequence[str],
+    out: Path,
+    opts: BatchOptions,
+    progress: Callable[[Progress], None] | None,
+) -> BatchResult:
     from medax.batch.html import write_report
     from medax.io_utils import write_json
     from medax.schemas import stamp
 
-    opts = options or BatchOptions()
-    opts.check()
-    out = _output_folder(outdir)
     paths = collect_inputs(inputs, exclude=out)
     hashes = [file_sha256(p) for p in paths]
     step_opts = opts.step_options()
@@ -277,6 +288,23 @@ def _client_of(opts: BatchOptions) -> Iterator[Any]:
         )
         with cluster, Client(cluster) as client:
             yield client
+
+
+@contextlib.contextmanager
+def _lock(out: Path) -> Iterator[None]:
+    """Hold ``out/.medax-batch.lock`` (flock) for the run: :class:`InputError` when another
+    batch is writing to the same folder."""
+    import fcntl
+
+    fd = os.open(out / LOCK, os.O_WRONLY | os.O_CREAT, 0o666)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise InputError(f"-o '{out}': another medax batch is writing to it") from None
+        yield
+    finally:
+        os.close(fd)
 
 
 def _output_folder(outdir: str | Path) -> Path:

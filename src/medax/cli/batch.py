@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 from typing import Any
 
 from medax import tolerances
@@ -95,7 +96,18 @@ def run(args: argparse.Namespace) -> int:
         mesh_size=args.mesh_size,
         pictures=args.pictures,
     )
-    result = run_batch(args.inputs, args.outdir, opts, progress=ProgressLine())
+    try:
+        result = run_batch(args.inputs, args.outdir, opts, progress=ProgressLine())
+    except KeyboardInterrupt as err:  # the records of finished parts are kept: say so
+        from medax.cli.main import Terminated
+
+        what = "terminated" if isinstance(err, Terminated) else "interrupted"
+        print(
+            f"\nmedax batch: {what}; the finished parts are in "
+            f"{Path(args.outdir) / 'records.jsonl'}: run the same command to resume",
+            file=sys.stderr,
+        )
+        return 143 if isinstance(err, Terminated) else 130
     for line in summary_table(result.summary, result.records):
         print(line)
     for name in ("records.jsonl", "summary.json", "report.html"):
