@@ -101,6 +101,24 @@ def batch(parts: list[Path], do: tuple[str, ...], workers: int, timeout: float) 
     }
 
 
+#: about a second of pure Python CPU
+SPIN = "s = 0\nfor i in range(12_000_000):\n    s += i"
+
+
+def parallel_capacity(n: int = 2) -> float:
+    """How much faster ``n`` processes of pure CPU run side by side than one after another:
+    about ``n`` on an idle machine with ``n`` free cores, about 1 when the cores are busy."""
+    t0 = time.perf_counter()
+    for _ in range(n):
+        subprocess.run([sys.executable, "-c", SPIN], check=True)
+    serial = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    procs = [subprocess.Popen([sys.executable, "-c", SPIN]) for _ in range(n)]
+    for p in procs:
+        p.wait()
+    return serial / (time.perf_counter() - t0)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("folder", type=Path, help="folder of parts")
@@ -123,7 +141,10 @@ def main(argv: list[str] | None = None) -> int:
     counts = [int(x) for x in args.workers.split(",")]
     refs: list[dict[str, Any]] = []
     runs: dict[int, list[dict[str, Any]]] = {w: [] for w in counts}
+    capacity = []
     for k in range(args.repeat):  # alternated, so that other loads hit every kind alike
+        capacity.append(parallel_capacity(2))
+        print(f"[{k + 1}] 2 CPU-bound processes side by side: {capacity[-1]:.2f}x one by one")
         refs.append(reference(parts, do, opts) | {"load": os.getloadavg()[0]})
         print(f"[{k + 1}] one process: {refs[-1]['wall_s']:.1f} s {refs[-1]['status']}")
         for w in counts:
@@ -150,8 +171,11 @@ def main(argv: list[str] | None = None) -> int:
             f"| {label} | {r['wall_s']:.1f} | {60.0 * n / r['wall_s']:.1f} | {r['cpu_s']:.1f} "
             f"| {over:+.2f} | {speed} | {r['process_overhead_median_s']:.3f} | {r['load']:.1f} |"
         )
+    caps = ", ".join(f"{c:.2f}x" for c in capacity)
+    print(f"\nthe machine's parallel capacity (2 pure-CPU processes side by side): {caps}")
     if args.json is not None:
         data = {"parts": [str(p) for p in parts], "do": do, "reference": refs, "batch": runs}
+        data["parallel_capacity"] = capacity
         args.json.write_text(json.dumps(data, indent=1) + "\n")
     return 0
 

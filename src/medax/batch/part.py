@@ -72,6 +72,7 @@ def run_part(task: PartTask) -> dict[str, Any]:
     seconds, and return its record (status ``ok``, ``refused``, ``failed`` or
     ``timeout``)."""
     start = time.perf_counter()
+    started = time.time()
     base = _base_record(task)
     if multiprocessing.current_process().daemon:
         return _finish(
@@ -113,7 +114,19 @@ def run_part(task: PartTask) -> dict[str, Any]:
         _remove_temporaries(folder)
         return _finish(base, "failed", start, f"the part's process {_exit_text(child.exitcode)}")
     record["wall_s"] = round(time.perf_counter() - start, 3)
+    record["started"] = round(started, 3)
+    record["worker"] = _worker_address()
     return record
+
+
+def _worker_address() -> str:
+    """The Dask worker's address ('' outside a worker)."""
+    try:
+        from distributed import get_worker
+
+        return str(get_worker().address)
+    except (ImportError, ValueError):
+        return ""
 
 
 def _child(task: PartTask, conn: Connection) -> None:
