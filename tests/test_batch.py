@@ -262,3 +262,34 @@ def test_a_second_batch_into_the_same_folder_is_refused(parts, tmp_path):
         with pytest.raises(InputError, match="another medax batch"):
             run_batch([str(parts)], out, BatchOptions(do=("classify",)))
     assert not (out / RECORDS).exists()
+
+
+@pytest.mark.slow
+def test_daemonic_workers_run_each_part_in_a_new_interpreter(parts, tmp_path):
+    """A stock ``dask worker`` is a daemonic process: the part runs in ``python -m
+    medax.batch.child`` instead of a fork, with the same record, timeout and outputs."""
+    import dask
+
+    src = tmp_path / "in"
+    src.mkdir()
+    shutil.copy(parts / "sub" / "bracket.step", src / "bracket.step")
+    shutil.copy(parts / "box4.step", src / "hang.step")
+    with dask.config.set({"distributed.worker.daemon": True}):
+        c = distributed.LocalCluster(
+            n_workers=1, threads_per_worker=2, host="127.0.0.1", dashboard_address="127.0.0.1:0"
+        )
+        with c:
+            opts = BatchOptions(
+                do=("classify",),
+                scheduler=c.scheduler_address,
+                timeout=30.0,
+                hook="batch_hooks:hang_if_named",
+            )
+            res = run_batch([str(src)], tmp_path / "out", opts)
+    status = {r["part_dir"]: r["status"] for r in res.records}
+    assert status == {"bracket": "ok", "hang": "timeout"}
+    rec = next(r for r in res.records if r["status"] == "ok")
+    assert rec["counts"]["fillets"] == 2 and rec["cpu_s"] > 0
+    assert (tmp_path / "out" / rec["outputs"]["classify_report"]).is_file()
+    with pytest.raises(ProcessLookupError):
+        os.kill(int((src / "hang.step.pid").read_text()), 0)

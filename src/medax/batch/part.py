@@ -6,7 +6,9 @@ waits for the child's record at most ``timeout`` seconds and kills it (SIGKILL, 
 any OCCT call) when it is late, removing the temporaries its outputs left. The child runs
 the asked steps as the ``medax`` subcommands do (``medax classify/simplify/mesh``, parsed and
 run in-process), with its stdout and stderr in the part's ``batch.log``, and returns a
-JSON-able record: shapes never leave the child.
+JSON-able record: shapes never leave the child. A daemonic worker (a stock ``dask worker``)
+may not have ``multiprocessing`` children: there the part runs in a new interpreter
+(``python -m medax.batch.child``), with the same timeout and kill.
 """
 
 from __future__ import annotations
@@ -74,19 +76,14 @@ def run_part(task: PartTask) -> dict[str, Any]:
     start = time.perf_counter()
     started = time.time()
     base = _base_record(task)
-    if multiprocessing.current_process().daemon:
-        return _finish(
-            base,
-            "failed",
-            start,
-            "the Dask worker is a daemonic process, which cannot start the part's process: "
-            "start the workers with DASK_DISTRIBUTED__WORKER__DAEMON=False",
-        )
-    ctx = multiprocessing.get_context("forkserver")
-    ctx.set_forkserver_preload(PRELOAD)
     folder = Path(task.outdir, task.part_dir)
     folder.mkdir(parents=True, exist_ok=True)
     _remove_temporaries(folder)  # left by a run of this part on a worker that was killed
+    if multiprocessing.current_process().daemon:  # cannot have multiprocessing children
+        rec = _run_in_interpreter(task, base, start, folder)
+        return _stamp_worker(rec, start, started)
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload(PRELOAD)
     recv, send = ctx.Pipe(duplex=False)
     child = ctx.Process(target=_child, args=(task, send), name=f"medax-part-{task.part_dir}")
     child.start()
@@ -100,7 +97,7 @@ def run_part(task: PartTask) -> dict[str, Any]:
             child.kill()
             child.join()
             _remove_temporaries(folder)
-            return _finish(base, "timeout", start, f"killed after the {task.timeout:g} s timeout")
+            return _timed_out(base, start, task)
         child.join(_EXIT_WAIT)
         if child.is_alive():
             child.kill()
@@ -113,10 +110,68 @@ def run_part(task: PartTask) -> dict[str, Any]:
     if record is None:
         _remove_temporaries(folder)
         return _finish(base, "failed", start, f"the part's process {_exit_text(child.exitcode)}")
-    record["wall_s"] = round(time.perf_counter() - start, 3)
+    return _stamp_worker(record, start, started)
+
+
+def _stamp_worker(record: dict[str, Any], start: float, started: float) -> dict[str, Any]:
+    if record["status"] != "timeout":
+        record["wall_s"] = round(time.perf_counter() - start, 3)
     record["started"] = round(started, 3)
     record["worker"] = _worker_address()
     return record
+
+
+def _run_in_interpreter(
+    task: PartTask, base: dict[str, Any], start: float, folder: Path
+) -> dict[str, Any]:
+    """The part in a new interpreter (``python -m medax.batch.child``): for a daemonic
+    worker, which ``multiprocessing`` forbids to have children. Each part pays medax's and
+    OCP's import (about 2.5 s of CPU); the timeout and the kill are the same."""
+    import select
+    import subprocess
+
+    read_fd, write_fd = os.pipe()
+    cmd = [sys.executable, "-m", "medax.batch.child", str(write_fd)]
+    try:
+        path = os.pathsep.join(p for p in sys.path if p)  # the worker's modules, as a fork
+        env = dict(os.environ, PYTHONPATH=path)
+        proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, pass_fds=(write_fd,), env=env)
+    finally:
+        os.close(write_fd)
+    data = b""
+    try:
+        assert proc.stdin is not None
+        proc.stdin.write(json.dumps(asdict(task)).encode())
+        proc.stdin.close()
+        deadline = None if task.timeout is None else time.monotonic() + task.timeout
+        while True:
+            left = None if deadline is None else max(0.0, deadline - time.monotonic())
+            ready, _, _ = select.select([read_fd], [], [], left)
+            if not ready:
+                proc.kill()
+                proc.wait()
+                _remove_temporaries(folder)
+                return _timed_out(base, start, task)
+            chunk = os.read(read_fd, 1 << 16)
+            if not chunk:
+                break
+            data += chunk
+        try:
+            proc.wait(_EXIT_WAIT)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+    finally:
+        os.close(read_fd)
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    try:
+        record: dict[str, Any] = json.loads(data)
+        return record
+    except ValueError:
+        _remove_temporaries(folder)
+        return _finish(base, "failed", start, f"the part's process {_exit_text(proc.returncode)}")
 
 
 def _worker_address() -> str:
@@ -130,8 +185,26 @@ def _worker_address() -> str:
 
 
 def _child(task: PartTask, conn: Connection) -> None:
-    """The child's body: log to the part's folder, run the hook, do the work, send the
-    record."""
+    """The forked child: its record through ``conn``."""
+    record = _child_record(task)
+    conn.send(record)
+    conn.close()
+
+
+def child_main(argv: list[str] | None = None) -> int:
+    """``python -m medax.batch.child FD``: the task as JSON on stdin, the record as JSON
+    on the file descriptor FD."""
+    fd = int((argv if argv is not None else sys.argv[1:])[0])
+    data = json.loads(sys.stdin.read())
+    data["do"] = tuple(data["do"])
+    record = _child_record(PartTask(**data))
+    with os.fdopen(fd, "wb") as f:
+        f.write(json.dumps(record).encode())
+    return 0
+
+
+def _child_record(task: PartTask) -> dict[str, Any]:
+    """The child's body: log to the part's folder, run the hook, do the work; the record."""
     _die_with_parent()
     folder = Path(task.outdir, task.part_dir)
     log = os.open(folder / LOG_NAME, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o666)
@@ -152,8 +225,7 @@ def _child(task: PartTask, conn: Connection) -> None:
     record["cpu_s"] = round(time.process_time(), 3)  # this process's, since its fork
     sys.stdout.flush()
     sys.stderr.flush()
-    conn.send(record)
-    conn.close()
+    return record
 
 
 def work(task: PartTask) -> dict[str, Any]:
@@ -296,6 +368,10 @@ def _finish(record: dict[str, Any], status: str, start: float, error: str | None
     if error:
         record["error"] = error
     return record
+
+
+def _timed_out(base: dict[str, Any], start: float, task: PartTask) -> dict[str, Any]:
+    return _finish(base, "timeout", start, f"killed after the {task.timeout:g} s timeout")
 
 
 def _one_line(err: BaseException) -> str:

@@ -50,7 +50,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--scheduler",
         help="address of a running Dask scheduler (tcp://host:port) instead of a local "
-        "cluster; its workers need medax installed and DASK_DISTRIBUTED__WORKER__DAEMON=False",
+        "cluster; its workers need medax installed (with DASK_DISTRIBUTED__WORKER__DAEMON="
+        "False they fork each part from a warm process, else each part imports OCP anew)",
     )
     p.add_argument(
         "--timeout",
