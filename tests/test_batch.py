@@ -16,7 +16,14 @@ import pytest
 from medax.batch import BatchOptions, run_batch
 from medax.batch.html import report_html, write_report
 from medax.batch.inputs import collect_inputs, part_dirs
-from medax.batch.records import RECORDS, append_record, read_records, summarize
+from medax.batch.records import (
+    RECORDS,
+    append_record,
+    finished_records,
+    options_key,
+    read_records,
+    summarize,
+)
 from medax.cli.main import main
 from medax.errors import InputError
 from medax.schemas import validation_errors
@@ -91,6 +98,22 @@ def test_options_are_checked_before_any_work(parts, tmp_path):
         run_batch([str(parts)], tmp_path / "o", BatchOptions(do=("fillet",)))
     assert main(["batch", str(parts), "-o", str(tmp_path / "o"), "--timeout", "-1"]) == 1
     assert not (tmp_path / "o" / RECORDS).exists()
+
+
+def test_finished_parts_are_found_by_hash_and_options(tmp_path):
+    (tmp_path / "a").mkdir()
+    (tmp_path / "a" / "classify.json").write_text("{}")
+    outs = {"classify_report": "a/classify.json"}
+    append_record(tmp_path, {"sha256": "1", "options_key": "k", "status": "ok", "outputs": outs})
+    append_record(tmp_path, {"sha256": "2", "options_key": "k", "status": "timeout"})
+    append_record(tmp_path, {"sha256": "3", "options_key": "k", "status": "refused"})
+    append_record(tmp_path, {"sha256": "3", "options_key": "j", "status": "ok"})
+    gone = {"classify_report": "b/classify.json"}
+    append_record(tmp_path, {"sha256": "4", "options_key": "k", "status": "ok", "outputs": gone})
+    append_record(tmp_path, {"sha256": "5", "options_key": "k", "status": "ok"})
+    append_record(tmp_path, {"sha256": "5", "options_key": "k", "status": "failed"})  # later
+    assert set(finished_records(tmp_path)) == {("1", "k"), ("3", "k"), ("3", "j")}
+    assert options_key(["classify"], {"tol": 1e-6}) != options_key(["classify"], {"tol": 1e-5})
 
 
 def test_journal_skips_a_torn_line(tmp_path):
