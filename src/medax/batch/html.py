@@ -127,7 +127,8 @@ def _part_section(r: Mapping[str, Any], outdir: Path) -> str:
         if key in outputs and (outdir / outputs[key]).is_file():
             data = base64.b64encode((outdir / outputs[key]).read_bytes()).decode("ascii")
             imgs.append(f'<img alt="{e(alt)}" title="{e(alt)}" src="data:image/png;base64,{data}">')
-    links = " ".join(f'<a href="{e(p)}">{e(Path(p).name)}</a>' for p in outputs.values())
+    files = [*outputs.values(), f"{r['part_dir']}/batch.log"]
+    links = " ".join(f'<a href="{e(p)}">{e(Path(p).name)}</a>' for p in files)
     return (
         f'<section id="{e(r["part_dir"])}"><h3>{e(r["part_dir"])}</h3>'
         f"<p>{'<br>'.join(lines)}</p><p>{links}</p>{''.join(imgs)}</section>"

@@ -203,13 +203,19 @@ def _run_tasks(
 
     counts = {"ok": 0, "refused": 0, "failed": 0, "timeout": 0}
     with _client(opts) as client:
-        futures = client.map(
-            run_part,
-            tasks,
-            key=[f"medax-part-{t.part_dir}-{t.sha256[:8]}-{t.options_key[:8]}" for t in tasks],
-            pure=False,
-        )
-        task_of = {f.key: t for f, t in zip(futures, tasks, strict=True)}
+        # the largest files first, so that a long part does not start last and run alone
+        order = sorted(tasks, key=lambda t: -_size(t.path))
+        futures = [
+            client.submit(
+                run_part,
+                t,
+                key=f"medax-part-{t.part_dir}-{t.sha256[:8]}-{t.options_key[:8]}",
+                pure=False,
+                priority=len(order) - i,
+            )
+            for i, t in enumerate(order)
+        ]
+        task_of = {f.key: t for f, t in zip(futures, order, strict=True)}
         for n, fut in enumerate(as_completed(futures), start=1):
             rec = _record(fut, task_of[fut.key], start)
             counts[rec["status"]] = counts.get(rec["status"], 0) + 1
@@ -318,6 +324,13 @@ def _output_folder(outdir: str | Path) -> Path:
     if not os.access(out, os.W_OK | os.X_OK):
         raise InputError(f"-o '{out}': the folder is not writable")
     return out
+
+
+def _size(path: str) -> int:
+    try:
+        return os.path.getsize(path)
+    except OSError:
+        return 0
 
 
 def _positive(x: float | None) -> bool:

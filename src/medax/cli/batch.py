@@ -140,10 +140,15 @@ class ProgressLine:
             print(line, file=sys.stderr, flush=True)
 
 
+#: parts listed one per row at the end of a run; above it, only the parts not ok
+MAX_ROWS = 40
+
+
 def summary_table(summary: dict[str, Any], records: list[dict[str, Any]]) -> list[str]:
     """The end-of-run table: one row per part, then the totals."""
     rows = [("part", "status", "faces", "after", "blends", "removed", "kept", "time s")]
-    for r in records:
+    listed = [r for r in records if len(records) <= MAX_ROWS or r["status"] != "ok"]
+    for r in listed:
         c = r.get("counts", {})
         rows.append(
             (
@@ -161,6 +166,8 @@ def summary_table(summary: dict[str, Any], records: list[dict[str, Any]]) -> lis
     lines = ["  ".join(v.ljust(w) for v, w in zip(row, widths, strict=True)) for row in rows]
     lines.insert(1, "  ".join("-" * w for w in widths))
     st, tot = summary["status"], summary["totals"]
+    if len(listed) < len(records):
+        lines.append(f"({len(records) - len(listed)} ok parts not listed: see report.html)")
     lines.append("")
     lines.append(
         f"{summary['parts']} parts ({summary['skipped']} skipped as finished): "
