@@ -75,7 +75,7 @@ def run_part(task: PartTask) -> dict[str, Any]:
     ``timeout``)."""
     start = time.perf_counter()
     started = time.time()
-    base = _base_record(task)
+    base = base_record(task)
     folder = Path(task.outdir, task.part_dir)
     folder.mkdir(parents=True, exist_ok=True)
     _remove_temporaries(folder)  # left by a run of this part on a worker that was killed
@@ -109,7 +109,7 @@ def run_part(task: PartTask) -> dict[str, Any]:
             child.join()
     if record is None:
         _remove_temporaries(folder)
-        return _finish(base, "failed", start, f"the part's process {_exit_text(child.exitcode)}")
+        return finish(base, "failed", start, f"the part's process {_exit_text(child.exitcode)}")
     return _stamp_worker(record, start, started)
 
 
@@ -171,7 +171,7 @@ def _run_in_interpreter(
         return record
     except ValueError:
         _remove_temporaries(folder)
-        return _finish(base, "failed", start, f"the part's process {_exit_text(proc.returncode)}")
+        return finish(base, "failed", start, f"the part's process {_exit_text(proc.returncode)}")
 
 
 def _worker_address() -> str:
@@ -221,7 +221,7 @@ def _child_record(task: PartTask) -> dict[str, Any]:
         record = work(task)
     except BaseException as err:  # noqa: B036 - reported, never raised in a child
         traceback.print_exc()
-        record = _finish(_base_record(task), "failed", start, _one_line(err))
+        record = finish(base_record(task), "failed", start, one_line(err))
     record["cpu_s"] = round(time.process_time(), 3)  # this process's, since its fork
     sys.stdout.flush()
     sys.stderr.flush()
@@ -234,7 +234,7 @@ def work(task: PartTask) -> dict[str, Any]:
     from medax.errors import MedaxError
 
     start = time.perf_counter()
-    record = _base_record(task)
+    record = base_record(task)
     folder = Path(task.outdir, task.part_dir)
     status, error = "ok", None
     for step in task.do:
@@ -246,10 +246,10 @@ def work(task: PartTask) -> dict[str, Any]:
             args.run(args)
             step_status = "ok"
         except MedaxError as err:
-            step_status, error = "refused", f"{step}: {_one_line(err)}"
+            step_status, error = "refused", f"{step}: {one_line(err)}"
         except Exception as err:
             traceback.print_exc()
-            step_status, error = "failed", f"{step}: {_one_line(err)}"
+            step_status, error = "failed", f"{step}: {one_line(err)}"
         record["steps"][step] = {
             "status": step_status,
             "time_s": round(time.perf_counter() - t0, 3),
@@ -261,7 +261,7 @@ def work(task: PartTask) -> dict[str, Any]:
             {k: str(Path(task.part_dir, Path(p).name)) for k, p in outputs.items()}
         )
     _read_reports(record, folder)
-    return _finish(record, status, start, error)
+    return finish(record, status, start, error)
 
 
 def step_argv(
@@ -332,7 +332,8 @@ def _read_reports(record: dict[str, Any], folder: Path) -> None:
         counts["mesh_structured_faces"] = mesh.get("n_structured_faces", 0)
 
 
-def _base_record(task: PartTask) -> dict[str, Any]:
+def base_record(task: PartTask) -> dict[str, Any]:
+    """A record of ``task`` with its header and no result yet (status ``failed``)."""
     from medax import __version__
     from medax.schemas import SCHEMA_VERSION
 
@@ -362,7 +363,8 @@ def tolerances_of(options: Mapping[str, Any]) -> dict[str, float]:
     return {names[k]: float(v) for k, v in options.items() if k in names}
 
 
-def _finish(record: dict[str, Any], status: str, start: float, error: str | None) -> dict[str, Any]:
+def finish(record: dict[str, Any], status: str, start: float, error: str | None) -> dict[str, Any]:
+    """``record`` with its status, the time since ``start`` and the error line, if any."""
     record["status"] = status
     record["time_s"] = round(time.perf_counter() - start, 3)
     if error:
@@ -371,10 +373,11 @@ def _finish(record: dict[str, Any], status: str, start: float, error: str | None
 
 
 def _timed_out(base: dict[str, Any], start: float, task: PartTask) -> dict[str, Any]:
-    return _finish(base, "timeout", start, f"killed after the {task.timeout:g} s timeout")
+    return finish(base, "timeout", start, f"killed after the {task.timeout:g} s timeout")
 
 
-def _one_line(err: BaseException) -> str:
+def one_line(err: BaseException) -> str:
+    """``Type: message`` on one line, at most 500 characters."""
     text = " ".join(str(err).split()) or type(err).__name__
     return f"{type(err).__name__}: {text}"[:500]
 

@@ -21,7 +21,15 @@ from typing import Any
 
 from medax import tolerances
 from medax.batch.inputs import collect_inputs, file_sha256, part_dirs
-from medax.batch.part import STEPS, PartTask, run_part, tolerances_of
+from medax.batch.part import (
+    STEPS,
+    PartTask,
+    base_record,
+    finish,
+    one_line,
+    run_part,
+    tolerances_of,
+)
 from medax.batch.records import (
     FINISHED,
     append_record,
@@ -172,9 +180,18 @@ def _run_locked(
         if old is not None:
             records.append(dict(old, input=str(path), skipped=True))
             continue
-        timeout = opts.timeout
-        tasks.append(PartTask(str(path), sha, key, str(out), folder, opts.do, step_opts, timeout,
-                              opts.hook))  # fmt: skip
+        task = PartTask(
+            path=str(path),
+            sha256=sha,
+            options_key=key,
+            outdir=str(out),
+            part_dir=folder,
+            do=opts.do,
+            options=step_opts,
+            timeout=opts.timeout,
+            hook=opts.hook,
+        )
+        tasks.append(task)
     log.info("%d parts: %d to run, %d finished before", len(paths), len(tasks), len(records))
     start = time.perf_counter()
     if tasks:
@@ -217,7 +234,7 @@ def _run_tasks(
         ]
         task_of = {f.key: t for f, t in zip(futures, order, strict=True)}
         for n, fut in enumerate(as_completed(futures), start=1):
-            rec = _record(fut, task_of[fut.key], start)
+            rec = _record(fut, task_of[fut.key])
             counts[rec["status"]] = counts.get(rec["status"], 0) + 1
             if progress is not None:
                 elapsed = time.perf_counter() - start
@@ -225,21 +242,21 @@ def _run_tasks(
             yield rec
 
 
-def _record(fut: Any, task: PartTask, start: float) -> dict[str, Any]:
+def _record(fut: Any, task: PartTask) -> dict[str, Any]:
     """The future's record, or a ``failed`` one when the task raised (a worker that died
-    twice running it: ``KilledWorker``)."""
-    from distributed import KilledWorker
+    twice running it: ``KilledWorker``) or was cancelled."""
+    import asyncio
 
-    from medax.batch.part import _base_record, _finish, _one_line
+    from distributed import KilledWorker
 
     try:
         rec: dict[str, Any] = fut.result()
         return rec
     except KilledWorker:
         msg = "the Dask workers running it died (KilledWorker); see the workers' logs"
-    except Exception as err:
-        msg = f"the task raised {_one_line(err)}"
-    rec = _finish(_base_record(task), "failed", time.perf_counter(), msg)
+    except (Exception, asyncio.CancelledError) as err:
+        msg = f"the task raised {one_line(err)}"
+    rec = finish(base_record(task), "failed", time.perf_counter(), msg)
     rec["time_s"] = 0.0
     return rec
 
