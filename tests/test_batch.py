@@ -316,3 +316,22 @@ def test_daemonic_workers_run_each_part_in_a_new_interpreter(parts, tmp_path):
     assert (tmp_path / "out" / rec["outputs"]["classify_report"]).is_file()
     with pytest.raises(ProcessLookupError):
         os.kill(int((src / "hang.step.pid").read_text()), 0)
+
+
+@pytest.mark.slow
+def test_mesh_step_meshes_the_simplified_part_and_pictures_go_in_the_report(
+    parts, cluster, tmp_path
+):
+    out = tmp_path / "out"
+    argv = ["batch", str(parts / "sub" / "bracket.step"), "-o", str(out), "--pictures"]
+    argv += ["--do", "classify,simplify,mesh", "--mesh-size", "5"]
+    assert main([*argv, "--scheduler", cluster.scheduler_address]) == 0
+    (rec,) = lines(out)
+    assert rec["status"] == "ok" and list(rec["steps"]) == ["classify", "simplify", "mesh"]
+    assert rec["counts"]["mesh_quads"] > 0
+    mesh = json.loads((out / rec["outputs"]["mesh_report"]).read_text())
+    assert mesh["input"].endswith("simplified.step")
+    assert set(rec["outputs"]) >= {"classify_png", "simplify_png", "mesh_png", "mesh"}
+    assert (out / "report.html").read_text().count("data:image/png;base64,") == 3
+    log = (out / "bracket" / "batch.log").read_text()
+    assert "$ medax mesh" in log and "wrote" in log
