@@ -178,13 +178,13 @@ def _run_locked(
     for path, sha, folder in zip(paths, hashes, part_dirs(paths, hashes), strict=True):
         old = done.get((sha, key))
         if old is not None:
-            records.append(dict(old, input=str(path), skipped=True))
+            records.append(dict(old, input=os.path.abspath(path), skipped=True))
             continue
         task = PartTask(
-            path=str(path),
+            path=os.path.abspath(path),  # the workers' working folder may differ
             sha256=sha,
             options_key=key,
-            outdir=str(out),
+            outdir=os.path.abspath(out),
             part_dir=folder,
             do=opts.do,
             options=step_opts,
