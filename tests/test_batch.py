@@ -155,6 +155,7 @@ def test_html_report_is_one_file_with_pictures_inlined(tmp_path):
 def test_batch_records_outputs_and_resume(parts, cluster, tmp_path, capsys):
     out = tmp_path / "out"
     argv = ["batch", str(parts), "-o", str(out), "--scheduler", cluster.scheduler_address]
+    argv += ["--timeout", "120"]
     assert main([*argv, "--do", "classify,simplify"]) == 0  # a refused part is not a failure
     recs = {r["part_dir"]: r for r in lines(out)}
     assert set(recs) == {"box4", "bracket", "broken"}
@@ -189,14 +190,15 @@ def test_batch_records_outputs_and_resume(parts, cluster, tmp_path, capsys):
     assert "3 parts (3 skipped" in capsys.readouterr().out
     # a part whose output was removed runs again; the others are skipped
     (out / "bracket" / "simplify.json").unlink()
-    res = run_batch([str(parts)], out, BatchOptions(scheduler=cluster.scheduler_address))
+    opts = BatchOptions(scheduler=cluster.scheduler_address, timeout=120.0)
+    res = run_batch([str(parts)], out, opts)
     ran = [r["part_dir"] for r in res.records if not r.get("skipped")]
     assert ran == ["bracket"] and res.exit_code == 0
     # other options: everything runs again
     res = run_batch(
         [str(parts / "box4.step")],
         out,
-        BatchOptions(do=("classify",), scheduler=cluster.scheduler_address),
+        BatchOptions(do=("classify",), scheduler=cluster.scheduler_address, timeout=120.0),
     )
     assert [r.get("skipped", False) for r in res.records] == [False]
 
@@ -324,7 +326,7 @@ def test_mesh_step_meshes_the_simplified_part_and_pictures_go_in_the_report(
 ):
     out = tmp_path / "out"
     argv = ["batch", str(parts / "sub" / "bracket.step"), "-o", str(out), "--pictures"]
-    argv += ["--do", "classify,simplify,mesh", "--mesh-size", "5"]
+    argv += ["--do", "classify,simplify,mesh", "--mesh-size", "5", "--timeout", "120"]
     assert main([*argv, "--scheduler", cluster.scheduler_address]) == 0
     (rec,) = lines(out)
     assert rec["status"] == "ok" and list(rec["steps"]) == ["classify", "simplify", "mesh"]
