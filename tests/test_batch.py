@@ -48,22 +48,25 @@ def parts(tmp_path_factory) -> Path:
     return d
 
 
-@pytest.fixture(scope="module")
-def cluster():
+def local_cluster():
     """One worker process (one thread) on 127.0.0.1; a killed part is retried once."""
     import dask
 
     config = {"distributed.worker.daemon": False, "distributed.scheduler.allowed-failures": 1}
     with dask.config.set(config):
-        c = distributed.LocalCluster(
+        return distributed.LocalCluster(
             n_workers=1,
             threads_per_worker=1,
             processes=True,
             host="127.0.0.1",
             dashboard_address="127.0.0.1:0",
         )
-        with c:
-            yield c
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    with local_cluster() as c:
+        yield c
 
 
 def lines(outdir: Path) -> list[dict]:
@@ -259,15 +262,17 @@ def test_a_killed_worker_does_not_stop_the_batch(parts, cluster, tmp_path):
 
 
 @pytest.mark.slow
-def test_a_part_that_kills_its_worker_twice_is_recorded_as_failed(parts, cluster, tmp_path):
+def test_a_part_that_kills_its_worker_twice_is_recorded_as_failed(parts, tmp_path):
     src = tmp_path / "in"
     src.mkdir()
     shutil.copy(parts / "box4.step", src / "crash.step")
     shutil.copy(parts / "sub" / "bracket.step", src / "bracket.step")
-    opts = BatchOptions(
-        do=("classify",), scheduler=cluster.scheduler_address, hook="batch_hooks:kill_worker"
-    )
-    res = run_batch([str(src)], tmp_path / "out", opts)
+    # its own cluster: the worker restarted last is not needed by the other tests
+    with local_cluster() as c:
+        opts = BatchOptions(
+            do=("classify",), scheduler=c.scheduler_address, hook="batch_hooks:kill_worker"
+        )
+        res = run_batch([str(src)], tmp_path / "out", opts)
     status = {r["part_dir"]: r["status"] for r in res.records}
     assert status == {"bracket": "ok", "crash": "failed"} and res.exit_code == 3
     crash = next(r for r in res.records if r["part_dir"] == "crash")
