@@ -342,3 +342,20 @@ def test_mesh_step_meshes_the_simplified_part_and_pictures_go_in_the_report(
     assert (out / "report.html").read_text().count("data:image/png;base64,") == 3
     log = (out / "bracket" / "batch.log").read_text()
     assert "$ medax mesh" in log and "wrote" in log
+
+
+@pytest.mark.slow
+def test_a_local_worker_whose_nanny_stopped_is_started_again():
+    from medax.batch.run import revive_local_workers
+
+    with local_cluster() as c, distributed.Client(c) as client:
+        (name,) = c.workers
+        c.sync(c.workers[name].close)  # as a nanny that failed to restart its worker
+        deadline = time.monotonic() + 60
+        while client.scheduler_info()["workers"] and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert not client.scheduler_info()["workers"]
+        assert revive_local_workers(c) == 1
+        client.wait_for_workers(1, timeout=120)
+        assert client.submit(os.getpid, pure=False).result(timeout=60) != os.getpid()
+        assert revive_local_workers(c) == 0

@@ -43,6 +43,8 @@ log = logging.getLogger(__name__)
 
 SUMMARY = "summary.json"
 LOCK = ".medax-batch.lock"
+#: seconds between checks that a local cluster still has its workers
+REVIVE_EVERY_S = 5.0
 #: seconds a part may take by default before its process is killed
 DEFAULT_TIMEOUT = 900.0
 
@@ -233,13 +235,47 @@ def _run_tasks(
             for i, t in enumerate(order)
         ]
         task_of = {f.key: t for f, t in zip(futures, order, strict=True)}
-        for n, fut in enumerate(as_completed(futures), start=1):
-            rec = _record(fut, task_of[fut.key])
-            counts[rec["status"]] = counts.get(rec["status"], 0) + 1
-            if progress is not None:
-                elapsed = time.perf_counter() - start
-                progress(Progress(n, len(tasks), dict(counts), elapsed, rec))
-            yield rec
+        local = client.cluster if opts.scheduler is None else None
+        done = as_completed(futures)
+        n = 0
+        checked = time.monotonic()
+        while not done.is_empty():
+            if not done.has_ready():
+                time.sleep(0.05)
+                if local is not None and time.monotonic() - checked > REVIVE_EVERY_S:
+                    checked = time.monotonic()
+                    revive_local_workers(local)
+                continue
+            for fut in done.next_batch(block=False):
+                n += 1
+                rec = _record(fut, task_of[fut.key])
+                counts[rec["status"]] = counts.get(rec["status"], 0) + 1
+                if progress is not None:
+                    elapsed = time.perf_counter() - start
+                    progress(Progress(n, len(tasks), dict(counts), elapsed, rec))
+                yield rec
+
+
+def revive_local_workers(cluster: Any) -> int:
+    """Start anew the workers of a local cluster whose nanny has stopped (a nanny closes
+    itself when it fails to restart a worker that died); how many were started."""
+    from distributed.core import Status
+
+    try:
+        dead = [
+            name
+            for name, w in list(cluster.workers.items())
+            if getattr(w, "status", None) in (Status.closed, Status.failed)
+        ]
+        if dead:
+            for name in dead:
+                cluster.workers.pop(name, None)
+            cluster.scale(len(cluster.worker_spec))
+            log.warning("started %d local Dask workers again (their nanny had stopped)", len(dead))
+        return len(dead)
+    except Exception as err:  # a watchdog: never the reason a run stops
+        log.warning("could not check the local Dask workers: %s", err)
+        return 0
 
 
 def _record(fut: Any, task: PartTask) -> dict[str, Any]:
