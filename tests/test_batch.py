@@ -3,6 +3,7 @@ to the single-part commands', resume, a part that hangs and a worker killed mid-
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
@@ -48,19 +49,23 @@ def parts(tmp_path_factory) -> Path:
     return d
 
 
+@contextlib.contextmanager
 def local_cluster():
-    """One worker process (one thread) on 127.0.0.1; a killed part is retried once."""
+    """One worker process (one thread) on 127.0.0.1; a killed part is retried once. The
+    config holds while the cluster runs: a restarted worker reads it again."""
     import dask
 
     config = {"distributed.worker.daemon": False, "distributed.scheduler.allowed-failures": 1}
     with dask.config.set(config):
-        return distributed.LocalCluster(
+        c = distributed.LocalCluster(
             n_workers=1,
             threads_per_worker=1,
             processes=True,
             host="127.0.0.1",
             dashboard_address="127.0.0.1:0",
         )
+        with c:
+            yield c
 
 
 @pytest.fixture(scope="module")
