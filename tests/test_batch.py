@@ -230,31 +230,29 @@ def test_a_hanging_part_times_out_and_the_batch_completes(parts, tmp_path):
 
 
 @pytest.mark.slow
-def test_a_killed_worker_does_not_stop_the_batch(parts, cluster, tmp_path):
+def test_a_killed_worker_does_not_stop_the_batch(parts, tmp_path):
     src = tmp_path / "in"
     src.mkdir()
     shutil.copy(parts / "box4.step", src / "slow.step")
-    opts = BatchOptions(
-        do=("classify",), scheduler=cluster.scheduler_address, hook="batch_hooks:slow_once"
-    )
+    opts = BatchOptions(do=("classify",), workers=1, hook="batch_hooks:slow_once")
     result: dict = {}
     thread = threading.Thread(
         target=lambda: result.update(res=run_batch([str(src)], tmp_path / "out", opts))
     )
-    thread.start()
+    thread.start()  # on the batch's own local cluster
     marker = src / "slow.step.started"
     deadline = time.monotonic() + 120
     while not marker.exists() and time.monotonic() < deadline:
         time.sleep(0.2)
     assert marker.exists()
-    with distributed.Client(cluster.scheduler_address) as client:
-        (pid,) = client.run(os.getpid).values()
-    os.kill(pid, signal.SIGKILL)  # the worker, mid-task
+    child = int(marker.read_text())
+    server = parent(child)
+    assert b"forkserver" in Path(f"/proc/{server}/cmdline").read_bytes()
+    os.kill(parent(server), signal.SIGKILL)  # the worker, mid-task
     thread.join(180)
     assert not thread.is_alive()
     (rec,) = result["res"].records
     assert rec["status"] == "ok"  # retried on the restarted worker
-    child = int(marker.read_text())
     deadline = time.monotonic() + 10
     while time.monotonic() < deadline:  # the part's process dies with its worker
         try:
@@ -266,18 +264,18 @@ def test_a_killed_worker_does_not_stop_the_batch(parts, cluster, tmp_path):
         pytest.fail("the killed worker's part process is still running")
 
 
+def parent(pid: int) -> int:
+    return int(Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1])
+
+
 @pytest.mark.slow
 def test_a_part_that_kills_its_worker_twice_is_recorded_as_failed(parts, tmp_path):
     src = tmp_path / "in"
     src.mkdir()
     shutil.copy(parts / "box4.step", src / "crash.step")
     shutil.copy(parts / "sub" / "bracket.step", src / "bracket.step")
-    # its own cluster: the worker restarted last is not needed by the other tests
-    with local_cluster() as c:
-        opts = BatchOptions(
-            do=("classify",), scheduler=c.scheduler_address, hook="batch_hooks:kill_worker"
-        )
-        res = run_batch([str(src)], tmp_path / "out", opts)
+    opts = BatchOptions(do=("classify",), workers=1, hook="batch_hooks:kill_worker")
+    res = run_batch([str(src)], tmp_path / "out", opts)  # on its own local cluster
     status = {r["part_dir"]: r["status"] for r in res.records}
     assert status == {"bracket": "ok", "crash": "failed"} and res.exit_code == 3
     crash = next(r for r in res.records if r["part_dir"] == "crash")
