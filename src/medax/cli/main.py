@@ -23,7 +23,7 @@ from contextlib import contextmanager
 from medax import __version__
 from medax.errors import MedaxError
 
-SUBCOMMANDS = ("axis", "mesh", "classify", "simplify", "samples", "demo")
+SUBCOMMANDS = ("axis", "mesh", "classify", "simplify", "batch", "samples", "demo")
 
 
 def versions() -> str:

@@ -28,6 +28,8 @@ SCHEMAS = {
     "part-mesh-report": "part-mesh-report.schema.json",
     "classify-report": "classify-report.schema.json",
     "simplify-report": "simplify-report.schema.json",
+    "batch-record": "batch-record.schema.json",
+    "batch-summary": "batch-summary.schema.json",
 }
 #: the shared definitions (header, statistics) the other schemas refer to
 COMMON = "common.schema.json"
