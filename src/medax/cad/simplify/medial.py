@@ -32,10 +32,6 @@ from medax.cad.simplify.traced import traced_medial_edge
 EXTEND = 0.02
 #: ``Medial.iso`` of a traced medial curve (no iso-line; see :mod:`.traced`).
 TRACED = "traced"
-#: Equidistance accepted for a traced medial curve (x the blend's half-width) when the
-#: finest interpolation misses ``rel_tol``: seen 1.9e-8 - 7.6e-6 x radius on B-spline blends
-#: of a corpus part (it moves only the line the blend is split along, not the shape).
-TRACED_EQUIDISTANCE = 1e-5
 
 
 @dataclass(frozen=True)
@@ -196,9 +192,7 @@ def medial_curve(
             )
         # a B-spline blend whose mid iso-line is off (a rolling ball between a plane and a
         # slanted cylinder): the medial curve traced per cross-section, to rel_tol x radius
-        traced = traced_medial_edge(
-            face, (edge1, edge2), k, cross, (lo, hi), rel_tol * radius, TRACED_EQUIDISTANCE * radius
-        )
+        traced = traced_medial_edge(face, (edge1, edge2), k, cross, (lo, hi), rel_tol * radius)
         if isinstance(traced, str):
             return f"mid iso-line not equidistant ({err:.2e} > {rel_tol:g} x radius), {traced}"
         return Medial(traced[0], TRACED, float("nan"), traced[1], float(radius))

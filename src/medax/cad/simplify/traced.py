@@ -166,18 +166,12 @@ def traced_medial_edge(
     cross: tuple[float, float],
     along: tuple[float, float],
     tol: float,
-    equi_tol: float = 0.0,
 ) -> tuple[Any, float] | str:
     """The traced medial edge of the B-spline blend ``face`` between smooth ``edges`` (on
     the iso-lines ``cross`` of parameter ``k``), over ``along`` = (lo, hi) of the other
     parameter: (edge with its 3-D curve and its pcurve on the face, measured error: the
     larger of the equidistance and the distance from the surface, length unit), or the
-    reason when the error stays above ``tol``.
-
-    ``equi_tol`` (length, when larger than ``tol``) is accepted for the equidistance alone
-    once the finest nodes miss ``tol``: the curve must lie on the surface (it splits the
-    blend there, so the shape stays the same), but where it is along the cross-section only
-    decides which half a sliver of the blend joins, and the measured value is reported."""
+    reason when the error stays above ``tol``."""
     surf = BRep_Tool.Surface_s(face)
     curves = [edge_curve(e) for e in edges]
     if not isinstance(surf, Geom_BSplineSurface) or not all(
@@ -207,12 +201,11 @@ def traced_medial_edge(
         if closed:  # one point, so that the edge gets one vertex
             c3[-1] = c3[0]
         space, plane = BSpline(t3, c3, DEGREE), BSpline(t2, c2, DEGREE)
-        equi, off = _measure(surf, k, edges, curves, space, plane, spans, n)
-        err = max(equi, off)
+        err = _measure(surf, k, edges, curves, space, plane, spans, n)
         if err <= tol:
             break
         n *= 2
-    if off > tol or equi > max(tol, equi_tol):
+    if err > tol:
         return f"traced medial curve error {err:.2e} above {tol:.2e} with {n // 2} nodes per span"
     curve3, curve2 = _geom_bspline(t3, c3), _geom_bspline(t2, c2)
     mk = BRepBuilderAPI_MakeEdge(curve3, lo, hi)
@@ -234,11 +227,11 @@ def _measure(
     s2: BSpline,
     spans: list[tuple[float, float]],
     n: int,
-) -> tuple[float, float]:
-    """Largest equidistance error (OCCT distances) and largest distance of the space curve
-    from the surface, at the midpoints between the ``n + 1`` nodes of every span and at
+) -> float:
+    """Largest equidistance error (OCCT distances) and distance of the space curve from
+    the surface at the midpoints between the ``n + 1`` nodes of every span and at
     ``CHECK_SAMPLES`` more."""
-    equi = off = 0.0
+    err = 0.0
     for a0, a1 in spans:
         # between the nodes, where the interpolation is worst (the nodes are exact by
         # construction), and at samples independent of them
@@ -250,5 +243,5 @@ def _measure(
             on = xyz(surf.Value(float(q[0]), float(q[1])))
             d1 = occt_distance(p, edges[0], curves[0])
             d2 = occt_distance(p, edges[1], curves[1])
-            equi, off = max(equi, abs(d1 - d2)), max(off, float(np.linalg.norm(p - on)))
-    return equi, off
+            err = max(err, abs(d1 - d2), float(np.linalg.norm(p - on)))
+    return err
