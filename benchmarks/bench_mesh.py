@@ -34,9 +34,9 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from medax.geometry import Arc, BSpline, Line, Region, read_regions, sample_regions_path
-from medax.geometry.curve import Curve
+from medax.geometry import Region, read_regions, sample_regions_path
 from medax.mesh import mesh_region, quad_quality
+from medax.mesh.gmsh_transfinite import gmsh_curve
 
 ROOT = Path(__file__).resolve().parent.parent
 SHARED = ROOT.parent / "shared" / "bench" / "regions.json"
@@ -45,24 +45,6 @@ T = TypeVar("T")
 
 def regions_file() -> Path:
     return SHARED if SHARED.is_file() else sample_regions_path()
-
-
-def _gmsh_curve(gmsh, side: Curve, p0: int, p1: int) -> int:
-    occ = gmsh.model.occ
-    if isinstance(side, Line):
-        return occ.addLine(p0, p1)
-    if isinstance(side, Arc):
-        c = occ.addPoint(*side.center, 0.0)
-        return occ.addCircleArc(p0, c, p1)
-    if isinstance(side, BSpline) and side.weights is None:
-        ctrl = side.control_points
-        tags = [p0] + [occ.addPoint(x, y, 0.0) for x, y in ctrl[1:-1]] + [p1]
-        knots, mult = np.unique(side.knots, return_counts=True)
-        return occ.addBSpline(tags, degree=side.degree, knots=knots.tolist(),
-                              multiplicities=mult.tolist())  # fmt: skip
-    pts = side.sample(401)  # other kinds: interpolating spline through dense samples
-    tags = [p0] + [occ.addPoint(x, y, 0.0) for x, y in pts[1:-1]] + [p1]
-    return occ.addSpline(tags)
 
 
 def gmsh_mesh(region: Region, n1: int, n2: int, smoothing: int) -> tuple[np.ndarray, np.ndarray,
@@ -75,7 +57,7 @@ def gmsh_mesh(region: Region, n1: int, n2: int, smoothing: int) -> tuple[np.ndar
     gmsh.model.add(region.name)
     occ = gmsh.model.occ
     corners = [occ.addPoint(x, y, 0.0) for x, y in region.corners]
-    curves = [_gmsh_curve(gmsh, region.sides[k], corners[k], corners[(k + 1) % 4])
+    curves = [gmsh_curve(gmsh, region.sides[k], corners[k], corners[(k + 1) % 4])
               for k in range(4)]  # fmt: skip
     loop = occ.addCurveLoop(curves)
     surf = occ.addPlaneSurface([loop])

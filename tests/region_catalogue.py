@@ -17,20 +17,28 @@ KINDS = ("line", "arc", "bspline", "polyline")
 FIRST_SEED = 24_000
 
 
-def random_side(rng: np.random.Generator, p0: np.ndarray, p1: np.ndarray, kind: str) -> dict:
-    """One side from ``p0`` to ``p1`` (2,): a line, an arc of sagitta 3 - 30 % of the chord
-    (either way), or a B-spline / polyline through 3 - 7 points bumped off the chord by up to
-    20 % of its length."""
+def random_side(
+    rng: np.random.Generator,
+    p0: np.ndarray,
+    p1: np.ndarray,
+    kind: str,
+    sagitta: float = 0.3,
+    points: int = 7,
+    bump_share: float = 0.2,
+) -> dict:
+    """One side from ``p0`` to ``p1`` (2,): a line, an arc of sagitta 3 % - ``sagitta`` of
+    the chord (either way), or a B-spline / polyline through 3 - ``points`` points bumped off
+    the chord by up to ``bump_share`` of its length."""
     chord = p1 - p0
     length = float(np.linalg.norm(chord))
     if kind == "line":
         return {"kind": "line"}
     if kind == "arc":
-        h = float(rng.uniform(0.03, 0.3)) * float(rng.choice([-1.0, 1.0]))
+        h = float(rng.uniform(0.03, sagitta)) * float(rng.choice([-1.0, 1.0]))
         return {"kind": "arc", "sagitta": h * length}
-    m = int(rng.integers(3, 8))
+    m = int(rng.integers(3, points + 1))
     normal = np.array([-chord[1], chord[0]]) / length
-    bump = rng.uniform(-0.2, 0.2, m) * length
+    bump = rng.uniform(-bump_share, bump_share, m) * length
     bump[[0, -1]] = 0.0
     pts = p0 + np.linspace(0.0, 1.0, m)[:, None] * chord + bump[:, None] * normal
     pts[0], pts[-1] = p0, p1
@@ -55,12 +63,15 @@ def random_spec(seed: int) -> dict[str, Any]:
 
 
 def corner_angles(region: Region) -> np.ndarray:
-    """Interior angles (4,) in degrees at corners 0..3, between the sides' end tangents
-    (measured here, independently of the mesher); above 180 a corner is reflex."""
+    """Interior angles (4,) in degrees at corners 0..3, between chords to points of the two
+    sides 1e-6 of their parameter from the corner (not the sides' derivatives the mesher's
+    obstacle check uses); above 180 a corner is reflex."""
     out = np.empty(4)
+    h = np.array([1e-6])
     for k in range(4):
-        back = -region.sides[k - 1].derivative(np.array([1.0]))[0]
-        ahead = region.sides[k].derivative(np.array([0.0]))[0]
+        prev, side = region.sides[k - 1], region.sides[k]
+        back = prev.evaluate(1.0 - h)[0] - prev.evaluate(np.array([1.0]))[0]
+        ahead = side.evaluate(h)[0] - side.evaluate(np.array([0.0]))[0]
         cross = ahead[0] * back[1] - ahead[1] * back[0]
         out[k] = np.degrees(np.arctan2(cross, float(ahead @ back))) % 360.0
     return out

@@ -104,7 +104,13 @@ def test_options_are_checked_before_any_work(parts, tmp_path):
         run_batch([str(parts)], tmp_path / "o", BatchOptions(do=("mesh",)))
     with pytest.raises(InputError, match="--do"):
         run_batch([str(parts)], tmp_path / "o", BatchOptions(do=("fillet",)))
-    assert main(["batch", str(parts), "-o", str(tmp_path / "o"), "--timeout", "-1"]) == 1
+    for bad in (
+        ["--timeout", "-1"],
+        ["--timeout", "nan"],
+        ["--tol", "inf"],
+        ["--simplify-tol", "nan"],
+    ):
+        assert main(["batch", str(parts), "-o", str(tmp_path / "o"), *bad]) == 1
     assert not (tmp_path / "o" / RECORDS).exists()
 
 

@@ -16,28 +16,10 @@ from medax.errors import InputError, MeshError
 from medax.geometry.region_io import region_from_dict
 from medax.geometry.resolution import coordinate_resolution
 from medax.mesh.mesher import mesh_region
+from region_catalogue import random_side
 
 N_REGIONS = 24
 KINDS = ("line", "arc", "bspline", "polyline")
-
-
-def random_side(rng: np.random.Generator, p0, p1, kind: str) -> dict:
-    chord = p1 - p0
-    length = float(np.linalg.norm(chord))
-    if kind == "line":
-        return {"kind": "line"}
-    if kind == "arc":
-        h = float(rng.uniform(0.03, 0.25)) * rng.choice([-1.0, 1.0])
-        return {"kind": "arc", "sagitta": h * length}
-    m = int(rng.integers(3, 7))
-    normal = np.array([-chord[1], chord[0]]) / length
-    bump = rng.uniform(-0.15, 0.15, m) * length
-    bump[[0, -1]] = 0.0
-    pts = p0 + np.linspace(0.0, 1.0, m)[:, None] * chord + bump[:, None] * normal
-    pts[0], pts[-1] = p0, p1
-    if kind == "polyline":
-        return {"kind": "polyline", "points": pts.tolist()}
-    return {"kind": "bspline", "degree": min(3, m - 1), "points": pts.tolist()}
 
 
 def random_region(seed: int) -> dict:
@@ -49,7 +31,10 @@ def random_region(seed: int) -> dict:
     if rng.random() < 0.3:
         corners = corners[::-1].copy()  # clockwise input
     kinds = rng.choice(KINDS, 4)
-    sides = [random_side(rng, corners[k], corners[(k + 1) % 4], kinds[k]) for k in range(4)]
+    sides = [
+        random_side(rng, corners[k], corners[(k + 1) % 4], kinds[k], 0.25, 6, 0.15)
+        for k in range(4)
+    ]
     return {"corners": corners.tolist(), "sides": sides}
 
 

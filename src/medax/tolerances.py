@@ -19,3 +19,6 @@ TANGENT_ANGLE = 1e-3
 #: ``wavy``: 1e-12 is met in 1.4 s; at 1e-13 the error stalls at 1.4e-12 (points) after 13 s
 #: and 0.9 GB, and smaller asks only grow the work.
 MIN_CURVE_TOL = 1e-12
+#: Geometric tolerance of fillet simplification's construction (relative to the diagonal):
+#: the smallest deviation tolerance ``simplify`` accepts.
+BUILD_TOL = 1e-7

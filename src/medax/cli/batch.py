@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from medax import tolerances
-from medax.errors import InputError
+from medax.cli.options import check_tol
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -84,8 +84,10 @@ def run(args: argparse.Namespace) -> int:
     from medax.batch.run import BatchOptions, run_batch
 
     do = tuple(s.strip() for s in args.do.split(",") if s.strip())
-    if args.timeout is not None and args.timeout < 0:
-        raise InputError(f"--timeout must be 0 (no limit) or positive, got {args.timeout}")
+    # refused here, before any part runs (each part's own command would refuse it too)
+    check_tol(args.tol, "--tol", tolerances.MIN_CURVE_TOL)
+    check_tol(args.simplify_tol, "--simplify-tol", tolerances.BUILD_TOL)
+    check_tol(args.timeout, "--timeout", 0.0, zero_ok=True)
     opts = BatchOptions(
         do=do,
         workers=args.workers,

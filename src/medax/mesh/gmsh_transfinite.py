@@ -18,7 +18,9 @@ from medax.geometry.region import Region
 from medax.mesh.gmsh_session import gmsh_session
 
 
-def _curve(gmsh: Any, side: Curve, p0: int, p1: int) -> int:
+def gmsh_curve(gmsh: Any, side: Curve, p0: int, p1: int) -> int:
+    """The gmsh OCC curve (its tag) of ``side`` between the point tags ``p0`` and ``p1``:
+    exact for lines, arcs and polynomial B-splines, else a spline through 401 samples."""
     occ = gmsh.model.occ
     if isinstance(side, Line):
         return int(occ.addLine(p0, p1))
@@ -51,7 +53,8 @@ def gmsh_transfinite(
             occ = gmsh.model.occ
             corners = [occ.addPoint(x, y, 0.0) for x, y in region.corners]
             curves = [
-                _curve(gmsh, region.sides[k], corners[k], corners[(k + 1) % 4]) for k in range(4)
+                gmsh_curve(gmsh, region.sides[k], corners[k], corners[(k + 1) % 4])
+                for k in range(4)
             ]
             surf = occ.addPlaneSurface([occ.addCurveLoop(curves)])
             occ.synchronize()

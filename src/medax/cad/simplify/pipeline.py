@@ -25,6 +25,7 @@ from OCP.GeomAbs import GeomAbs_Cylinder, GeomAbs_Plane
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_SHELL
 from OCP.TopoDS import TopoDS
 
+from medax import tolerances
 from medax._progress import log_progress
 from medax.cad.simplify.bridge import bridge_edge
 from medax.cad.simplify.corner import corner_arcs, plane_normal
@@ -67,7 +68,7 @@ AREA_TOL = 5e-6
 #: The deviation check samples an n x n UV grid on every old and new face (kept inside).
 DEVIATION_SAMPLES = 8
 #: Geometric tolerance of the construction, relative to the diagonal.
-BUILD_TOL = 1e-7
+BUILD_TOL = tolerances.BUILD_TOL
 #: A fitted surface must be within this share of the deviation tolerance (measured).
 FIT_SHARE = 0.1
 #: Deviation samples per face (n x n) for groups on a fitted surface.
