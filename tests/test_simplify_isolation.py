@@ -18,7 +18,7 @@ from medax.cad.classify import classify_solid
 from medax.cad.reader import heal
 from medax.cad.simplify import simplify, specs_from_classification
 from medax.cad.simplify.occ import count, edges_of, faces_of
-from medax.cad.simplify.search import Failure, isolate
+from medax.cad.simplify.search import Failure, isolate, volume_blame
 from medax.cad.simplify.specs import BlendInput, FilletSpec
 from medax.cad.simplify.split import split_along
 from truth import assert_same_solid
@@ -70,6 +70,31 @@ def test_isolation_traced_failures_are_not_bisected():
     # the 9 others at once, then the 3 traced ones (together, then split): 6 attempts;
     # bisection alone took 16
     assert len(calls) == 6
+
+
+@pytest.mark.parametrize(
+    ("shares", "blamed"),
+    [
+        ([1e-8] * 10 + [1.2e-6], [10]),  # one group holds the change
+        ([1.2e-7] * 15, list(range(11))),  # spread thinly: leave out enough for tol / 2
+        ([-3e-6, 2e-7, -1e-8], [0]),  # a loss
+        ([2e-6, -1e-6, 3e-7], []),  # removing what has the change's sign overshoots
+        ([1.5e-6], []),  # all of them: nothing to tell apart, bisect
+    ],
+)
+def test_volume_blame_leaves_out_the_groups_that_account_for_the_change(shares, blamed):
+    change = sum(shares)
+    got = volume_blame(shares, change, 1e-6)
+    assert sorted(got) == blamed
+    if got:  # what remains is within half the tolerance
+        assert abs(change - sum(shares[i] for i in got)) <= 0.5e-6
+
+
+def test_volume_blame_needs_shares_that_account_for_the_change():
+    """Per-group shares far from the measured change (another integrator's verdict) blame
+    nothing: the search bisects instead."""
+    assert volume_blame([1e-8] * 10 + [2e-7], 1.5e-6, 1e-6) == []
+    assert volume_blame([float("nan"), 2e-6], 2e-6, 1e-6) == []
 
 
 def test_isolation_out_of_time_keeps_the_rest_with_the_reason():

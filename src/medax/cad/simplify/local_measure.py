@@ -49,27 +49,41 @@ def area_delta(new: Sequence[Any], old: Sequence[Any], eps: float) -> float:
     return _area(new, eps) - _area(old, eps)
 
 
+def contributions(new: Sequence[Any], old: Sequence[Any], before: float, tol: float) -> np.ndarray:
+    """Each face's signed share of the volume change relative to ``before``, shape
+    ``(len(new) + len(old),)``: the new faces' contributions, then minus the old ones', all
+    from one common point, by the adaptive integrator to ``tol / 100`` relative. The shares
+    of a new face and the old faces it replaces sum to that group's own change (they form a
+    closed surface, so the common point cancels)."""
+    faces = [*new, *old]
+    sign = np.array([1.0] * len(new) + [-1.0] * len(old))
+    origin = pnt(_centre(faces))
+    return sign * np.array([_contribution(f, origin, 1e-2 * tol) for f in faces]) / before
+
+
 def local_volume_change(
     new: Sequence[Any],
     old: Sequence[Any],
     before: float,
     tol: float,
     expected: float | None = None,
+    shares: np.ndarray | None = None,
 ) -> float | None:
     """Relative volume change, when two measures settle it; None otherwise (measure the
     whole solid).
 
-    The adaptive integrator gives each face's contribution. Above ``tol`` (a refusal),
-    Gauss-Kronrod on B-spline copies of all the faces must agree within a tenth of the
-    change. Within it, a second measure must agree with their sum within ``tol / 10``:
-    ``expected`` (the fits' own measure of their volume change), else face by face OCCT's
-    default integrator (it loses the order of its fixed Gauss rules across the C1 knot lines
-    of fitted faces), and Gauss-Kronrod on a B-spline copy of the faces where the two differ
-    most, until the faces left unconfirmed differ by less than that budget in all."""
+    The adaptive integrator gives each face's contribution (``shares``: those of
+    :func:`contributions`, when already measured). Above ``tol`` (a refusal), Gauss-Kronrod
+    on B-spline copies of all the faces must agree within a tenth of the change. Within it, a
+    second measure must agree with their sum within ``tol / 10``: ``expected`` (the fits' own
+    measure of their volume change), else face by face OCCT's default integrator (it loses
+    the order of its fixed Gauss rules across the C1 knot lines of fitted faces), and
+    Gauss-Kronrod on a B-spline copy of the faces where the two differ most, until the faces
+    left unconfirmed differ by less than that budget in all."""
     faces = [*new, *old]
     sign = np.array([1.0] * len(new) + [-1.0] * len(old))
     origin = pnt(_centre(faces))
-    ad = sign * np.array([_contribution(f, origin, 1e-2 * tol) for f in faces]) / before
+    ad = contributions(new, old, before, tol) if shares is None else shares
     d_ad = float(ad.sum())
     if abs(d_ad) > tol:  # a refusal: Gauss-Kronrod on B-spline copies of every face agrees
         d_gk = volume_delta(new, old, tol, gk=True) / before

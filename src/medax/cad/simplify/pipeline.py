@@ -18,6 +18,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+import numpy as np
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 from OCP.BRepCheck import BRepCheck_Analyzer
@@ -31,14 +32,18 @@ from medax.cad.simplify.bridge import bridge_edge
 from medax.cad.simplify.corner import corner_arcs, plane_normal
 from medax.cad.simplify.fitted import FittedSurface, graph_surface
 from medax.cad.simplify.groups import Group, GroupError, build_groups
-from medax.cad.simplify.local_measure import local_area_change, local_volume_change
+from medax.cad.simplify.local_measure import (
+    contributions,
+    local_area_change,
+    local_volume_change,
+)
 from medax.cad.simplify.medial import TRACED, Medial, medial_curve
 from medax.cad.simplify.mitre import mitre_keeps, mitre_pairs
 from medax.cad.simplify.occ import count, diagonal, shape_map
 from medax.cad.simplify.reasons import reason_counts
 from medax.cad.simplify.rebuild import build_solid
 from medax.cad.simplify.ring import NOT_A_RING, ring_surface
-from medax.cad.simplify.search import Failure, halves_of, isolate, riders
+from medax.cad.simplify.search import Failure, halves_of, isolate, riders, volume_blame
 from medax.cad.simplify.specs import BlendInput, CornerSpec, FilletSpec
 from medax.cad.simplify.split import split_along
 from medax.cad.simplify.surfaces import Half, MergedSurface, merged_surface
@@ -761,13 +766,22 @@ def _validated(
     changed = [(g, f) for g, f in zip(groups, faces, strict=True) if not g.untouched]
     new = [f for _, f in changed]
     old = [TopoDS.Face(split.face_map.FindKey(k + 1)) for g, _ in changed for k in g.members]
-    dv_local = local_volume_change(new, old, job.vol0, VOLUME_TOL, expected)
+    shares = contributions(new, old, job.vol0, VOLUME_TOL)
+    owner = list(range(len(changed))) + [i for i, (g, _) in enumerate(changed) for _ in g.members]
+    per_group = np.bincount(owner, weights=shares, minlength=len(changed))
+
+    def refused(why: str, dv: float) -> Failure:
+        """The volume refusal, blamed on the groups that account for the change."""
+        blamed = [changed[i][0] for i in volume_blame(per_group, dv, VOLUME_TOL)]
+        return Failure(why, _fillets_of(split, blamed, sel))
+
+    dv_local = local_volume_change(new, old, job.vol0, VOLUME_TOL, expected, shares)
     if dv_local is None:
         dv, why = volume_change(shape, job.vol0, VOLUME_TOL, expected)
         if why:
-            return why
+            return refused(why, dv)
     elif abs(dv_local) > VOLUME_TOL:  # two integrators agree on the changed faces
-        return f"volume changed by {abs(dv_local):.2e} (> {VOLUME_TOL:g})"
+        return refused(f"volume changed by {abs(dv_local):.2e} (> {VOLUME_TOL:g})", dv_local)
     else:
         dv = dv_local
     if job.area0 is None:

@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from typing import TypeVar
+
+import numpy as np
 
 from medax.cad.simplify.specs import FilletSpec
 
@@ -31,6 +33,24 @@ class Failure(str):
         obj = super().__new__(cls, why)
         obj.blamed = frozenset(blamed)
         return obj
+
+
+def volume_blame(shares: Sequence[float] | np.ndarray, change: float, tol: float) -> list[int]:
+    """The groups to leave out so that a volume change within ``tol`` remains: indices
+    into ``shares`` (each changed group's own relative volume change), taken greedily by
+    the largest share of the sign of ``change`` (the measured total) until the rest is
+    within ``tol / 2``. Empty when the shares do not account for the measured change (their
+    sum more than half of it away), or when leaving all of them out would be needed."""
+    s = np.asarray(shares, dtype=float)
+    if s.size == 0 or not np.isfinite(s).all() or abs(s.sum() - change) > 0.5 * abs(change):
+        return []
+    rest, out = float(s.sum()), []
+    for i in np.argsort(-np.sign(change) * s, kind="stable").tolist():
+        if abs(rest) <= 0.5 * tol or np.sign(s[i]) != np.sign(change):
+            break
+        out.append(i)
+        rest -= float(s[i])
+    return out if abs(rest) <= 0.5 * tol and len(out) < s.size else []
 
 
 def riders(specs: dict[int, FilletSpec]) -> dict[int, list[int]]:
