@@ -341,6 +341,9 @@ def test_local_measures_match_whole_solids(box4):
     d = L.volume_delta(big, old) / v_old
     assert abs(d - (1.001**3 - 1.0)) <= 1e-9
     assert abs(L.local_volume_change(big, old, v_old, 1e-6) - (1.001**3 - 1.0)) <= 1e-9
+    shares = L.contributions(big, old, v_old, 1e-6)  # per face, one common point
+    assert shares.shape == (len(big) + len(old),)
+    assert abs(shares.sum() - (1.001**3 - 1.0)) <= 1e-9
     assert abs(L.volume_delta(big, old, 1e-9, gk=True) / v_old - (1.001**3 - 1.0)) <= 1e-9
     assert L.local_area_change(big, old, L._area(old, 1e-9), 5e-6) is None
 
