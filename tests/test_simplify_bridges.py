@@ -82,3 +82,31 @@ def test_side_faces_meet_on_the_bisector_planes(chain):
     assert len(top) == 4
     # the edges between two side faces (medial line, then bridge) climb over the torus
     assert min(top.values()) > 10.0 - 1.5 + 0.1
+
+
+def test_bridge_distances_to_curved_supports():
+    """A bridge's equidistance is measured from curved supporting faces too: distances from
+    a cylinder's surface by projection equal the closed form |dist to axis - R|, and from
+    a plane the closed form."""
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox, BRepPrimAPI_MakeCylinder
+    from OCP.GeomAbs import GeomAbs_Cylinder, GeomAbs_Plane
+
+    from medax.cad.simplify.bridge import _distances
+    from medax.cad.simplify.occ import faces_of
+
+    rng = np.random.default_rng(7)
+    pts = rng.uniform(-9.0, 9.0, (20, 3))
+    cyl = next(
+        f
+        for f in faces_of(BRepPrimAPI_MakeCylinder(3.0, 5.0).Shape())
+        if BRepAdaptor_Surface(f).GetType() == GeomAbs_Cylinder
+    )
+    want = np.abs(np.hypot(pts[:, 0], pts[:, 1]) - 3.0)  # the axis is z, R = 3
+    assert np.max(np.abs(_distances(pts, cyl) - want)) <= 1e-9
+    box = BRepPrimAPI_MakeBox(2.0, 3.0, 4.0).Shape()
+    planes = [f for f in faces_of(box) if BRepAdaptor_Surface(f).GetType() == GeomAbs_Plane]
+    top = next(
+        f for f in planes if abs(BRepAdaptor_Surface(f).Plane().Location().Z() - 4.0) < 1e-12
+    )
+    assert np.max(np.abs(_distances(pts, top) - np.abs(pts[:, 2] - 4.0))) <= 1e-12

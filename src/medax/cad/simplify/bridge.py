@@ -7,9 +7,10 @@ half on ``V`` must be shared between them too. It is split by the *bridge*: the
 continuation of ``V``'s medial curve across ``T``, from the point where ``V``'s medial curve
 meets ``T``'s smooth edge on ``V`` to ``T``'s own medial curve. When ``a`` and ``b`` are
 planes and ``T`` is a torus coaxial with ``V`` (or, in general, when ``T``'s cross iso-line
-through that point lies in the bisector plane of ``a`` and ``b``), the bridge is that
-iso-line, and every point of it is equidistant from ``a`` and ``b``: this is measured, not
-assumed, and the bridge is refused above the tolerance.
+through that point lies in the bisector of ``a`` and ``b``: also for coaxial cylinders,
+cones and tori), the bridge is that iso-line, and every point of it is equidistant from the
+surfaces of ``a`` and ``b``: this is measured, not assumed, and the bridge is refused above
+the tolerance.
 """
 
 from __future__ import annotations
@@ -25,9 +26,9 @@ from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
 
 from medax.cad.simplify.corner import plane_normal
 from medax.cad.simplify.medial import Medial
-from medax.cad.simplify.occ import Array, face_inside_point, xyz
+from medax.cad.simplify.occ import Array, face_inside_point, pnt, xyz
 
-#: Samples along the bridge where its equidistance from the two planes is measured.
+#: Samples along the bridge where its equidistance from the two supporting faces is measured.
 CHECK_SAMPLES = 11
 
 
@@ -36,24 +37,19 @@ def bridge_edge(
     rider_medial: Medial,
     base_medial: Medial,
     smooth_edge: Any,
-    planes: tuple[Any, Any],
+    supports: tuple[Any, Any],
     tol: float,
     rel_tol: float = 1e-9,
 ) -> tuple[Any, float] | str:
     """The bridge of fillet face ``rider`` over the fillet whose medial curve is
     ``base_medial``: a tool edge and its measured equidistance error (length unit).
 
-    ``smooth_edge``: the rider's smooth edge on the base fillet; ``planes``: the base
+    ``smooth_edge``: the rider's smooth edge on the base fillet; ``supports``: the base
     fillet's two supporting faces; ``tol``: length tolerance for the bridge's start on
     ``smooth_edge``. Returns a one-line reason when there is no such bridge.
     """
     if rider_medial.iso not in ("u", "v"):
         return "the rider's medial curve is traced, not an iso-line (no bridge along it)"
-    found = [(plane_normal(p), face_inside_point(p)) for p in planes]
-    normals = [n for n, _ in found if n is not None]
-    points = [q for _, q in found if q is not None]
-    if len(normals) != 2 or len(points) != 2:
-        return "the fillet it rides on is not between two planes"
     ext = BRepExtrema_DistShapeShape(base_medial.edge, smooth_edge)
     if not ext.IsDone() or ext.NbSolution() < 1 or ext.Value() > tol:
         return "the medial curve of the fillet it rides on does not reach its smooth edge"
@@ -72,20 +68,33 @@ def bridge_edge(
     if abs(b - a) < 1e-12:
         return "the bridge has zero length"
     lo, hi = min(a, b), max(a, b)
-    err = _equidistance(curve, lo, hi, normals, points)
+    err = _equidistance(curve, lo, hi, supports)
     if err > rel_tol * rider_medial.radius:
-        return f"the bridge is not equidistant from the two planes ({err:.2e})"
+        return f"the bridge is not equidistant from the two supporting faces ({err:.2e})"
     mk = BRepBuilderAPI_MakeEdge(curve, lo, hi)
     if not mk.IsDone():
         return "could not build the bridge edge"
     return mk.Edge(), err
 
 
-def _equidistance(
-    curve: Any, lo: float, hi: float, normals: list[Array], points: list[Array]
-) -> float:
-    """Largest ``| |dist to plane a| - |dist to plane b| |`` at samples of ``curve``."""
+def _equidistance(curve: Any, lo: float, hi: float, supports: tuple[Any, Any]) -> float:
+    """Largest ``| dist to surface a - dist to surface b |`` at samples of ``curve``
+    (unsigned distances to the supporting faces' whole surfaces)."""
     pts = np.array([xyz(curve.Value(float(t))) for t in np.linspace(lo, hi, CHECK_SAMPLES)])
-    da = np.abs((pts - points[0]) @ normals[0])
-    db = np.abs((pts - points[1]) @ normals[1])
+    da, db = (_distances(pts, f) for f in supports)
     return float(np.max(np.abs(da - db)))
+
+
+def _distances(pts: Array, face: Any) -> Array:
+    """Unsigned distances (n,) of points (n, 3) from the surface of ``face``: closed form
+    on a plane, else by projection (``GeomAPI_ProjectPointOnSurf``)."""
+    n, q = plane_normal(face), face_inside_point(face)
+    if n is not None and q is not None:
+        return np.asarray(np.abs((pts - q) @ n))
+    surf = BRep_Tool.Surface_s(face)
+    out = np.full(len(pts), np.inf)
+    for i, p in enumerate(pts):  # 11 samples per bridge, once per rider
+        proj = GeomAPI_ProjectPointOnSurf(pnt(p), surf)
+        if proj.NbPoints() > 0:
+            out[i] = proj.LowerDistance()
+    return out

@@ -398,13 +398,13 @@ def _bridges(job: _Job, blends: BlendInput) -> None:
         for base, e in zip(spec.supporting, spec.smooth_edges, strict=True):
             if spec.face not in job.medials or base not in job.medials:
                 continue
-            planes = tuple(job.face(s) for s in by_face[base].supporting)
+            supports = tuple(job.face(s) for s in by_face[base].supporting)
             r = bridge_edge(
                 job.face(spec.face),
                 job.medials[spec.face],
                 job.medials[base],
                 TopoDS.Edge(job.emap.FindKey(e + 1)),
-                (planes[0], planes[1]),
+                (supports[0], supports[1]),
                 job.btol,
             )
             if isinstance(r, str):
