@@ -157,3 +157,26 @@ def test_cli_refuses_a_file_that_reads_back_moved(box_step, tmp_path, monkeypatc
     assert "s.step: face" in err and "moves by 0.005" in err
     assert out.read_text() == "the user's earlier result"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.step"]
+
+
+def test_boundary_shift_polyline_distance_is_exact():
+    """The read-back's point-to-polyline distance (k-d tree pruned) equals the distance
+    over all point-segment pairs, on bent polylines at scales 1e-3 to 1e3."""
+    import numpy as np
+
+    from medax.cad.simplify.readback import _to_polylines
+
+    rng = np.random.default_rng(18)
+    t = np.linspace(0.0, 1.0, 49)[None, :, None]
+    for scale in (1e-3, 1.0, 1e3):
+        for noise in (0.0, 1e-6, 0.3):
+            s = rng.normal(size=(12, 1, 3)) * scale
+            lines = s + t * rng.normal(size=(12, 1, 3)) * scale
+            lines += t * (1 - t) * rng.normal(size=(12, 1, 3)) * 0.3 * scale
+            pts = lines[:, ::4] + rng.normal(size=lines[:, ::4].shape) * noise * scale
+            p = pts.reshape(-1, 3)
+            a, b = lines[:, :-1].reshape(-1, 3), lines[:, 1:].reshape(-1, 3)
+            ab, ap = b - a, p[:, None] - a[None]
+            u = np.clip((ap * ab).sum(2) / (ab * ab).sum(1), 0.0, 1.0)
+            want = np.linalg.norm(ap - u[..., None] * ab, axis=2).min(axis=1).max()
+            assert abs(_to_polylines(pts, lines) - want) <= 1e-12 * scale

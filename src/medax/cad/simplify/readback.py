@@ -27,6 +27,7 @@ from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_SOLID, TopAbs_VERTEX
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS
+from scipy.spatial import cKDTree
 
 from medax._progress import log_progress
 from medax.cad.simplify.occ import Array, count, edges_of, faces_of, xyz
@@ -157,16 +158,27 @@ def boundary_shift(old: Any, new: Any) -> float:
 
 def _to_polylines(points: Array, lines: Array) -> float:
     """Largest distance of ``points`` (e, k, 3) from the nearest segment of ``lines``
-    (e', m, 3): one polyline per edge."""
+    (e', m, 3): one polyline per edge.
+
+    Exact, on the segments that can be nearest only: a point's distance to the nearest
+    polyline vertex bounds its answer, so only segments whose midpoint lies within that
+    bound plus the longest half-segment are measured (a k-d tree finds them; all pairs
+    took 15 s of a 700-face part's read-back)."""
     p = points.reshape(-1, 3)
     if p.size == 0 or lines.size == 0:
         return 0.0
     a, b = lines[:, :-1].reshape(-1, 3), lines[:, 1:].reshape(-1, 3)
-    ab = b - a
-    ap = p[:, None, :] - a[None, :, :]
-    t = np.clip(np.einsum("ijk,jk->ij", ap, ab) / np.maximum((ab * ab).sum(1), 1e-300), 0, 1)
-    d = np.linalg.norm(ap - t[..., None] * ab[None], axis=2)
-    return float(d.min(axis=1).max())
+    bound = cKDTree(lines.reshape(-1, 3)).query(p)[0]
+    half = 0.5 * float(np.sqrt(((b - a) ** 2).sum(1)).max())
+    near = cKDTree(0.5 * (a + b)).query_ball_point(p, bound * (1 + 1e-9) + half)
+    rows = np.repeat(np.arange(len(p)), [len(c) for c in near])
+    cols = np.fromiter((j for c in near for j in c), dtype=np.intp, count=len(rows))
+    ab, ap = b[cols] - a[cols], p[rows] - a[cols]
+    t = np.clip((ap * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-300), 0.0, 1.0)
+    d = np.linalg.norm(ap - t[:, None] * ab, axis=1)
+    best = bound.copy()  # the nearest vertex, an end of some segment
+    np.minimum.at(best, rows, d)
+    return float(best.max())
 
 
 def boundary_samples(face: Any, n: int) -> Array:
