@@ -51,8 +51,13 @@ def bridge_edge(
     if rider_medial.iso not in ("u", "v"):
         return "the rider's medial curve is traced, not an iso-line (no bridge along it)"
     ext = BRepExtrema_DistShapeShape(base_medial.edge, smooth_edge)
-    if not ext.IsDone() or ext.NbSolution() < 1 or ext.Value() > tol:
+    if not ext.IsDone() or ext.NbSolution() < 1:
         return "the medial curve of the fillet it rides on does not reach its smooth edge"
+    if ext.Value() > tol:
+        return (
+            "the medial curve of the fillet it rides on does not reach its smooth edge "
+            f"(gap {ext.Value():.2e})"
+        )
     start = ext.PointOnShape1(1)
     surf = BRep_Tool.Surface_s(rider)
     u, v = GeomAPI_ProjectPointOnSurf(start, surf).LowerDistanceParameters()
