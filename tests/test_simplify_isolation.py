@@ -172,8 +172,11 @@ def test_reason_kinds_group_numbers():
 
     reasons = ["supporting face 4: fitted error 1.2e-02 above 4e-06", "meets fillet 7 in a mitre"]
     reasons.append("supporting face 12: fitted error 3.77e-02 above 4.12e-06")
+    reasons.append("volume changed by 1.3e-06 (> 1e-06); 8.0e-07 of it on the faces of fillets 4")
+    reasons.append("volume changed by 2e-06 (> 1e-06); 1e-06 of it on the faces of fillets 2, 9")
     assert reason_counts(reasons) == {
         "supporting face N: fitted error N above N": 2,
+        "volume changed by N (> N); N of it on the faces of fillets N": 2,
         "meets fillet N in a mitre": 1,
     }
 

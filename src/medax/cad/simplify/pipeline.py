@@ -771,9 +771,14 @@ def _validated(
     per_group = np.bincount(owner, weights=shares, minlength=len(changed))
 
     def refused(why: str, dv: float) -> Failure:
-        """The volume refusal, blamed on the groups that account for the change."""
-        blamed = [changed[i][0] for i in volume_blame(per_group, dv, VOLUME_TOL)]
-        return Failure(why, _fillets_of(split, blamed, sel))
+        """The volume refusal, blamed on the groups that account for the change (the
+        change is the whole attempt's: a fillet tried with accepted ones shares it)."""
+        picked = volume_blame(per_group, dv, VOLUME_TOL)
+        fillets = _fillets_of(split, [changed[i][0] for i in picked], sel)
+        if fillets:
+            names = ", ".join(map(str, sorted(fillets)[:5])) + (", ..." if len(fillets) > 5 else "")
+            why += f"; {float(per_group[picked].sum()):.1e} of it on the faces of fillets {names}"
+        return Failure(why, fillets)
 
     dv_local = local_volume_change(new, old, job.vol0, VOLUME_TOL, expected, shares)
     if dv_local is None:

@@ -8,9 +8,10 @@ from collections.abc import Iterable
 
 
 def reason_kind(why: str) -> str:
-    """A kept blend's reason with its numbers (face indices, measures) replaced by ``N``:
-    the key under which the report groups reasons."""
-    return re.sub(r"[-+]?\d+(\.\d+)?(e[-+]?\d+)?", "N", why)
+    """A kept blend's reason with its numbers (face indices, measures) and lists of them
+    replaced by ``N``: the key under which the report groups reasons."""
+    one = re.sub(r"[-+]?\d+(\.\d+)?(e[-+]?\d+)?", "N", why)
+    return re.sub(r"N(, N)+(, \.\.\.)?", "N", one)
 
 
 def reason_counts(reasons: Iterable[str]) -> dict[str, int]:
