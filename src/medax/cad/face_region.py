@@ -24,13 +24,24 @@ from OCP.Geom import Geom_TrimmedCurve
 from OCP.Geom2d import Geom2d_TrimmedCurve
 from OCP.Geom2dConvert import Geom2dConvert, Geom2dConvert_CompCurveToBSplineCurve
 from OCP.GeomAbs import (
+    GeomAbs_BezierCurve,
+    GeomAbs_BezierSurface,
+    GeomAbs_BSplineCurve,
     GeomAbs_BSplineSurface,
+    GeomAbs_Circle,
     GeomAbs_Cone,
     GeomAbs_Cylinder,
+    GeomAbs_Ellipse,
+    GeomAbs_Hyperbola,
+    GeomAbs_Line,
+    GeomAbs_Parabola,
     GeomAbs_Plane,
     GeomAbs_Sphere,
+    GeomAbs_SurfaceOfExtrusion,
+    GeomAbs_SurfaceOfRevolution,
     GeomAbs_Torus,
 )
+from OCP.GeomAdaptor import GeomAdaptor_Surface
 from OCP.GeomConvert import GeomConvert, GeomConvert_CompCurveToBSplineCurve
 from OCP.gp import gp_Pnt, gp_Vec
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_REVERSED, TopAbs_WIRE
@@ -50,9 +61,12 @@ from medax.geometry.region import Region
 from medax.geometry.surfaces import (
     ConeSurface,
     CylinderSurface,
+    ExtrusionSurface,
     Frame,
     NurbsSurface,
     PlaneSurface,
+    Profile,
+    RevolutionSurface,
     SphereSurface,
     TorusSurface,
 )
@@ -66,13 +80,13 @@ def _frame(ax3: Any) -> Frame:
     )
 
 
-def surface_embedding(face: Any) -> Embedding:
-    """The numpy embedding ``S(u, v)`` of ``face``'s surface, in OCCT's parameters.
-
-    Analytic surfaces map exactly; B-spline surfaces copy poles, weights and knots; other
-    kinds (Bezier, revolution, extrusion, offset) go through
-    ``GeomConvert.SurfaceToBSplineSurface_s``.
-    """
+def exact_embedding(face: Any) -> Embedding:
+    """The numpy embedding ``S(u, v)`` of ``face``'s surface in OCCT's own parameters, so
+    that the face's pcurves apply to it as they are: analytic surfaces exactly, B-spline and
+    Bezier surfaces by their poles, surfaces of revolution and of linear extrusion by their
+    axis or direction and their generatrix (:class:`~medax.geometry.surfaces.Profile`: a
+    line, conic or B-spline curve). :class:`CadError` (why) for other kinds (offset
+    surfaces, sweeps of offset curves), whose B-spline copy has parameters of its own."""
     s = BRepAdaptor_Surface(face, False)
     kind = s.GetType()
     if kind == GeomAbs_Plane:
@@ -90,12 +104,74 @@ def surface_embedding(face: Any) -> Embedding:
         t = s.Torus()
         return TorusSurface(_frame(t.Position()), t.MajorRadius(), t.MinorRadius())
     if kind == GeomAbs_BSplineSurface:
-        bs = s.BSpline()
-    else:
-        try:
-            bs = GeomConvert.SurfaceToBSplineSurface_s(BRep_Tool.Surface_s(face))
-        except Exception as err:
-            raise CadError(f"cannot convert a {kind.name} surface to a B-spline ({err})") from err
+        return bspline_embedding(s.BSpline())
+    if kind == GeomAbs_BezierSurface:  # (its B-spline copy keeps the parameters [0, 1])
+        return bspline_embedding(GeomConvert.SurfaceToBSplineSurface_s(BRep_Tool.Surface_s(face)))
+    if kind in (GeomAbs_SurfaceOfRevolution, GeomAbs_SurfaceOfExtrusion):
+        # (the surface with the face's location applied, as the analytic kinds above have it)
+        g = GeomAdaptor_Surface(BRep_Tool.Surface_s(face))
+        profile = _profile(g.BasisCurve())
+        if kind == GeomAbs_SurfaceOfRevolution:
+            ax = g.AxeOfRevolution()
+            return RevolutionSurface(_xyz(ax.Location()), _xyz(ax.Direction()), profile)
+        return ExtrusionSurface(profile, _xyz(g.Direction()))
+    name = kind.name.removeprefix("GeomAbs_").lower()
+    raise CadError(f"a {name} surface has no numpy copy in OCCT's parameters")
+
+
+def _xyz(p: Any) -> FloatArray:
+    return np.array([p.X(), p.Y(), p.Z()])
+
+
+def _profile(c: Any) -> Profile:
+    """The generatrix ``c`` (an ``Adaptor3d_Curve``) of a swept surface as a numpy
+    :class:`Profile` in OCCT's parameter; :class:`CadError` for other curve kinds."""
+    kind = c.GetType()
+    if kind == GeomAbs_Line:
+        lin = c.Line()
+        d = _xyz(lin.Direction())
+        other = np.eye(3)[int(np.argmin(np.abs(d)))]
+        return Profile("line", Frame.make(_xyz(lin.Location()), d, other - d * float(d @ other)))
+    conics = {GeomAbs_Circle: "Circle", GeomAbs_Ellipse: "Ellipse", GeomAbs_Hyperbola: "Hyperbola"}
+    if kind in conics:
+        g = getattr(c, conics[kind])()
+        a, b = (g.Radius(),) * 2 if kind == GeomAbs_Circle else (g.MajorRadius(), g.MinorRadius())
+        name = "hyperbola" if kind == GeomAbs_Hyperbola else "ellipse"
+        return Profile(name, _frame(g.Position()), a, b)
+    if kind == GeomAbs_Parabola:
+        g = c.Parabola()
+        return Profile("parabola", _frame(g.Position()), g.Focal())
+    if kind in (GeomAbs_BSplineCurve, GeomAbs_BezierCurve):
+        bs = c.BSpline() if kind == GeomAbs_BSplineCurve else c.Bezier()
+        bs = GeomConvert.CurveToBSplineCurve_s(bs)  # (a copy; a Bezier keeps [0, 1])
+        if bs.IsPeriodic():
+            bs.SetNotPeriodic()
+        knots = np.array(list(bs.KnotSequence()), dtype=float)
+        deg = bs.Degree()
+        return Profile("nurbs", _frame_any(), spline=_to_bspline(bs, 3), t0=knots[deg],
+                       t1=knots[-deg - 1])  # fmt: skip
+    name = kind.name.removeprefix("GeomAbs_").lower()
+    raise CadError(f"a sweep of a {name}: no numpy copy in OCCT's parameters")
+
+
+def _frame_any() -> Frame:
+    return Frame.make((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+
+
+def surface_embedding(face: Any) -> Embedding:
+    """The numpy embedding ``S(u, v)`` of ``face``'s surface: :func:`exact_embedding`
+    (OCCT's parameters) where there is one, else (offset surfaces, sweeps of offset curves)
+    the same geometry through ``GeomConvert.SurfaceToBSplineSurface_s``, in the B-spline
+    copy's parameters."""
+    try:
+        return exact_embedding(face)
+    except CadError:
+        pass
+    kind = BRepAdaptor_Surface(face, False).GetType()
+    try:
+        bs = GeomConvert.SurfaceToBSplineSurface_s(BRep_Tool.Surface_s(face))
+    except Exception as err:
+        raise CadError(f"cannot convert a {kind.name} surface to a B-spline ({err})") from err
     return bspline_embedding(bs)
 
 
@@ -277,6 +353,16 @@ class Development:
 
     surface: Embedding
     scale: FloatArray
+    dim = 3
+    is_identity = False
+
+    def evaluate(self, p: FloatArray) -> FloatArray:
+        """Surface points (n, 3) of plane points ``p`` (n, 2) (as an embedding)."""
+        return self.points(p)
+
+    def jacobian(self, p: FloatArray) -> FloatArray:
+        """``d points / d p`` (n, 3, 2)."""
+        return np.asarray(self.surface.jacobian(self.uv(p))) / self.scale
 
     def uv(self, p: FloatArray) -> FloatArray:
         """Surface parameters (n, 2) of plane points ``p`` (n, 2)."""

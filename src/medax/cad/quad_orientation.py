@@ -15,15 +15,10 @@ from typing import Any
 import numpy as np
 from OCP.TopAbs import TopAbs_REVERSED
 
-from medax.cad.face_geometry import surface_type
-from medax.cad.face_region import surface_embedding
+from medax.cad.face_region import exact_embedding
 from medax.cad.topology import face_normals
-from medax.errors import MeshError
+from medax.errors import CadError, MeshError
 from medax.geometry._types import FloatArray, IntArray
-
-#: surface kinds whose numpy copy (:func:`~medax.cad.face_region.surface_embedding`) keeps
-#: OCCT's parameters; faces on other kinds are meshed by gmsh
-NATIVE_SURFACES = ("plane", "cylinder", "cone", "sphere", "torus", "bspline", "bezier")
 
 
 def oriented(face: Any, i: int, q: IntArray, uv: FloatArray, pts: FloatArray) -> IntArray:
@@ -51,10 +46,12 @@ def orient(face: Any, q: IntArray, uv: FloatArray, pts: FloatArray) -> tuple[Int
 
 def outward_normals(face: Any, uv: FloatArray) -> FloatArray:
     """Outward unit normals (n, 3) at OCCT parameters ``uv`` (n, 2): from the numpy copy of
-    the surface where it keeps OCCT's parameters, else from OCCT point by point."""
-    if surface_type(face) not in NATIVE_SURFACES:
+    the surface in OCCT's parameters (:func:`~medax.cad.face_region.exact_embedding`) where
+    there is one, else from OCCT point by point."""
+    try:
+        emb = exact_embedding(face)
+    except CadError:
         return face_normals(face, uv)
-    emb = surface_embedding(face)
     normal = np.asarray(emb.normal(uv)) if hasattr(emb, "normal") else np.zeros((len(uv), 3))
     return -normal if face.Orientation() == TopAbs_REVERSED else normal
 
