@@ -178,15 +178,15 @@ def _assert_sound(shape, m):
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    ("name", "n_structured"),
-    [("quarter turn", 6), ("full turn", 2), ("prism", 6)],
+    ("make", "n_structured"),
+    [(lambda: revolved(0.5 * np.pi), 6), (lambda: revolved(2.0 * np.pi), 2), (extruded, 6)],
+    ids=["quarter turn", "full turn", "prism"],
 )
-def test_swept_faces_structured(name, n_structured):
+def test_swept_faces_structured(make, n_structured):
     """Every 4-sided face takes the medial grid, the swept ones too (the full turn's two
     revolution faces through their seams; its planar rings have holes and go to gmsh), and
     the report says so; the mesh passes the part checks."""
-    shape = {"quarter turn": lambda: revolved(0.5 * np.pi), "full turn": lambda: revolved(2 * np.pi),
-             "prism": extruded}[name]()  # fmt: skip
+    shape = make()
     m = mesh_part(shape, 2.0)
     topo = build_topology(shape)
     swept = {i for i in range(topo.n_faces) if surface_type(topo.face(i)) in SWEPT}

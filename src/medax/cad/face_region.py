@@ -384,7 +384,7 @@ def seam_region(
     points onto the surface."""
     try:
         sides2d = [_to_bspline(_chain([_pcurve(e, face) for e in s], True), 2) for s in sides]
-        emb = surface_embedding(face)
+        emb = exact_embedding(face)  # (the pcurves are in OCCT's parameters)
     except CadError as err:
         raise CadError(f"{name}: {err}") from err
     except Exception as err:
@@ -424,7 +424,7 @@ def side_region(face: Any, sides: list[list[Any]], name: str) -> tuple[Region, l
     try:
         sides2d = [_to_bspline(_chain([_pcurve(e, face) for e in s], True), 2) for s in sides]
         sides3d = [_to_bspline(_chain([_curve3d(e) for e in s], False), 3) for s in sides]
-        emb = surface_embedding(face)
+        emb = exact_embedding(face)  # (the pcurves are in OCCT's parameters)
     except CadError as err:
         raise CadError(f"{name}: {err}") from err
     except Exception as err:

@@ -50,7 +50,6 @@ from medax.cad.edge_counts import division_counts
 from medax.cad.edge_nodes import edge_curve, equal_arc_nodes
 from medax.cad.face_region import (
     Development,
-    exact_embedding,
     face_sides,
     has_seam,
     seam_region,
@@ -64,8 +63,8 @@ from medax.errors import CadError, InputError, MedaxError, MeshError
 from medax.geometry._types import FloatArray, IntArray
 from medax.geometry.embedded_curve import EmbeddedCurve
 from medax.geometry.region import Region
-from medax.mesh.gmsh_session import gmsh_session
 from medax.mesh.arclength import arclength_at
+from medax.mesh.gmsh_session import gmsh_session
 from medax.mesh.grid import boundary_indices, structured_quads
 from medax.mesh.mesher import mesh_region
 
@@ -213,7 +212,6 @@ def mesh_part(
             why[i] = "structured grid not asked for"
             continue
         try:
-            exact_embedding(f)  # (the pcurves need the surface in OCCT's parameters)
             sides = face_sides(f, seams=True)
             if len(sides) != 4:
                 why[i] = f"{len(sides)} sides"
@@ -445,11 +443,14 @@ class _Part:
         q: IntArray | None = None
         divisions = None
         if i in regions:
+            region, _, flat = regions[i]
             try:
                 q, uv, pts, gid, divisions = _structured(
                     regions[i], topo, shared, self.lengths, diag
                 )
-                problem = orient(f, q, uv, pts)[1]
+                # (turned to the outward normal and checked once, on the region's surface)
+                surface = region.embedding if flat is None else flat.surface
+                q, problem = orient(f, q, uv, pts, surface)
                 if problem is not None:
                     raise MeshError(problem)
             except MedaxError as err:
@@ -460,7 +461,7 @@ class _Part:
             if q is None:
                 gm = by_gmsh.mesh(i)
                 q, uv, pts, gid = gm.quads, gm.uv, gm.points, gm.node_id
-            q = oriented(f, i, q, uv, pts)
+                q = oriented(f, i, q, uv, pts)
         except MeshError as err:
             raise _FaceFailed(i, str(err), counts) from None
         edge = np.full(len(pts), -2, dtype=np.int64)
