@@ -197,3 +197,24 @@ def test_swept_faces_structured(make, n_structured):
     assert all(kinds[i] == "structured" for i in swept)
     assert report["n_structured_faces"] == n_structured and report["n_inverted"] == 0
     _assert_sound(shape, m)
+
+
+@pytest.mark.slow
+def test_simplified_shaft_revolution_faces_structured():
+    """The stepped shaft after fillet simplification: its shoulders and cylinders merged
+    with the fillet halves are surfaces of revolution whose seams are chains of edges (the
+    old cylinder's and the half's); each run along the seam is one side, and all four take
+    the medial grid (the two planar end discs have no corner and go to gmsh)."""
+    from medax.cad import parts
+    from medax.cad.classify import classify_solid
+    from medax.cad.simplify import simplify, specs_from_classification
+
+    cls = classify_solid(parts.stepped_shaft().shape)
+    shape = simplify(cls.shape, specs_from_classification(cls)).shape
+    topo = build_topology(shape)
+    kinds = [surface_type(topo.face(i)) for i in range(topo.n_faces)]
+    assert kinds.count("revolution") == 4
+    m = mesh_part(shape, 2.0)
+    revolved = {i for i, k in enumerate(kinds) if k == "revolution"}
+    assert revolved <= set(m.structured_faces) and len(m.structured_faces) == 5
+    _assert_sound(shape, m)

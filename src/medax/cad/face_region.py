@@ -292,8 +292,9 @@ def face_sides(face: Any, angle_tol: float = CORNER_ANGLE, seams: bool = False) 
     edges whose tangents turn by less than ``angle_tol`` (radians, in space) form one side.
     Raises :class:`CadError` for a face with inner wires, a degenerate edge or, unless
     ``seams``, a seam edge (no corner structure), or a wire with no corner. With ``seams`` a
-    seam edge is a side of its own each time the wire runs along it (a cylinder's lateral
-    face cut by one seam: circle, seam, circle, seam)."""
+    run of seam edges is a side of its own each time the wire runs along it (a cylinder's
+    lateral face cut by one seam: circle, seam, circle, seam; a merged face's seam may be
+    several edges in a G1 chain)."""
     wires = TopExp_Explorer(face, TopAbs_WIRE)
     n_wires = 0
     while wires.More():
@@ -313,9 +314,9 @@ def face_sides(face: Any, angle_tol: float = CORNER_ANGLE, seams: bool = False) 
         edges.append(e)
     tangents = [_end_tangents(e) for e in edges]
     cos = np.cos(angle_tol)
+    on_seam = [seams and _is_seam(e, face) for e in edges]
     corner = [
-        float(tangents[k - 1][1] @ tangents[k][0]) < cos
-        or (seams and (_is_seam(edges[k], face) or _is_seam(edges[k - 1], face)))
+        float(tangents[k - 1][1] @ tangents[k][0]) < cos or on_seam[k] != on_seam[k - 1]
         for k in range(len(edges))
     ]
     if not any(corner):
