@@ -88,6 +88,22 @@ def extruded():
     return BRepPrimAPI_MakePrism(face, gp_Vec(3, 2, 20)).Shape()
 
 
+def looped():
+    """A closed periodic B-spline loop in the xy plane extruded along (2, 1, 12): one
+    extrusion face with a seam (loop, seam, loop, seam), two planar caps with no corner."""
+    from OCP.collections import HArray1_gp_Pnt
+    from OCP.GeomAPI import GeomAPI_Interpolate
+
+    pts = HArray1_gp_Pnt(1, 5)
+    for k, p in enumerate([(0, 0, 0), (14, -3, 0), (20, 9, 0), (6, 15, 0), (-3, 6, 0)]):
+        pts.SetValue(k + 1, gp_Pnt(*p))
+    interp = GeomAPI_Interpolate(pts, True, 1e-9)
+    interp.Perform()
+    edge = BRepBuilderAPI_MakeEdge(interp.Curve()).Edge()
+    face = BRepBuilderAPI_MakeFace(BRepBuilderAPI_MakeWire(edge).Wire(), True).Face()
+    return BRepPrimAPI_MakePrism(face, gp_Vec(2, 1, 12)).Shape()
+
+
 def _occt_d1(face, uv):
     s = BRepAdaptor_Surface(face, False)
     p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
@@ -99,7 +115,7 @@ def _occt_d1(face, uv):
 
 
 def _parameter_box(face, n=7):
-    s = BRepAdaptor_Surface(face, False)
+    s = BRepAdaptor_Surface(face, True)  # (the face's own parameter box)
     g = np.linspace(0.0, 1.0, n)
     u = s.FirstUParameter() + g * (s.LastUParameter() - s.FirstUParameter())
     v = s.FirstVParameter() + g * (s.LastVParameter() - s.FirstVParameter())
@@ -129,20 +145,58 @@ def test_swept_embeddings_keep_occt_parameters(shape):
 
 
 def test_conic_generatrices_keep_occt_parameters():
-    """Revolutions of a parabola and a hyperbola, an extrusion of a hyperbola (faces made
-    straight from the ``Geom`` surfaces, moved off the origin): OCCT's points and derivatives."""
+    """Revolutions of a parabola, a hyperbola, a skew line and a circle tilted off the axis'
+    planes, extrusions of a hyperbola and of a Bezier curve (faces made straight from the
+    ``Geom`` surfaces, off the origin): OCCT's points and derivatives."""
+    from OCP.Geom import Geom_BezierCurve, Geom_Circle, Geom_Line
+    from OCP.gp import gp_Circ, gp_Lin
+
     frame = gp_Ax2(gp_Pnt(1, 2, 3), gp_Dir(0, 1, 0), gp_Dir(1, 0, 0))
     parab = Geom_TrimmedCurve(Geom_Parabola(gp_Parab(frame, 2.5)), -3.0, 4.0)
     hyper = Geom_TrimmedCurve(Geom_Hyperbola(gp_Hypr(frame, 4.0, 1.5)), -1.0, 1.2)
+    skew = Geom_Line(gp_Lin(gp_Pnt(5, 0, 0), gp_Dir(0.2, 0.7, 0.5)))
+    tilted = gp_Ax2(gp_Pnt(9, 1, 2), gp_Dir(0.3, 0.4, 0.866), gp_Dir(0.95, -0.3, 0.0))
+    circle = Geom_Circle(gp_Circ(tilted, 3.0))
+    poles = Array1_gp_Pnt(1, 4)
+    for k, p in enumerate([(0, 0, 0), (2, 3, 1), (5, -1, 2), (7, 2, 0)]):
+        poles.SetValue(k + 1, gp_Pnt(*p))
     axis = gp_Ax1(gp_Pnt(-20, 2, 0), gp_Dir(0, 0.6, 0.8))
     surfaces = [
         Geom_SurfaceOfRevolution(parab, axis),
         Geom_SurfaceOfRevolution(hyper, axis),
+        Geom_SurfaceOfRevolution(skew, axis),
+        Geom_SurfaceOfRevolution(circle, axis),
         Geom_SurfaceOfLinearExtrusion(hyper, gp_Dir(0.3, 0.2, 0.9)),
+        Geom_SurfaceOfLinearExtrusion(Geom_BezierCurve(poles), gp_Dir(0.1, 0.2, 0.9)),
     ]
     for surf in surfaces:
-        face = BRepBuilderAPI_MakeFace(surf, 0.2, 1.3, -0.9, 1.1, 1e-9).Face()
+        # (u: the angle of a revolution, the profile's parameter of an extrusion, within
+        # the Bezier's [0, 1]; v: the profile's parameter of a revolution)
+        face = BRepBuilderAPI_MakeFace(surf, 0.2, 0.9, -0.9, 1.1, 1e-9).Face()
         _assert_same_surface(face, exact_embedding(face), 1e-11)
+
+
+def test_periodic_profile_across_its_period():
+    """An extrusion of a periodic B-spline (a closed interpolated loop), on a face whose
+    parameter box runs across the end of the loop's period: OCCT's points and
+    derivatives there too."""
+    from OCP.collections import HArray1_gp_Pnt
+    from OCP.GeomAPI import GeomAPI_Interpolate
+
+    pts = HArray1_gp_Pnt(1, 5)
+    for k, p in enumerate([(0, 0, 0), (4, -1, 0), (6, 3, 0), (2, 5, 0), (-1, 2, 0)]):
+        pts.SetValue(k + 1, gp_Pnt(*p))
+    interp = GeomAPI_Interpolate(pts, True, 1e-9)
+    interp.Perform()
+    loop = interp.Curve()
+    assert loop.IsPeriodic()
+    t0, t1 = loop.FirstParameter(), loop.LastParameter()
+    surf = Geom_SurfaceOfLinearExtrusion(loop, gp_Dir(0.2, 0.1, 1.0))
+    a, b = t0 + 0.7 * (t1 - t0), t0 + 1.3 * (t1 - t0)
+    face = BRepBuilderAPI_MakeFace(surf, a, b, 0.0, 3.0, 1e-9).Face()
+    uv = _parameter_box(face)
+    assert uv[:, 0].max() > t1  # (beyond the first period)
+    _assert_same_surface(face, exact_embedding(face), 1e-11)
 
 
 def _assert_sound(shape, m):
@@ -178,19 +232,25 @@ def _assert_sound(shape, m):
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    ("make", "n_structured"),
-    [(lambda: revolved(0.5 * np.pi), 6), (lambda: revolved(2.0 * np.pi), 2), (extruded, 6)],
-    ids=["quarter turn", "full turn", "prism"],
+    ("make", "n_structured", "n_swept"),
+    [
+        (lambda: revolved(0.5 * np.pi), 6, 2),
+        (lambda: revolved(2.0 * np.pi), 2, 2),
+        (extruded, 6, 2),
+        (looped, 1, 1),
+    ],
+    ids=["quarter turn", "full turn", "prism", "loop prism"],
 )
-def test_swept_faces_structured(make, n_structured):
+def test_swept_faces_structured(make, n_structured, n_swept):
     """Every 4-sided face takes the medial grid, the swept ones too (the full turn's two
-    revolution faces through their seams; its planar rings have holes and go to gmsh), and
-    the report says so; the mesh passes the part checks."""
+    revolution faces and the loop's extrusion through their seams; the full turn's planar
+    rings have holes, the loop's caps no corner: gmsh), and the report says so; the mesh
+    passes the part checks."""
     shape = make()
     m = mesh_part(shape, 2.0)
     topo = build_topology(shape)
     swept = {i for i in range(topo.n_faces) if surface_type(topo.face(i)) in SWEPT}
-    assert len(swept) == 2
+    assert len(swept) == n_swept
     assert swept <= set(m.structured_faces) and len(m.structured_faces) == n_structured
     report = part_report(m)
     kinds = {f["face"]: f["kind"] for f in report["faces"]}

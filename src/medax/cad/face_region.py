@@ -144,12 +144,13 @@ def _profile(c: Any) -> Profile:
     if kind in (GeomAbs_BSplineCurve, GeomAbs_BezierCurve):
         bs = c.BSpline() if kind == GeomAbs_BSplineCurve else c.Bezier()
         bs = GeomConvert.CurveToBSplineCurve_s(bs)  # (a copy; a Bezier keeps [0, 1])
-        if bs.IsPeriodic():
+        periodic = bool(bs.IsPeriodic())
+        if periodic:  # (one period, the same parameters)
             bs.SetNotPeriodic()
         knots = np.array(list(bs.KnotSequence()), dtype=float)
         deg = bs.Degree()
         return Profile("nurbs", _frame_any(), spline=_to_bspline(bs, 3), t0=knots[deg],
-                       t1=knots[-deg - 1])  # fmt: skip
+                       t1=knots[-deg - 1], periodic=periodic)  # fmt: skip
     name = kind.name.removeprefix("GeomAbs_").lower()
     raise CadError(f"a sweep of a {name}: no numpy copy in OCCT's parameters")
 
@@ -184,17 +185,16 @@ def bspline_embedding(bs: Any) -> NurbsSurface:
         if bs.IsVPeriodic():
             bs.SetVNotPeriodic()
     nu, nv = bs.NbUPoles(), bs.NbVPoles()
-    poles = np.empty((nu, nv, 3))
-    weights = np.empty((nu, nv))
-    for a in range(nu):
-        for b in range(nv):
-            p = bs.Pole(a + 1, b + 1)
-            poles[a, b] = (p.X(), p.Y(), p.Z())
-            weights[a, b] = bs.Weight(a + 1, b + 1)
+    rows, cols = range(1, nu + 1), range(1, nv + 1)
+    # (one OCCT call per pole and none for unit weights: fitted faces have 10^3 poles)
+    poles = np.array([[bs.Pole(a, b).Coord() for b in cols] for a in rows], dtype=float)
+    poles = poles.reshape(nu, nv, 3)
     uk = np.array(list(bs.UKnotSequence()), dtype=float)
     vk = np.array(list(bs.VKnotSequence()), dtype=float)
-    rational = bs.IsURational() or bs.IsVRational()
-    return NurbsSurface(poles, bs.UDegree(), bs.VDegree(), uk, vk, weights if rational else None)
+    weights = None
+    if bs.IsURational() or bs.IsVRational():
+        weights = np.array([[bs.Weight(a, b) for b in cols] for a in rows], dtype=float)
+    return NurbsSurface(poles, bs.UDegree(), bs.VDegree(), uk, vk, weights)
 
 
 # ---- curves -------------------------------------------------------------------------------

@@ -196,7 +196,8 @@ class Profile:
     - ``hyperbola``: ``C = o + a cosh t x + b sinh t y``
     - ``parabola``:  ``C = o + t^2 / (4 a) x + t y`` (``a`` the focal length)
     - ``nurbs``:     ``spline`` at ``(t - t0) / (t1 - t0)`` (its knot domain ``[t0, t1]``,
-      which :class:`~medax.geometry.bspline.BSpline` maps onto ``[0, 1]``)
+      which :class:`~medax.geometry.bspline.BSpline` maps onto ``[0, 1]``); with
+      ``periodic`` one period of a periodic curve, ``t`` taken modulo ``t1 - t0``
     """
 
     kind: str
@@ -206,6 +207,7 @@ class Profile:
     spline: BSpline | None = None
     t0: float = 0.0
     t1: float = 1.0
+    periodic: bool = False
 
     def __post_init__(self) -> None:
         if self.kind not in PROFILE_KINDS:
@@ -224,7 +226,7 @@ class Profile:
         if self.kind == "nurbs":
             assert self.spline is not None
             span = self.t1 - self.t0
-            s = (t - self.t0) / span
+            s = (np.mod(t - self.t0, span) if self.periodic else t - self.t0) / span
             return self.spline.evaluate(s), self.spline.derivative(s) / span
         tc = t[:, None]
         if self.kind == "line":
