@@ -36,7 +36,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -56,7 +56,7 @@ from medax.cad.face_region import (
     side_region,
 )
 from medax.cad.gmsh_faces import FaceJob, GmshFace, GmshFaces
-from medax.cad.quad_orientation import orient, oriented
+from medax.cad.quad_orientation import orient
 from medax.cad.shared_nodes import SharedNodes
 from medax.cad.topology import build_topology
 from medax.errors import CadError, InputError, MedaxError, MeshError
@@ -416,8 +416,9 @@ class _Part:
         def job(i: int) -> FaceJob:
             face = topo.face(i)
 
-            def check(m: GmshFace) -> str | None:
-                return orient(face, m.quads, m.uv, m.points)[1]
+            def check(m: GmshFace) -> GmshFace | str:
+                q, problem = orient(face, m.quads, m.uv, m.points)
+                return problem if problem is not None else replace(m, quads=q)
 
             own = [j for j in topo.face_edges[i] if j in shared.edge_ids]
             vs = sorted({k for j in topo.face_edges[i] for k in topo.edge_vertices[j]})
@@ -458,10 +459,9 @@ class _Part:
                 why[i] = f"structured grid failed: {err}"
                 self.say(f"face {i}: {why[i]}; meshed by gmsh")
         try:
-            if q is None:
+            if q is None:  # (its quads turned to the outward normal and checked by the job)
                 gm = by_gmsh.mesh(i)
                 q, uv, pts, gid = gm.quads, gm.uv, gm.points, gm.node_id
-                q = oriented(f, i, q, uv, pts)
         except MeshError as err:
             raise _FaceFailed(i, str(err), counts) from None
         edge = np.full(len(pts), -2, dtype=np.int64)
