@@ -280,3 +280,26 @@ def test_closest_of_no_points():
     for c in curves:
         got = c.closest(np.zeros((0, 2)))
         assert got.t.shape == (0,) and got.distance.shape == (0,) and got.foot.shape[0] == 0
+
+
+def test_arclength_at_against_dense_polyline():
+    """``arclength_at`` (lengths from the start to given parameters) against a dense polyline
+    of the curve (2e5 chords, independent of the quadrature), and inverse to
+    ``arclength_params``, on an arc and a wavy rational B-spline."""
+    from medax.mesh.arclength import arclength_at, arclength_params
+
+    wavy = BSpline(
+        np.array([[0, 0], [1, 2], [2, -1], [3, 3], [4, 0], [6, 1]], dtype=float),
+        3,
+        weights=np.array([1.0, 2.0, 0.5, 1.0, 3.0, 1.0]),
+    )
+    for curve in (Arc(np.array([1.0, 2.0]), 3.0, 0.3, 2.5), wavy):
+        t = np.array([0.0, 0.13, 0.5, 0.77, 1.0])
+        dense = np.linspace(0.0, 1.0, 200_001)
+        p = curve.evaluate(dense)
+        cum = np.concatenate(([0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))))
+        truth = np.interp(t, dense, cum)
+        np.testing.assert_allclose(arclength_at(curve, t), truth, rtol=1e-8, atol=1e-12)
+        f = np.array([0.0, 0.2, 0.45, 0.9, 1.0])
+        back = arclength_at(curve, arclength_params(curve, f)) / arclength_at(curve, [1.0])[0]
+        np.testing.assert_allclose(back, f, atol=1e-12)

@@ -187,3 +187,33 @@ def test_a_fit_that_cannot_reach_its_tolerance_stops_early(monkeypatch):
     calls.clear()
     fit_height((0.9, 20.0), (0.9, 20.0), [], [], _h, 1e-6 * first.error, R / 4, levels=5)
     assert len(calls) > 4
+
+
+def test_height_fitter_shares_fits_between_probe_and_full_fit():
+    """A coarse probe (one level) then the full refinement on one HeightFitter give the same
+    fit as fit_height alone, and the height is sampled only for spacings not fitted before:
+    the probe's fit is not made again."""
+    from medax.geometry.tensor_fit import HeightFitter
+
+    calls: list[int] = []
+
+    def counted(x, y):
+        calls.append(x.size)
+        return _h(x, y)
+
+    args = ((0.9, 20.0), (0.9, 20.0), [1.1716, R], [1.1716, R])
+    alone = fit_height(*args, counted, 2e-5, R / 4)
+    n_alone = len(calls)
+    calls.clear()
+    fitter = HeightFitter(*args, counted, R / 4)
+    probe = fitter.fit(2e-5, levels=1)
+    n_probe = len(calls)
+    full = fitter.fit(2e-5)
+    assert probe is not None and full is not None and alone is not None
+    assert probe.spacing == R / 4 and full.spacing < probe.spacing
+    np.testing.assert_array_equal(full.coef, alone.coef)
+    assert full.error == alone.error
+    # the full fit alone: the knot placement's samples and 2 height grids per fit; with the
+    # probe first, its level's 2 grids are not taken again
+    assert len(calls) == n_alone
+    assert n_probe < n_alone

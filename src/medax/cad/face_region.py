@@ -24,13 +24,24 @@ from OCP.Geom import Geom_TrimmedCurve
 from OCP.Geom2d import Geom2d_TrimmedCurve
 from OCP.Geom2dConvert import Geom2dConvert, Geom2dConvert_CompCurveToBSplineCurve
 from OCP.GeomAbs import (
+    GeomAbs_BezierCurve,
+    GeomAbs_BezierSurface,
+    GeomAbs_BSplineCurve,
     GeomAbs_BSplineSurface,
+    GeomAbs_Circle,
     GeomAbs_Cone,
     GeomAbs_Cylinder,
+    GeomAbs_Ellipse,
+    GeomAbs_Hyperbola,
+    GeomAbs_Line,
+    GeomAbs_Parabola,
     GeomAbs_Plane,
     GeomAbs_Sphere,
+    GeomAbs_SurfaceOfExtrusion,
+    GeomAbs_SurfaceOfRevolution,
     GeomAbs_Torus,
 )
+from OCP.GeomAdaptor import GeomAdaptor_Surface
 from OCP.GeomConvert import GeomConvert, GeomConvert_CompCurveToBSplineCurve
 from OCP.gp import gp_Pnt, gp_Vec
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_REVERSED, TopAbs_WIRE
@@ -50,9 +61,12 @@ from medax.geometry.region import Region
 from medax.geometry.surfaces import (
     ConeSurface,
     CylinderSurface,
+    ExtrusionSurface,
     Frame,
     NurbsSurface,
     PlaneSurface,
+    Profile,
+    RevolutionSurface,
     SphereSurface,
     TorusSurface,
 )
@@ -66,13 +80,13 @@ def _frame(ax3: Any) -> Frame:
     )
 
 
-def surface_embedding(face: Any) -> Embedding:
-    """The numpy embedding ``S(u, v)`` of ``face``'s surface, in OCCT's parameters.
-
-    Analytic surfaces map exactly; B-spline surfaces copy poles, weights and knots; other
-    kinds (Bezier, revolution, extrusion, offset) go through
-    ``GeomConvert.SurfaceToBSplineSurface_s``.
-    """
+def exact_embedding(face: Any) -> Embedding:
+    """The numpy embedding ``S(u, v)`` of ``face``'s surface in OCCT's own parameters, so
+    that the face's pcurves apply to it as they are: analytic surfaces exactly, B-spline and
+    Bezier surfaces by their poles, surfaces of revolution and of linear extrusion by their
+    axis or direction and their generatrix (:class:`~medax.geometry.surfaces.Profile`: a
+    line, conic or B-spline curve). :class:`CadError` (why) for other kinds (offset
+    surfaces, sweeps of offset curves), whose B-spline copy has parameters of its own."""
     s = BRepAdaptor_Surface(face, False)
     kind = s.GetType()
     if kind == GeomAbs_Plane:
@@ -90,12 +104,75 @@ def surface_embedding(face: Any) -> Embedding:
         t = s.Torus()
         return TorusSurface(_frame(t.Position()), t.MajorRadius(), t.MinorRadius())
     if kind == GeomAbs_BSplineSurface:
-        bs = s.BSpline()
-    else:
-        try:
-            bs = GeomConvert.SurfaceToBSplineSurface_s(BRep_Tool.Surface_s(face))
-        except Exception as err:
-            raise CadError(f"cannot convert a {kind.name} surface to a B-spline ({err})") from err
+        return bspline_embedding(s.BSpline())
+    if kind == GeomAbs_BezierSurface:  # (its B-spline copy keeps the parameters [0, 1])
+        return bspline_embedding(GeomConvert.SurfaceToBSplineSurface_s(BRep_Tool.Surface_s(face)))
+    if kind in (GeomAbs_SurfaceOfRevolution, GeomAbs_SurfaceOfExtrusion):
+        # (the surface with the face's location applied, as the analytic kinds above have it)
+        g = GeomAdaptor_Surface(BRep_Tool.Surface_s(face))
+        profile = _profile(g.BasisCurve())
+        if kind == GeomAbs_SurfaceOfRevolution:
+            ax = g.AxeOfRevolution()
+            return RevolutionSurface(_xyz(ax.Location()), _xyz(ax.Direction()), profile)
+        return ExtrusionSurface(profile, _xyz(g.Direction()))
+    name = kind.name.removeprefix("GeomAbs_").lower()
+    raise CadError(f"a {name} surface has no numpy copy in OCCT's parameters")
+
+
+def _xyz(p: Any) -> FloatArray:
+    return np.array([p.X(), p.Y(), p.Z()])
+
+
+def _profile(c: Any) -> Profile:
+    """The generatrix ``c`` (an ``Adaptor3d_Curve``) of a swept surface as a numpy
+    :class:`Profile` in OCCT's parameter; :class:`CadError` for other curve kinds."""
+    kind = c.GetType()
+    if kind == GeomAbs_Line:
+        lin = c.Line()
+        d = _xyz(lin.Direction())
+        other = np.eye(3)[int(np.argmin(np.abs(d)))]
+        return Profile("line", Frame.make(_xyz(lin.Location()), d, other - d * float(d @ other)))
+    conics = {GeomAbs_Circle: "Circle", GeomAbs_Ellipse: "Ellipse", GeomAbs_Hyperbola: "Hyperbola"}
+    if kind in conics:
+        g = getattr(c, conics[kind])()
+        a, b = (g.Radius(),) * 2 if kind == GeomAbs_Circle else (g.MajorRadius(), g.MinorRadius())
+        name = "hyperbola" if kind == GeomAbs_Hyperbola else "ellipse"
+        return Profile(name, _frame(g.Position()), a, b)
+    if kind == GeomAbs_Parabola:
+        g = c.Parabola()
+        return Profile("parabola", _frame(g.Position()), g.Focal())
+    if kind in (GeomAbs_BSplineCurve, GeomAbs_BezierCurve):
+        bs = c.BSpline() if kind == GeomAbs_BSplineCurve else c.Bezier()
+        bs = GeomConvert.CurveToBSplineCurve_s(bs)  # (a copy; a Bezier keeps [0, 1])
+        periodic = bool(bs.IsPeriodic())
+        if periodic:  # (one period, the same parameters)
+            bs.SetNotPeriodic()
+        knots = np.array(list(bs.KnotSequence()), dtype=float)
+        deg = bs.Degree()
+        return Profile("nurbs", _frame_any(), spline=_to_bspline(bs, 3), t0=knots[deg],
+                       t1=knots[-deg - 1], periodic=periodic)  # fmt: skip
+    name = kind.name.removeprefix("GeomAbs_").lower()
+    raise CadError(f"a sweep of a {name}: no numpy copy in OCCT's parameters")
+
+
+def _frame_any() -> Frame:
+    return Frame.make((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+
+
+def surface_embedding(face: Any) -> Embedding:
+    """The numpy embedding ``S(u, v)`` of ``face``'s surface: :func:`exact_embedding`
+    (OCCT's parameters) where there is one, else (offset surfaces, sweeps of offset curves)
+    the same geometry through ``GeomConvert.SurfaceToBSplineSurface_s``, in the B-spline
+    copy's parameters."""
+    try:
+        return exact_embedding(face)
+    except CadError:
+        pass
+    kind = BRepAdaptor_Surface(face, False).GetType()
+    try:
+        bs = GeomConvert.SurfaceToBSplineSurface_s(BRep_Tool.Surface_s(face))
+    except Exception as err:
+        raise CadError(f"cannot convert a {kind.name} surface to a B-spline ({err})") from err
     return bspline_embedding(bs)
 
 
@@ -108,17 +185,16 @@ def bspline_embedding(bs: Any) -> NurbsSurface:
         if bs.IsVPeriodic():
             bs.SetVNotPeriodic()
     nu, nv = bs.NbUPoles(), bs.NbVPoles()
-    poles = np.empty((nu, nv, 3))
-    weights = np.empty((nu, nv))
-    for a in range(nu):
-        for b in range(nv):
-            p = bs.Pole(a + 1, b + 1)
-            poles[a, b] = (p.X(), p.Y(), p.Z())
-            weights[a, b] = bs.Weight(a + 1, b + 1)
+    rows, cols = range(1, nu + 1), range(1, nv + 1)
+    # (one OCCT call per pole and none for unit weights: fitted faces have 10^3 poles)
+    poles = np.array([[bs.Pole(a, b).Coord() for b in cols] for a in rows], dtype=float)
+    poles = poles.reshape(nu, nv, 3)
     uk = np.array(list(bs.UKnotSequence()), dtype=float)
     vk = np.array(list(bs.VKnotSequence()), dtype=float)
-    rational = bs.IsURational() or bs.IsVRational()
-    return NurbsSurface(poles, bs.UDegree(), bs.VDegree(), uk, vk, weights if rational else None)
+    weights = None
+    if bs.IsURational() or bs.IsVRational():
+        weights = np.array([[bs.Weight(a, b) for b in cols] for a in rows], dtype=float)
+    return NurbsSurface(poles, bs.UDegree(), bs.VDegree(), uk, vk, weights)
 
 
 # ---- curves -------------------------------------------------------------------------------
@@ -216,8 +292,9 @@ def face_sides(face: Any, angle_tol: float = CORNER_ANGLE, seams: bool = False) 
     edges whose tangents turn by less than ``angle_tol`` (radians, in space) form one side.
     Raises :class:`CadError` for a face with inner wires, a degenerate edge or, unless
     ``seams``, a seam edge (no corner structure), or a wire with no corner. With ``seams`` a
-    seam edge is a side of its own each time the wire runs along it (a cylinder's lateral
-    face cut by one seam: circle, seam, circle, seam)."""
+    run of seam edges is a side of its own each time the wire runs along it (a cylinder's
+    lateral face cut by one seam: circle, seam, circle, seam; a merged face's seam may be
+    several edges in a G1 chain)."""
     wires = TopExp_Explorer(face, TopAbs_WIRE)
     n_wires = 0
     while wires.More():
@@ -237,9 +314,9 @@ def face_sides(face: Any, angle_tol: float = CORNER_ANGLE, seams: bool = False) 
         edges.append(e)
     tangents = [_end_tangents(e) for e in edges]
     cos = np.cos(angle_tol)
+    on_seam = [seams and _is_seam(e, face) for e in edges]
     corner = [
-        float(tangents[k - 1][1] @ tangents[k][0]) < cos
-        or (seams and (_is_seam(edges[k], face) or _is_seam(edges[k - 1], face)))
+        float(tangents[k - 1][1] @ tangents[k][0]) < cos or on_seam[k] != on_seam[k - 1]
         for k in range(len(edges))
     ]
     if not any(corner):
@@ -277,6 +354,16 @@ class Development:
 
     surface: Embedding
     scale: FloatArray
+    dim = 3
+    is_identity = False
+
+    def evaluate(self, p: FloatArray) -> FloatArray:
+        """Surface points (n, 3) of plane points ``p`` (n, 2) (as an embedding)."""
+        return self.points(p)
+
+    def jacobian(self, p: FloatArray) -> FloatArray:
+        """``d points / d p`` (n, 3, 2)."""
+        return np.asarray(self.surface.jacobian(self.uv(p))) / self.scale
 
     def uv(self, p: FloatArray) -> FloatArray:
         """Surface parameters (n, 2) of plane points ``p`` (n, 2)."""
@@ -298,7 +385,7 @@ def seam_region(
     points onto the surface."""
     try:
         sides2d = [_to_bspline(_chain([_pcurve(e, face) for e in s], True), 2) for s in sides]
-        emb = surface_embedding(face)
+        emb = exact_embedding(face)  # (the pcurves are in OCCT's parameters)
     except CadError as err:
         raise CadError(f"{name}: {err}") from err
     except Exception as err:
@@ -338,7 +425,7 @@ def side_region(face: Any, sides: list[list[Any]], name: str) -> tuple[Region, l
     try:
         sides2d = [_to_bspline(_chain([_pcurve(e, face) for e in s], True), 2) for s in sides]
         sides3d = [_to_bspline(_chain([_curve3d(e) for e in s], False), 3) for s in sides]
-        emb = surface_embedding(face)
+        emb = exact_embedding(face)  # (the pcurves are in OCCT's parameters)
     except CadError as err:
         raise CadError(f"{name}: {err}") from err
     except Exception as err:

@@ -92,13 +92,14 @@ class GmshFace:
 @dataclass(frozen=True)
 class FaceJob:
     """One face for :class:`GmshFaces`: the CAD ``face``, its ``edges`` that have nodes,
-    its ``vertices`` (indices into the shared nodes) and ``check``, which says what is
-    wrong with a mesh (e.g. a quad inverted against the face normal) or returns None."""
+    its ``vertices`` (indices into the shared nodes) and ``check``, which returns the mesh
+    as it is to be used (e.g. its quads turned to the face's outward normal) or what is
+    wrong with it (e.g. a quad inverted against that normal)."""
 
     face: Any
     edges: Sequence[int]
     vertices: Sequence[int]
-    check: Callable[[GmshFace], str | None] | None = None
+    check: Callable[[GmshFace], GmshFace | str] | None = None
 
 
 def attempts_for(face: Any) -> list[tuple[int, bool, float]]:
@@ -268,8 +269,7 @@ def _serve_face(
                 result = "triangles left by the recombination"
             else:
                 _vertices(gmsh, out, nodes.vert_pts[vs], nodes.vert_ids[vs], nodes.tol, index)
-                problem = None if job.check is None else job.check(out)
-                result = out if problem is None else problem
+                result = out if job.check is None else job.check(out)
         except MeshError as err:  # (counts not kept, nodes off the edge: try again)
             result = str(err).removeprefix(f"face {index}: ")
         except Exception as err:  # gmsh raises plain Exceptions

@@ -36,7 +36,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -48,15 +48,22 @@ from OCP.TopoDS import TopoDS
 from medax._progress import log_progress
 from medax.cad.edge_counts import division_counts
 from medax.cad.edge_nodes import edge_curve, equal_arc_nodes
-from medax.cad.face_geometry import surface_type
-from medax.cad.face_region import Development, face_sides, has_seam, seam_region, side_region
+from medax.cad.face_region import (
+    Development,
+    face_sides,
+    has_seam,
+    seam_region,
+    side_region,
+)
 from medax.cad.gmsh_faces import FaceJob, GmshFace, GmshFaces
-from medax.cad.quad_orientation import NATIVE_SURFACES, orient, oriented
+from medax.cad.quad_orientation import orient
 from medax.cad.shared_nodes import SharedNodes
 from medax.cad.topology import build_topology
 from medax.errors import CadError, InputError, MedaxError, MeshError
 from medax.geometry._types import FloatArray, IntArray
+from medax.geometry.embedded_curve import EmbeddedCurve
 from medax.geometry.region import Region
+from medax.mesh.arclength import arclength_at
 from medax.mesh.gmsh_session import gmsh_session
 from medax.mesh.grid import boundary_indices, structured_quads
 from medax.mesh.mesher import mesh_region
@@ -203,10 +210,6 @@ def mesh_part(
         f = topo.face(i)
         if not structured:
             why[i] = "structured grid not asked for"
-            continue
-        kind = surface_type(f)
-        if kind not in NATIVE_SURFACES:
-            why[i] = f"a {kind} surface (its B-spline copy may not keep OCCT's parameters)"
             continue
         try:
             sides = face_sides(f, seams=True)
@@ -413,8 +416,9 @@ class _Part:
         def job(i: int) -> FaceJob:
             face = topo.face(i)
 
-            def check(m: GmshFace) -> str | None:
-                return orient(face, m.quads, m.uv, m.points)[1]
+            def check(m: GmshFace) -> GmshFace | str:
+                q, problem = orient(face, m.quads, m.uv, m.points)
+                return problem if problem is not None else replace(m, quads=q)
 
             own = [j for j in topo.face_edges[i] if j in shared.edge_ids]
             vs = sorted({k for j in topo.face_edges[i] for k in topo.edge_vertices[j]})
@@ -440,11 +444,14 @@ class _Part:
         q: IntArray | None = None
         divisions = None
         if i in regions:
+            region, _, flat = regions[i]
             try:
                 q, uv, pts, gid, divisions = _structured(
                     regions[i], topo, shared, self.lengths, diag
                 )
-                problem = orient(f, q, uv, pts)[1]
+                # (turned to the outward normal and checked once, on the region's surface)
+                surface = region.embedding if flat is None else flat.surface
+                q, problem = orient(f, q, uv, pts, surface)
                 if problem is not None:
                     raise MeshError(problem)
             except MedaxError as err:
@@ -452,10 +459,9 @@ class _Part:
                 why[i] = f"structured grid failed: {err}"
                 self.say(f"face {i}: {why[i]}; meshed by gmsh")
         try:
-            if q is None:
+            if q is None:  # (its quads turned to the outward normal and checked by the job)
                 gm = by_gmsh.mesh(i)
                 q, uv, pts, gid = gm.quads, gm.uv, gm.points, gm.node_id
-            q = oriented(f, i, q, uv, pts)
         except MeshError as err:
             raise _FaceFailed(i, str(err), counts) from None
         edge = np.full(len(pts), -2, dtype=np.int64)
@@ -504,8 +510,13 @@ def _structured(
     n1, n2 = len(per_side[0][0]) - 1, len(per_side[1][0]) - 1
     if (len(per_side[2][0]) - 1, len(per_side[3][0]) - 1) != (n1, n2):
         raise MeshError(f"{region.name}: opposite sides have different counts")  # pragma: no cover
-    chained = any(len(s) > 1 for s in sides)
-    fractions = [p[2] for p in per_side] if chained else None
+    if flat is not None:
+        fractions: list[FloatArray] | None = [
+            _flat_fractions(region, k, flat, per_side[k][1]) for k in range(4)
+        ]
+    else:
+        chained = any(len(s) > 1 for s in sides)
+        fractions = [p[2] for p in per_side] if chained else None
     mesh = mesh_region(region, divisions=(n1, n2), fractions=fractions)
     uv = mesh.params if flat is None else flat.uv(mesh.params)
     pts = np.array(mesh.points if flat is None else flat.points(mesh.params), dtype=np.float64)
@@ -520,6 +531,19 @@ def _structured(
         gid[idx] = ids
         pts[idx] = ours
     return structured_quads(n1, n2), uv, pts, gid, (n1, n2)
+
+
+def _flat_fractions(region: Region, k: int, flat: Development, nodes: FloatArray) -> FloatArray:
+    """Arc-length fractions (n + 1,) along side ``k`` of the planar ``region`` of a seam
+    face at which its points map onto the edge ``nodes`` (n + 1, 3): the planar lengths are
+    not those in space where the surface stretches along the side (a revolved B-spline or
+    ellipse), so the side's nodes are found on the side by their points in space."""
+    side = region.sides[k]
+    t = EmbeddedCurve(side, flat).closest(nodes[1:-1]).t
+    fr = np.concatenate(([0.0], arclength_at(side, t) / arclength_at(side, np.ones(1))[0], [1.0]))
+    if not np.all(np.diff(fr) > 0.0):
+        raise MeshError(f"{region.name}: the edge nodes of side {k} do not run along it")
+    return fr
 
 
 def _check(mesh: PartMesh) -> None:

@@ -15,29 +15,30 @@ from typing import Any
 import numpy as np
 from OCP.TopAbs import TopAbs_REVERSED
 
-from medax.cad.face_geometry import surface_type
-from medax.cad.face_region import surface_embedding
+from medax.cad.face_region import exact_embedding
 from medax.cad.topology import face_normals
-from medax.errors import MeshError
+from medax.errors import CadError, MeshError
 from medax.geometry._types import FloatArray, IntArray
-
-#: surface kinds whose numpy copy (:func:`~medax.cad.face_region.surface_embedding`) keeps
-#: OCCT's parameters; faces on other kinds are meshed by gmsh
-NATIVE_SURFACES = ("plane", "cylinder", "cone", "sphere", "torus", "bspline", "bezier")
+from medax.geometry.embedding import Embedding
 
 
-def oriented(face: Any, i: int, q: IntArray, uv: FloatArray, pts: FloatArray) -> IntArray:
+def oriented(
+    face: Any, i: int, q: IntArray, uv: FloatArray, pts: FloatArray, emb: Embedding | None = None
+) -> IntArray:
     """``q`` turned counter-clockwise about the face's outward normal; :class:`MeshError`
-    if a quad corner still turns the other way or is flat (an inverted quad)."""
-    q, problem = orient(face, q, uv, pts)
+    if a quad corner still turns the other way or is flat (an inverted quad). ``emb``: the
+    face's surface in OCCT's parameters when the caller has it (see :func:`outward_normals`)."""
+    q, problem = orient(face, q, uv, pts, emb)
     if problem is not None:
         raise MeshError(f"face {i}: {problem}")
     return q
 
 
-def orient(face: Any, q: IntArray, uv: FloatArray, pts: FloatArray) -> tuple[IntArray, str | None]:
+def orient(
+    face: Any, q: IntArray, uv: FloatArray, pts: FloatArray, emb: Embedding | None = None
+) -> tuple[IntArray, str | None]:
     """``q`` turned to the outward normal, and what is wrong with it (or None)."""
-    normal = outward_normals(face, uv)
+    normal = outward_normals(face, uv, emb)
     area = corner_areas(pts, q, normal)
     if np.nansum(area) < 0.0:
         q = q[:, ::-1]
@@ -49,12 +50,16 @@ def orient(face: Any, q: IntArray, uv: FloatArray, pts: FloatArray) -> tuple[Int
     return q, None
 
 
-def outward_normals(face: Any, uv: FloatArray) -> FloatArray:
+def outward_normals(face: Any, uv: FloatArray, emb: Embedding | None = None) -> FloatArray:
     """Outward unit normals (n, 3) at OCCT parameters ``uv`` (n, 2): from the numpy copy of
-    the surface where it keeps OCCT's parameters, else from OCCT point by point."""
-    if surface_type(face) not in NATIVE_SURFACES:
-        return face_normals(face, uv)
-    emb = surface_embedding(face)
+    the surface in OCCT's parameters (``emb``, else
+    :func:`~medax.cad.face_region.exact_embedding`) where there is one, else from OCCT point
+    by point."""
+    if emb is None:
+        try:
+            emb = exact_embedding(face)
+        except CadError:
+            return face_normals(face, uv)
     normal = np.asarray(emb.normal(uv)) if hasattr(emb, "normal") else np.zeros((len(uv), 3))
     return -normal if face.Orientation() == TopAbs_REVERSED else normal
 

@@ -149,12 +149,15 @@ def _solids(
     check(list(part.solids))
     if not simplify:
         return list(part.solids), part.unit
-    from medax.cad.classify import classify_file
+    from medax.cad.classify import classify_solid
     from medax.cad.simplify import simplify as run_simplify
     from medax.cad.simplify import specs_from_classification
 
     out = []
-    classes = classify_file(path)  # reads the file again (cheap beside the simplification)
+    classes = [  # (the solids as read above: the file is not read twice)
+        classify_solid(s, source=part.source, unit=part.unit, index=k)
+        for k, s in enumerate(part.solids)
+    ]
     for k, cls in enumerate(classes):
         specs = specs_from_classification(cls)
         progress(f"solid {k}: {len(cls.faces)} faces, simplifying")

@@ -12,6 +12,9 @@ numpy only. Each class implements :class:`medax.geometry.embedding.Embedding` wi
 - sphere:   ``S = o + r cos v (cos u x + sin u y) + r sin v z``
 - torus:    ``S = o + (R + r cos v)(cos u x + sin u y) + r sin v z``
 - NURBS:    tensor-product rational B-spline, poles (nu, nv, 3), optional weights (nu, nv)
+- revolution: ``S = R(u) (C(v) - o) + o``, ``C`` a :class:`Profile` turned by the angle
+  ``u`` about the axis through ``o`` along ``z`` (right hand)
+- extrusion:  ``S = C(u) + v d``, ``C`` a :class:`Profile`, ``d`` a unit direction
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ import numpy as np
 
 from medax.errors import InputError
 from medax.geometry._types import FloatArray
-from medax.geometry.bspline import POWER_BASIS_MAX_DEGREE
+from medax.geometry.bspline import POWER_BASIS_MAX_DEGREE, BSpline
 
 
 def _p(p: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -176,6 +179,116 @@ class TorusSurface(_Surface):
         ring = (big + r * np.cos(v))[:, None]
         dv = (-r * np.sin(v))[:, None] * rad + (r * np.cos(v))[:, None] * self.frame.z
         return _stack(ring * drad, dv)
+
+
+# ---- swept surfaces --------------------------------------------------------------------------
+#: the kinds of :class:`Profile`
+PROFILE_KINDS = ("line", "ellipse", "hyperbola", "parabola", "nurbs")
+
+
+@dataclass(frozen=True)
+class Profile:
+    """A space curve ``C(t)`` in OpenCASCADE's own parameter ``t`` (``Geom_*`` curves), the
+    generatrix of a swept surface. ``frame``'s origin ``o`` and axes ``x``, ``y``:
+
+    - ``line``:      ``C = o + t x`` (``t`` a length)
+    - ``ellipse``:   ``C = o + a cos t x + b sin t y`` (a circle when ``a = b``)
+    - ``hyperbola``: ``C = o + a cosh t x + b sinh t y``
+    - ``parabola``:  ``C = o + t^2 / (4 a) x + t y`` (``a`` the focal length)
+    - ``nurbs``:     ``spline`` at ``(t - t0) / (t1 - t0)`` (its knot domain ``[t0, t1]``,
+      which :class:`~medax.geometry.bspline.BSpline` maps onto ``[0, 1]``); with
+      ``periodic`` one period of a periodic curve, ``t`` taken modulo ``t1 - t0``
+    """
+
+    kind: str
+    frame: Frame
+    a: float = 1.0
+    b: float = 1.0
+    spline: BSpline | None = None
+    t0: float = 0.0
+    t1: float = 1.0
+    periodic: bool = False
+
+    def __post_init__(self) -> None:
+        if self.kind not in PROFILE_KINDS:
+            raise InputError(f"profile kind must be one of {PROFILE_KINDS}, got {self.kind!r}")
+        if self.kind == "nurbs" and (self.spline is None or not self.t1 > self.t0):
+            raise InputError("a nurbs profile needs its spline and a knot domain t0 < t1")
+
+    def evaluate(self, t: FloatArray) -> FloatArray:
+        """Points ``C(t)`` (n, 3) at parameters ``t`` (n,)."""
+        return self.jet(t)[0]
+
+    def jet(self, t: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """``C(t)`` and ``C'(t)``, each (n, 3), at parameters ``t`` (n,)."""
+        t = np.asarray(t, dtype=np.float64).reshape(-1)
+        f = self.frame
+        if self.kind == "nurbs":
+            assert self.spline is not None
+            span = self.t1 - self.t0
+            s = (np.mod(t - self.t0, span) if self.periodic else t - self.t0) / span
+            return self.spline.evaluate(s), self.spline.derivative(s) / span
+        tc = t[:, None]
+        if self.kind == "line":
+            return f.origin + tc * f.x, np.broadcast_to(f.x, (len(t), 3)).copy()
+        if self.kind == "parabola":
+            a = self.a
+            p = f.origin + tc**2 / (4.0 * a) * f.x + tc * f.y
+            return p, tc / (2.0 * a) * f.x + f.y
+        if self.kind == "ellipse":
+            c, s_, dc, ds = np.cos(tc), np.sin(tc), -np.sin(tc), np.cos(tc)
+        else:  # hyperbola
+            c, s_, dc, ds = np.cosh(tc), np.sinh(tc), np.sinh(tc), np.cosh(tc)
+        p = f.origin + self.a * c * f.x + self.b * s_ * f.y
+        return p, self.a * dc * f.x + self.b * ds * f.y
+
+
+@dataclass(frozen=True)
+class RevolutionSurface(_Surface):
+    """``profile`` turned by the angle ``u`` (radians) about the axis through ``origin``
+    (3,) along the unit ``axis`` (3,); ``v`` is the profile's parameter."""
+
+    origin: FloatArray
+    axis: FloatArray
+    profile: Profile
+
+    def _turn(self, u: FloatArray, w: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Vectors ``w`` (n, 3) turned by ``u`` (n,) about the axis, and their u-derivative."""
+        z = self.axis
+        along = (w @ z)[:, None] * z
+        perp = w - along
+        side = np.cross(z, w)
+        c, s = np.cos(u)[:, None], np.sin(u)[:, None]
+        return along + c * perp + s * side, -s * perp + c * side
+
+    def evaluate(self, p: FloatArray) -> FloatArray:
+        u, v = _p(p)
+        turned, _ = self._turn(u, self.profile.evaluate(v) - self.origin)
+        return self.origin + turned
+
+    def jacobian(self, p: FloatArray) -> FloatArray:
+        u, v = _p(p)
+        c, dc = self.profile.jet(v)
+        _, du = self._turn(u, c - self.origin)
+        dv, _ = self._turn(u, dc)
+        return _stack(du, dv)
+
+
+@dataclass(frozen=True)
+class ExtrusionSurface(_Surface):
+    """``profile`` (parameter ``u``) moved by ``v`` along the unit ``direction`` (3,)."""
+
+    profile: Profile
+    direction: FloatArray
+
+    def evaluate(self, p: FloatArray) -> FloatArray:
+        u, v = _p(p)
+        return self.profile.evaluate(u) + v[:, None] * self.direction
+
+    def jacobian(self, p: FloatArray) -> FloatArray:
+        u, _ = _p(p)
+        _, dc = self.profile.jet(u)
+        return _stack(dc, np.broadcast_to(self.direction, (len(u), 3)))
 
 
 # ---- NURBS --------------------------------------------------------------------------------

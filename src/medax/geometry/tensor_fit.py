@@ -26,6 +26,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Protocol, TypeVar
 
 import numpy as np
@@ -33,7 +34,7 @@ import scipy.sparse as sp
 from scipy.interpolate import BSpline
 from scipy.linalg import LinAlgError, cho_solve_banded, cholesky_banded
 from scipy.sparse.linalg import spsolve
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 
 from medax.geometry._types import FloatArray
 
@@ -209,28 +210,57 @@ def fit_height(
     has more than ``MAX_COEFFICIENTS``.
 
     ``x_breaks``/``y_breaks``: coordinates strictly inside the ranges where the height's
-    curvature may jump (C1 knots there).
+    curvature may jump (C1 knots there). See :class:`HeightFitter` to fit one height
+    several times (its fits made once each).
     """
     if not spacing > 0.0:  # (a degenerate piece's radius): no fit
         return None
-    (x0, x1), (y0, y1) = x_range, y_range
-    xb = sorted(b for b in set(x_breaks) if x0 < b < x1)
-    yb = sorted(b for b in set(y_breaks) if y0 < b < y1)
-    probe_y = np.linspace(y0, y1, 41)
-    probe_x = np.linspace(x0, x1, 41)
-    xb, fine_x = _curved(x0, x1, xb, h, probe_y, 0, spacing)
-    yb, fine_y = _curved(y0, y1, yb, h, probe_x, 1, spacing)
+    return HeightFitter(x_range, y_range, x_breaks, y_breaks, h, spacing).fit(tol, levels)
 
-    def fit_at(sx: float, sy: float) -> TensorFit | None:
+
+class HeightFitter:
+    """The fits of one height ``h`` on a rectangle (arguments as :func:`fit_height`'s,
+    ``spacing > 0``), each spacing fitted once: a coarse first check (``fit(tol, 1)``) and
+    the full refinement after it share their common fits and the knot placement."""
+
+    def __init__(
+        self,
+        x_range: tuple[float, float],
+        y_range: tuple[float, float],
+        x_breaks: Sequence[float],
+        y_breaks: Sequence[float],
+        h: HeightFn,
+        spacing: float,
+    ) -> None:
+        (x0, x1), (y0, y1) = x_range, y_range
+        self.x_range, self.y_range, self.h, self.spacing = x_range, y_range, h, spacing
+        xb = sorted(b for b in set(x_breaks) if x0 < b < x1)
+        yb = sorted(b for b in set(y_breaks) if y0 < b < y1)
+        probe_y = np.linspace(y0, y1, 41)
+        probe_x = np.linspace(x0, x1, 41)
+        self.xb, self.fine_x = _curved(x0, x1, xb, h, probe_y, 0, spacing)
+        self.yb, self.fine_y = _curved(y0, y1, yb, h, probe_x, 1, spacing)
+        self._fits: dict[tuple[float, float], TensorFit | None] = {}
+
+    def fit_at(self, sx: float, sy: float) -> TensorFit | None:
         """The fit with spans of at most ``sx``, ``sy``; None when too large to solve."""
-        # (counted first: a spacing near 0 would build knot vectors beyond memory)
-        nx = _coefficient_count(x0, x1, xb, fine_x, sx)
-        ny = _coefficient_count(y0, y1, yb, fine_y, sy)
-        if not nx * ny <= MAX_COEFFICIENTS:
-            return None
-        return _fit_once(x_range, y_range, xb, yb, fine_x, fine_y, h, sx, sy)
+        key = (sx, sy)
+        if key not in self._fits:
+            # (counted first: a spacing near 0 would build knot vectors beyond memory)
+            (x0, x1), (y0, y1) = self.x_range, self.y_range
+            nx = _coefficient_count(x0, x1, self.xb, self.fine_x, sx)
+            ny = _coefficient_count(y0, y1, self.yb, self.fine_y, sy)
+            self._fits[key] = (
+                _fit_once(self.x_range, self.y_range, self.xb, self.yb, self.fine_x,
+                          self.fine_y, self.h, sx, sy)
+                if nx * ny <= MAX_COEFFICIENTS
+                else None
+            )  # fmt: skip
+        return self._fits[key]
 
-    return refine_both(fit_at, spacing, tol, levels)
+    def fit(self, tol: float, levels: int = 5) -> TensorFit | None:
+        """As :func:`fit_height` with this fitter's height and spacing."""
+        return refine_both(self.fit_at, self.spacing, tol, levels)
 
 
 def refine_both(
@@ -429,9 +459,16 @@ def _one_lapack_thread() -> Iterator[None]:
     """BLAS (scipy's and numpy's OpenBLAS) limited to one thread inside the block: the banded
     factorisation is thousands of small BLAS calls, and their thread hand-offs stalled it
     for 2 - 17 s (0.3 s single-threaded, the same otherwise) on a shared 2-core machine under
-    other loads. threadpoolctl finds the libraries loaded in the process."""
-    with threadpool_limits(limits=1, user_api="blas"):
+    other loads. threadpoolctl finds the libraries loaded in the process, once (its scan of
+    the process's libraries cost 4 ms per fit, as much as a small fit itself)."""
+    with _blas_controller().limit(limits=1, user_api="blas"):
         yield
+
+
+@lru_cache(maxsize=1)
+def _blas_controller() -> ThreadpoolController:
+    """The process's thread pools (numpy's and scipy's BLAS are loaded with this module)."""
+    return ThreadpoolController()
 
 
 def _pair_products(b: sp.csr_matrix, lo: int) -> sp.csr_matrix:

@@ -33,6 +33,17 @@ def _speed(curve: Curve, t: FloatArray) -> FloatArray:
     return np.asarray(np.sqrt(np.einsum("ij,ij->j", d, d)))
 
 
+def arclength_at(curve: Curve, t: FloatArray) -> FloatArray:
+    """Arc lengths (n,) of ``curve`` from its start to parameters ``t`` (n,, in ``[0, 1]``):
+    the same Gauss-Legendre pieces as :func:`arclength_params`."""
+    t = np.clip(np.asarray(t, dtype=np.float64), 0.0, 1.0)
+    pieces = _PIECES * max(curve.complexity(), 1)
+    edges = np.linspace(0.0, 1.0, pieces + 1)
+    cum = np.concatenate(([0.0], np.cumsum(_length_between(curve, edges[:-1], edges[1:]))))
+    k = np.clip(np.searchsorted(edges, t, side="right") - 1, 0, pieces - 1)
+    return np.asarray(cum[k] + _length_between(curve, edges[k], t))
+
+
 def arclength_params(curve: Curve, fractions: FloatArray) -> FloatArray:
     """Parameters ``t`` (n,) where the arc length from the start of ``curve`` is
     ``fractions`` (n,, in ``[0, 1]``) of its length. Lines and arcs: ``t = fractions``

@@ -51,7 +51,7 @@ from medax.cad.simplify.occ import (
 from medax.geometry.polygon_grid import inside_grid
 from medax.geometry.surface_heights import graph_heights
 from medax.geometry.surfaces import NurbsSurface
-from medax.geometry.tensor_fit import MAX_COEFFICIENTS, TensorFit, fit_height, greville
+from medax.geometry.tensor_fit import MAX_COEFFICIENTS, HeightFitter, TensorFit, greville
 
 #: Samples per edge for the projected member boundaries.
 EDGE_SAMPLES = 48
@@ -475,18 +475,22 @@ def _grid_labels(
     return label.ravel()
 
 
-def graph_surface(
-    plane_face: Any,
-    members: Sequence[Any],
-    fit_tol: float,
-    geom_tol: float,
-    probe: bool = False,
-) -> FittedSurface | str:
-    """Fitted surface of the merged face made of ``members`` (faces of the split solid, one of
-    them on the supporting plane of ``plane_face``), to ``fit_tol`` (length unit); the reason
-    (str) when the pieces are not a height field over the plane or the fit misses ``fit_tol``.
-    ``geom_tol``: length tolerance of the geometric tests. With ``probe`` only the coarsest
-    fit is made and only a face that is no height field is refused (a cheap first check)."""
+@dataclass(frozen=True)
+class GraphSetup:
+    """What the fits of one merged face share (:func:`graph_setup`): the plane's frame
+    ``o, ex, ey`` and normal ``n`` (each (3,)), and the fitter of the height over it."""
+
+    o: Array
+    ex: Array
+    ey: Array
+    n: Array
+    fitter: HeightFitter
+
+
+def graph_setup(plane_face: Any, members: Sequence[Any], geom_tol: float) -> GraphSetup | str:
+    """The frame, the members' projected boundaries and heights, and the knot placement of
+    the merged face made of ``members`` over the plane of ``plane_face`` (see
+    :func:`graph_surface`); the reason (str) when a member cannot be merged."""
     o, ex, ey, n = _frame(plane_face, members, geom_tol)
     frame = (o, ex, ey)
     ms: list[_Member] = []
@@ -526,8 +530,31 @@ def graph_surface(
         return z.reshape(x.shape), ok.reshape(x.shape), face_mask.reshape(x.shape)
 
     xb, yb = _breaks(ms, geom_tol)
-    levels = 1 if probe else 4
-    fit = fit_height((lo[0], hi[0]), (lo[1], hi[1]), xb, yb, h, fit_tol, rmin / 4, levels=levels)
+    fitter = HeightFitter((lo[0], hi[0]), (lo[1], hi[1]), xb, yb, h, rmin / 4)
+    return GraphSetup(o, ex, ey, n, fitter)
+
+
+def graph_surface(
+    plane_face: Any,
+    members: Sequence[Any],
+    fit_tol: float,
+    geom_tol: float,
+    probe: bool = False,
+    setup: GraphSetup | str | None = None,
+) -> FittedSurface | str:
+    """Fitted surface of the merged face made of ``members`` (faces of the split solid, one of
+    them on the supporting plane of ``plane_face``), to ``fit_tol`` (length unit); the reason
+    (str) when the pieces are not a height field over the plane or the fit misses ``fit_tol``.
+    ``geom_tol``: length tolerance of the geometric tests. With ``probe`` only the coarsest
+    fit is made and only a face that is no height field is refused (a cheap first check).
+    ``setup``: :func:`graph_setup` of the same face and members, when the caller keeps it
+    (the probe's fit is then not made again by the full fit)."""
+    if setup is None:
+        setup = graph_setup(plane_face, members, geom_tol)
+    if isinstance(setup, str):
+        return setup
+    o, ex, ey, n = setup.o, setup.ex, setup.ey, setup.n
+    fit = setup.fitter.fit(fit_tol, levels=1 if probe else 4)
     if fit is None:
         return (
             f"the fitted surface would need more than {MAX_COEFFICIENTS} coefficients "

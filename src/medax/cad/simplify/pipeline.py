@@ -30,7 +30,7 @@ from medax import tolerances
 from medax._progress import log_progress
 from medax.cad.simplify.bridge import bridge_edge
 from medax.cad.simplify.corner import corner_arcs, plane_normal
-from medax.cad.simplify.fitted import FittedSurface, graph_surface
+from medax.cad.simplify.fitted import FittedSurface, GraphSetup, graph_setup, graph_surface
 from medax.cad.simplify.groups import Group, GroupError, build_groups
 from medax.cad.simplify.local_measure import (
     contributions,
@@ -222,6 +222,10 @@ class _Job:
     bridges: dict[tuple[int, int], Any] = field(default_factory=dict)
     surfaces: dict[int, MergedSurface | str] = field(default_factory=dict)
     cache: dict[tuple[int, ...], FittedSurface | str] = field(default_factory=dict)
+    # (support, member origins) -> the height-field fit's setup, shared by probe and full fit
+    setups: dict[tuple[int, ...], GraphSetup | str] = field(default_factory=dict)
+    # the last split kept by a fit round and the tool edges it was made with (:func:`_split`)
+    last_split: tuple[list[Any], Any] | None = None
     exact: dict[tuple[Any, ...], MergedSurface | str] = field(default_factory=dict)
     area0: float | None = None  # the input's boundary area (measured at the first attempt)
     volume0: float | None = None  # the input's volume (measured at the first attempt)
@@ -552,7 +556,12 @@ def _fitted(job: _Job, split: Any, g: Group, probe: bool = False) -> FittedSurfa
             # planes and cylinders), else the height field over a plane
             ring = ring_surface(support, members, fit_tol, job.btol, probe=probe)
             if isinstance(ring, str) and not _ring_kind(support):
-                flat = graph_surface(support, members, fit_tol, job.btol, probe=probe)
+                # (the probe's setup and fit serve the full fit of the same group)
+                skey = key[1:]
+                if skey not in job.setups:
+                    job.setups[skey] = graph_setup(support, members, job.btol)
+                setup = job.setups[skey]
+                flat = graph_surface(support, members, fit_tol, job.btol, probe, setup)
                 if isinstance(flat, str) and _ring_applies(ring):
                     flat = f"{flat}; ring route: {ring}"
                 job.cache[key] = flat
@@ -583,13 +592,24 @@ def _ring_applies(why: str) -> bool:
     return not why.startswith(NOT_A_RING)
 
 
-def _split(job: _Job, sel: dict[int, FilletSpec], csel: dict[int, CornerSpec]) -> Any:
+def _split(
+    job: _Job, sel: dict[int, FilletSpec], csel: dict[int, CornerSpec], keep: bool = False
+) -> Any:
     """The working solid split along the medial curves of ``sel`` and the arcs of ``csel``,
-    and its groups."""
+    and its groups. The split a fit round kept (``keep``) is taken again by the next call
+    when it was made with the same tool edges (the fit rounds only read it; an attempt,
+    whose rebuild adds pcurves to its edges, takes it and leaves none behind)."""
     tools = [job.medials[f].edge for f in sel if f not in job.whole]
     tools += [e for c in csel for e in job.arcs[c]]
     tools += [e for (f, base), e in job.bridges.items() if f in sel and base in sel]
-    split = split_along(job.work, tools)
+    last, job.last_split = job.last_split, None
+    same = last is not None and len(last[0]) == len(tools)
+    if last is not None and same and all(a.IsSame(b) for a, b in zip(last[0], tools, strict=True)):
+        split = last[1]
+    else:
+        split = split_along(job.work, tools)
+    if keep:
+        job.last_split = (tools, split)
     groups = build_groups(
         split,
         {f: s.supporting for f, s in sel.items()},
@@ -616,7 +636,7 @@ def _fit_round(job: _Job, probe: bool) -> bool:
     if not fitted or not job.specs:
         return False
     try:
-        split, groups = _split(job, job.specs, job.corners)
+        split, groups = _split(job, job.specs, job.corners, keep=True)
     except GroupError as err:  # traced to fillets: keep them now, not after a search
         blamed = {f for c in err.faces if c in job.corners for f in job.corners[c].fillets}
         blamed |= err.faces & set(job.specs)

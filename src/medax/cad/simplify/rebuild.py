@@ -193,11 +193,12 @@ def _add_pcurves(face: Any, tol: float, old: Sequence[Any] = ()) -> None:
                 u0, u1, v0, v1 = (float(x) for x in surf.Bounds())
                 grid = GridProjection.of(surf, (u0, u1, v0, v1))
             alt = _fitted_pcurve(c, surf, f, l, tol, grid)
-            if alt is not None and _pcurve_error(alt, c, surf, f, l) < err:
-                pc = alt
+            alt_err = float("inf") if alt is None else _pcurve_error(alt, c, surf, f, l)
+            if alt_err < err:
+                pc, err = alt, alt_err
         if pc is None:
             raise CadError("projecting a boundary edge onto a new surface failed")
-        _set_pcurve(builder, TopoDS.Edge(e), face, pc, f, l, _pcurve_error(pc, c, surf, f, l), tol)
+        _set_pcurve(builder, TopoDS.Edge(e), face, pc, f, l, err, tol)  # (err measured above)
 
 
 def _set_pcurve(
