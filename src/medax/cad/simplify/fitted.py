@@ -541,6 +541,7 @@ def graph_surface(
     geom_tol: float,
     probe: bool = False,
     setup: GraphSetup | str | None = None,
+    accept: float | None = None,
 ) -> FittedSurface | str:
     """Fitted surface of the merged face made of ``members`` (faces of the split solid, one of
     them on the supporting plane of ``plane_face``), to ``fit_tol`` (length unit); the reason
@@ -548,7 +549,8 @@ def graph_surface(
     ``geom_tol``: length tolerance of the geometric tests. With ``probe`` only the coarsest
     fit is made and only a face that is no height field is refused (a cheap first check).
     ``setup``: :func:`graph_setup` of the same face and members, when the caller keeps it
-    (the probe's fit is then not made again by the full fit)."""
+    (the probe's fit is then not made again by the full fit). ``accept``: the largest error
+    taken when the fit cannot reach ``fit_tol`` (``fit_tol`` when None)."""
     if setup is None:
         setup = graph_setup(plane_face, members, geom_tol)
     if isinstance(setup, str):
@@ -562,9 +564,10 @@ def graph_surface(
         )
     if not np.isfinite(fit.error):
         return "the merged face is not a height field over its plane (steep or undefined)"
-    if fit.error > fit_tol and not probe:
+    limit = fit_tol if accept is None else max(accept, fit_tol)
+    if fit.error > limit and not probe:
         return (
-            f"fitted surface error {fit.error:.2e} above {fit_tol:.2e} (curvature jumps off the "
+            f"fitted surface error {fit.error:.2e} above {limit:.2e} (curvature jumps off the "
             "knot lines, e.g. along circles, a step at a cross edge, or a crease where two "
             "fillets meet in a mitre)"
         )

@@ -113,14 +113,20 @@ def _at(spline: CubicSpline, theta: Array) -> Array:
 
 
 def ring_surface(
-    support: Any, members: Sequence[Any], fit_tol: float, geom_tol: float, probe: bool = False
+    support: Any,
+    members: Sequence[Any],
+    fit_tol: float,
+    geom_tol: float,
+    probe: bool = False,
+    accept: float | None = None,
 ) -> FittedSurface | str:
     """The fitted surface of the merged face made of ``members`` (faces of the split solid:
     a piece of the supporting plane or cylinder ``support`` and one blend half whose
     contact with it is one closed curve round the axis), to ``fit_tol`` (length unit); the
     reason (str) when the route does not apply or the fit misses ``fit_tol``. With
     ``probe`` only the first level is fitted and only data missing inside the face is
-    refused (a cheap first check)."""
+    refused (a cheap first check). ``accept``: the largest error taken when the fit cannot
+    reach ``fit_tol`` (``fit_tol`` when None)."""
     ad = BRepAdaptor_Surface(support)
     kind = ad.GetType()
     if kind not in (GeomAbs_Plane, GeomAbs_Cylinder):
@@ -268,8 +274,9 @@ def ring_surface(
         return "the ring fit would need too many coefficients"
     if not np.isfinite(fit.error):
         return "the blend half's points are not all found on their rays (ring route)"
-    if fit.error > fit_tol and not probe:
-        return f"ring fit error {fit.error:.2e} above {fit_tol:.2e}"
+    limit = fit_tol if accept is None else max(accept, fit_tol)
+    if fit.error > limit and not probe:
+        return f"ring fit error {fit.error:.2e} above {limit:.2e}"
     fit = replace(fit, coef=base + fit.coef @ rot)  # poles in space
     surface = periodic_surface(fit)
     dv = _volume_change(fit, h, support, inside_pt, frame)
