@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial import cKDTree
 
+from medax.geometry import kernels
 from medax.geometry._types import FloatArray
 
 #: 10-point Gauss-Legendre nodes and weights on [-1, 1] (for :meth:`Curve.length`)
@@ -72,6 +73,12 @@ class Curve(ABC):
         """The :meth:`jet` as component rows (3 * dim, n): ``C``, ``C'``, ``C''``, each
         coordinate a contiguous row (cheaper arithmetic on them than on (n, dim) columns);
         None where a kind has no such fast path (callers then use :meth:`jet`)."""
+        return None
+
+    def poly_search(self) -> Any:
+        """The compiled search tables of a kind evaluated by polynomial pieces
+        (:class:`~medax.geometry.pair_search.PolySearch`: global and bracketed closest points
+        in one kernel call each), None for the others (their jets come from Python)."""
         return None
 
     def transformed(self, offset: FloatArray, scale: float) -> Curve:
@@ -445,27 +452,30 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
     (distinct parts of the curve, not neighbouring samples of one part). Each is refined in
     the bracket of its two neighbouring samples: ``g = (C - x) . C'`` at the three samples
     (from the tabulated samples and slopes: no curve evaluation) picks the half with the
-    sign change, whose linear interpolation starts :func:`_newton_in_brackets`; a bracket
-    without a sign change keeps its nearest sample (an end of the curve).
+    sign change, whose inverse quadratic interpolation starts a bracketed Newton iteration;
+    a bracket without a sign change keeps its nearest sample (an end of the curve). Curves
+    with polynomial tables run it all in one compiled call
+    (:func:`medax.geometry.kernels.closest_search`); the others evaluate their jets from
+    Python between the compiled steps (:func:`_newton_in_brackets`).
     """
-    ts, pts = curve._search
-    slopes = curve._slopes
-    n, m = points.shape[0], ts.size
+    n = points.shape[0]
     if n == 0:
         return Closest(t=np.zeros(0), foot=np.zeros((0, curve.dim)), distance=np.zeros(0))
+    poly = curve.poly_search()
+    if poly is not None and poly.k == k:
+        t2, f2, d2 = poly.closest(points)
+        return Closest(t=t2[:, 0], foot=f2[:, 0], distance=d2[:, 0])
+    ts, pts = curve._search
     cand = _candidate_samples(curve, points, k).ravel()
-    x = np.repeat(points, k, axis=0)
-    j3 = np.minimum(np.maximum(cand[:, None] + _THREE, 0), m - 1)  # (nk, 3) samples
-    g, d2, ia, ga, gb, interior = sign_brackets(pts, slopes, j3, x)
-    best = np.argmin(d2, axis=1)
-    rows = np.arange(x.shape[0])
-    jb = j3[rows, best]
-    t, foot = ts[jb], pts[jb]
+    x = np.ascontiguousarray(np.repeat(points, k, axis=0))
+    t, foot, ta, tb, s0, interior, w_lo, w_hi = kernels.bracket_rows(
+        ts, np.ascontiguousarray(pts), np.ascontiguousarray(curve._slopes), x, cand
+    )
     if np.any(interior):
-        ta, tb = ts[ia[interior]], ts[ia[interior] + 1]
-        start = _start(ts[j3[interior]], g[interior], ta, tb, ga[interior], gb[interior])
-        t[interior], foot[interior] = _quick_newton(curve, x[interior], ta, tb, start)
-    at_breaks(curve, curve.breaks(), x, ts[j3[:, 0]], ts[j3[:, 2]], t, foot)
+        t[interior], foot[interior] = _newton_in_brackets(
+            curve, x[interior], ta[interior], tb[interior], s0[interior]
+        )
+    at_breaks(curve, curve.breaks(), x, w_lo, w_hi, t, foot)
     dist = np.linalg.norm(foot - x, axis=1).reshape(n, k)
     pick = np.argmin(dist, axis=1)
     r = np.arange(n)
@@ -506,43 +516,6 @@ def at_breaks(
     t[r], foot[r] = e[rows][nearer], c[nearer]
 
 
-def sign_brackets(
-    pts: FloatArray, slopes: FloatArray, j3: np.ndarray, x: FloatArray
-) -> tuple[FloatArray, FloatArray, np.ndarray, FloatArray, FloatArray, np.ndarray]:
-    """For points ``x`` (n, dim) and three consecutive sample indices ``j3`` (n, 3) each,
-    from the tabulated samples ``pts`` and slopes ``slopes`` (m, dim): ``g = (C - x) . C'``
-    (n, 3), the squared distances (n, 3), the left sample ``ia`` (n,) of the half with the
-    sign change and ``g`` at its ends ``ga``, ``gb`` (n,), and whether that change is a
-    minimum inside (n,) (``ga < 0 < gb``)."""
-    c = pts[j3] - x[:, None, :]
-    g = np.einsum("nij,nij->ni", c, slopes[j3])
-    d2 = np.einsum("nij,nij->ni", c, c)
-    left = g[:, 1] >= 0.0  # the sign change is in [j-1, j] (else in [j, j+1])
-    ia = np.where(left, j3[:, 0], j3[:, 1])
-    ga = np.where(left, g[:, 0], g[:, 1])
-    gb = np.where(left, g[:, 1], g[:, 2])
-    return g, d2, ia, ga, gb, (ga < 0.0) & (gb > 0.0)
-
-
-def _start(
-    t3: FloatArray, g3: FloatArray, ta: FloatArray, tb: FloatArray, ga: FloatArray, gb: FloatArray
-) -> FloatArray:
-    """Start (n,) for the root of ``g`` in ``[ta, tb]`` (``g(ta) = ga < 0 < gb = g(tb)``):
-    inverse quadratic interpolation through the three samples ``t3``, ``g3`` (n, 3) (error
-    ~ h^3 instead of the h^2 of regula falsi: Newton then needs one step less), regula falsi
-    where that leaves the bracket or is undefined (repeated samples at the curve's ends)."""
-    g0, g1, g2 = g3[:, 0], g3[:, 1], g3[:, 2]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = (
-            t3[:, 0] * g1 * g2 / ((g0 - g1) * (g0 - g2))
-            + t3[:, 1] * g0 * g2 / ((g1 - g0) * (g1 - g2))
-            + t3[:, 2] * g0 * g1 / ((g2 - g0) * (g2 - g1))
-        )
-    falsi = ta + (tb - ta) * ga / (ga - gb)
-    return np.where((s > ta) & (s < tb), s, falsi)
-
-
-_THREE = np.arange(-1, 2)
 #: a Newton step on the foot parameter at most this long ends a row: Newton converging
 #: quadratically, the foot parameter is then off by about ``K s^2`` (``K = g'' / 2 g'``),
 #: ~1e-16. Far from the curve the distance is stationary at the foot and would allow far
@@ -550,7 +523,7 @@ _THREE = np.arange(-1, 2)
 #: near it (the deviation check's points on the surfaces) the distance is off by
 #: ``|C'| K s^2``: 1e-6 left 3e-12 on a merged face's profile, 1e-8 leaves round-off, at
 #: no measurable cost on the wavy axis (27 - 29 ms both)
-_STEP_TOL = 1e-8
+_STEP_TOL = kernels.STEP_TOL
 
 
 _TREE_ABOVE = 2_000_000  # point x sample table size above which a k-d tree answers (x 50)
@@ -588,30 +561,10 @@ def _candidate_samples(curve: Curve, points: FloatArray, k: int) -> np.ndarray:
         _, idx = curve._tree.query(points, k=4 * k)
         return np.asarray(idx)[:, ::4][:, :k]
     centre, aug = curve._table
-    xt = _augmented(points - centre)
-    out = np.empty((n, k), dtype=np.int64)
-    cols = max(1, _TABLE_BLOCK // m)
-    d2_buf, min_buf = np.empty((m, cols)), np.empty((m, cols), dtype=bool)
-    le_buf = np.empty((m - 1, cols), dtype=bool)
-    for s in range(0, n, cols):
-        e = min(n, s + cols)
-        # |x - p|^2 up to the per-point constant |x|^2 (which does not change the minima)
-        d2, is_min = d2_buf[:, : e - s], min_buf[:, : e - s]
-        _distance_table(aug, xt[:, s:e], d2, is_min, le_buf[:, : e - s])
-        score = np.where(is_min, d2, np.inf).T  # (points, samples) for the row argmins
-        score = np.ascontiguousarray(score)
-        # the k best local minima by repeated argmin (faster than argpartition for small k);
-        # rows with fewer than k local minima repeat their best one
-        rr = np.arange(e - s)
-        best = np.argmin(score, axis=1)
-        part = np.empty((e - s, k), dtype=np.int64)
-        part[:, 0] = best
-        for j in range(1, k):
-            score[rr, part[:, j - 1]] = np.inf
-            nxt = np.argmin(score, axis=1)
-            part[:, j] = np.where(np.isfinite(score[rr, nxt]), nxt, best)
-        out[s:e] = part
-    return out
+    cpts = np.ascontiguousarray(aug[:, :-1] * -0.5)
+    x = np.ascontiguousarray(points - centre)
+    bounds = np.array([0, m], dtype=np.int64)
+    return kernels.candidates(cpts, np.ascontiguousarray(aug[:, -1]), bounds, x, k)[:, 0]  # type: ignore[no-any-return]
 
 
 def _bracketed_newton(
@@ -625,10 +578,14 @@ def _bracketed_newton(
     and foot points (n, dim).
 
     ``g(t) = (C - x) . C'`` is the half derivative of the squared distance. Where ``g`` has
-    the same sign at both bracket ends the minimum is at an end; otherwise
-    :func:`_quick_newton` from ``start`` (default: the linear interpolation of ``g`` between
-    the bracket ends).
+    the same sign at both bracket ends the minimum is at an end; otherwise the bracketed
+    Newton iteration from ``start`` (default: the linear interpolation of ``g`` between the
+    bracket ends); in one compiled call for curves with polynomial tables
+    (:func:`medax.geometry.kernels.closest_bracketed`).
     """
+    poly = curve.poly_search()
+    if poly is not None:
+        return poly.closest_in(np.zeros(x.shape[0], dtype=np.int64), x, lo, hi, start)  # type: ignore[no-any-return]
     n = x.shape[0]
     c0, c1, _ = curve.jet(np.concatenate((lo, hi)))
     c = c0 - np.concatenate((x, x))
@@ -648,72 +605,36 @@ def _bracketed_newton(
         s0 = a + (b - a) * ga / (ga - gb)  # regula falsi start: g < 0 at a, > 0 at b
     else:
         s0 = np.minimum(np.maximum(start[interior], a), b)
-    t[interior], foot[interior] = _quick_newton(curve, x[interior], a, b, s0)
+    t[interior], foot[interior] = _newton_in_brackets(curve, x[interior], a, b, s0)
     return t, foot
-
-
-def _quick_newton(
-    curve: Curve, x: FloatArray, a: FloatArray, b: FloatArray, s: FloatArray, steps: int = 3
-) -> tuple[FloatArray, FloatArray]:
-    """:func:`_newton_in_brackets` for good starts ``s`` (n,): up to ``steps`` plain Newton
-    steps on all rows (clamped to ``[a, b]``, no per-row bookkeeping: a few numpy calls
-    each), stopping once every row's step was a Newton step of at most ``_STEP_TOL``; then
-    the safeguarded iteration for the rows that did not settle (from where they are)."""
-    for _ in range(steps):
-        c0, c1, c2 = curve.jet(s)
-        c = c0 - x
-        g = np.einsum("ij,ij->i", c, c1)
-        dg = np.einsum("ij,ij->i", c1, c1) + np.einsum("ij,ij->i", c, c2)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            new = np.minimum(np.maximum(s - g / dg, a), b)
-        ds = new - s
-        ok = (dg > 0.0) & (np.abs(ds) <= _STEP_TOL)
-        if ok.all():
-            break
-        s = new
-    foot = c0 + ds[:, None] * (c1 + (0.5 * ds)[:, None] * c2)  # Taylor: no evaluation
-    if ok.all():
-        return new, foot
-    bad = ~ok
-    ss = np.where(np.isfinite(new), new, s)[bad]
-    new[bad], foot[bad] = _newton_in_brackets(curve, x[bad], a[bad], b[bad], ss)
-    return new, foot
 
 
 def _newton_in_brackets(
     curve: Curve, x: FloatArray, a: FloatArray, b: FloatArray, s: FloatArray, iters: int = 60
 ) -> tuple[FloatArray, FloatArray]:
     """The root of ``g(t) = (C(t) - x) . C'(t)`` in ``[a, b]`` (n,) where ``g(a) < 0 < g(b)``,
-    from ``s`` (n,): parameters (n,) and foot points (n, dim).
+    from ``s`` (n,): parameters (n,) and foot points (n, dim), for curves without polynomial
+    tables (their jets evaluated here, the steps compiled: :func:`kernels.newton_rows`).
 
     Newton steps kept inside the shrinking sign-change bracket (bisection when a step leaves
     it or ``g' <= 0``); a row stops at its first step of at most ``_STEP_TOL`` (see there),
     its foot the second-order Taylor expansion of that step's jet (off by ``|C^(3)| s^3 / 6``):
     no separate evaluation of the feet.
     """
-    a, b, s = a.copy(), b.copy(), s.copy()
+    a = np.array(a, dtype=np.float64)
+    b = np.array(b, dtype=np.float64)
+    s = np.array(s, dtype=np.float64)
+    s = np.where(np.isfinite(s), s, 0.5 * (a + b))
+    x = np.ascontiguousarray(x, dtype=np.float64)
     foot = np.empty_like(x)
     rows = np.arange(s.size)
     for it in range(iters):
-        sr, xr = s[rows], x[rows]
-        c0, c1, c2 = curve.jet(sr)
-        c = c0 - xr
-        g = np.einsum("ij,ij->i", c, c1)
-        dg = np.einsum("ij,ij->i", c1, c1) + np.einsum("ij,ij->i", c, c2)
-        aa = np.where(g < 0.0, sr, a[rows])
-        bb = np.where(g > 0.0, sr, b[rows])
-        # g / dg where dg > 0, else inf (a bisection below); no division warnings
-        step = np.divide(g, dg, out=np.full_like(g, np.inf), where=dg > 0.0)
-        new = sr - step
-        small = np.abs(step) <= _STEP_TOL
-        bad = ~(new >= aa) | ~(new <= bb)  # also catches nan
-        kept = np.minimum(np.maximum(new, aa), bb)
-        new = np.where(small, kept, np.where(bad, 0.5 * (aa + bb), new))
-        done = small | (bb - aa <= 4e-16) | (g == 0.0) | (it == iters - 1)
-        a[rows], b[rows], s[rows] = aa, bb, new
-        ds = np.where(small, kept - sr, 0.0)[done]
-        foot[rows[done]] = c0[done] + ds[:, None] * (c1[done] + (0.5 * ds)[:, None] * c2[done])
-        s[rows[done]] = np.where(small[done], kept[done], sr[done])
+        sr, ar, br, xr = s[rows], a[rows], b[rows], x[rows]
+        c0, c1, c2 = (np.ascontiguousarray(c) for c in curve.jet(sr))
+        fr = np.empty_like(xr)
+        done = kernels.newton_rows(c0, c1, c2, xr, sr, ar, br, it == iters - 1, fr)
+        s[rows], a[rows], b[rows] = sr, ar, br
+        foot[rows[done]] = fr[done]
         rows = rows[~done]
         if rows.size == 0:
             break
