@@ -561,10 +561,10 @@ def _candidate_samples(curve: Curve, points: FloatArray, k: int) -> np.ndarray:
         _, idx = curve._tree.query(points, k=4 * k)
         return np.asarray(idx)[:, ::4][:, :k]
     centre, aug = curve._table
-    cpts = np.ascontiguousarray(aug[:, :-1] * -0.5)
+    ct = np.ascontiguousarray(aug[:, :-1].T * -0.5)
     x = np.ascontiguousarray(points - centre)
     bounds = np.array([0, m], dtype=np.int64)
-    return kernels.candidates(cpts, np.ascontiguousarray(aug[:, -1]), bounds, x, k)[:, 0]  # type: ignore[no-any-return]
+    return kernels.candidates(ct, np.ascontiguousarray(aug[:, -1]), bounds, x, k)[:, 0]  # type: ignore[no-any-return]
 
 
 def _bracketed_newton(

@@ -46,8 +46,17 @@ SAFE_STEPS = 60
 # ---- jets ---------------------------------------------------------------------------------
 @njit(cache=True, error_model="numpy", inline="always")
 def _span(inner: FloatArray, u: float) -> int:
-    """The span of stacked parameter ``u``: the number of ``inner`` breaks ``<= u``."""
-    return int(np.searchsorted(inner, u, side="right"))
+    """The span of stacked parameter ``u``: the number of ``inner`` breaks ``<= u`` (binary
+    search; a NaN ``u`` counts as above them all, as numpy's ``searchsorted`` has it)."""
+    lo = 0
+    hi = inner.size
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if inner[mid] <= u or u != u:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -259,22 +268,30 @@ def _corner(
 
 
 @njit(cache=True, error_model="numpy")
-def candidates(cpts: FloatArray, pp: FloatArray, bounds: np.ndarray, x: FloatArray, k: int):  # type: ignore[no-untyped-def]
+def candidates(ct: FloatArray, pp: FloatArray, bounds: np.ndarray, x: FloatArray, k: int):  # type: ignore[no-untyped-def]
     """Indices (n, curves, k) of the ``k`` nearest local minima of the sampled distance of
-    each point ``x`` (n, dim; centred as the samples) on each curve; samples ``cpts``
-    (m, dim) centred, ``pp`` (m,) their squared norms, curve ``j`` on samples
-    ``bounds[j]:bounds[j + 1]``. Rows with fewer than ``k`` minima repeat their best one."""
+    each point ``x`` (n, dim; centred as the samples) on each curve; samples ``ct``
+    (dim, m) centred, coordinates as rows, ``pp`` (m,) their squared norms, curve ``j`` on
+    samples ``bounds[j]:bounds[j + 1]``. Rows with fewer than ``k`` minima repeat their best
+    one."""
     n, dim = x.shape
+    m = ct.shape[1]
     nc = bounds.size - 1
     out = np.empty((n, nc, k), dtype=np.int64)
-    d2 = np.empty(cpts.shape[0])
+    d2 = np.empty(m)
     best_v = np.empty(k)
     for i in range(n):
-        for j in range(cpts.shape[0]):
-            acc = 0.0
-            for d in range(dim):
-                acc += cpts[j, d] * x[i, d]
-            d2[j] = pp[j] - 2.0 * acc
+        # |x - p|^2 - |x|^2 (the per-point constant does not move the minima), a loop over
+        # contiguous rows per coordinate (vectorised)
+        x0 = x[i, 0]
+        for j in range(m):
+            d2[j] = ct[0, j] * x0
+        for d in range(1, dim):
+            xd = x[i, d]
+            for j in range(m):
+                d2[j] += ct[d, j] * xd
+        for j in range(m):
+            d2[j] = pp[j] - 2.0 * d2[j]
         for c in range(nc):
             lo, hi = bounds[c], bounds[c + 1]
             cnt = 0
@@ -386,7 +403,7 @@ def closest_search(  # type: ignore[no-untyped-def]
     pts: FloatArray,
     slopes: FloatArray,
     centre: FloatArray,
-    cpts: FloatArray,
+    ct: FloatArray,
     pp: FloatArray,
     bounds: np.ndarray,
     inner: FloatArray,
@@ -402,16 +419,17 @@ def closest_search(  # type: ignore[no-untyped-def]
     (n, curves, dim) and distances (n, curves).
 
     The search samples of curve ``j`` are ``ts``, ``pts``, ``slopes`` (local parameters,
-    points, ``C'``) on ``bounds[j]:bounds[j + 1]``, ``cpts``/``pp`` the points centred on
-    ``centre`` and their squared norms; its C0 corners ``breaks[break_bounds[j]:...]``. Per
-    point and curve: the ``k`` best local minima of the sampled distance (:func:`candidates`),
-    each refined in the sign-change half of its three-sample window (inverse quadratic start,
-    :func:`_refine`; no sign change: its nearest sample), a nearer corner in the window
-    taken, the nearest candidate kept (the first on ties)."""
+    points, ``C'``) on ``bounds[j]:bounds[j + 1]``, ``ct`` (dim, m) and ``pp`` the points
+    centred on ``centre`` and their squared norms; its C0 corners
+    ``breaks[break_bounds[j]:break_bounds[j + 1]]``. Per point and curve: the ``k`` best
+    local minima of the sampled distance (:func:`candidates`), each refined in the
+    sign-change half of its three-sample window (inverse quadratic start, :func:`_refine`;
+    no sign change: its nearest sample), a nearer corner in the window taken, the nearest
+    candidate kept (the first on ties)."""
     n, dim = x.shape
     nc = bounds.size - 1
     xc = x - centre
-    cand = candidates(cpts, pp, bounds, xc, k)
+    cand = candidates(ct, pp, bounds, xc, k)
     t_out = np.empty((n, nc))
     foot_out = np.empty((n, nc, dim))
     dist_out = np.empty((n, nc))
@@ -562,11 +580,11 @@ def warm_up() -> None:
     pts = np.column_stack((ts, ts * ts))
     slopes = np.column_stack((np.ones(5), 2.0 * ts))
     closest_search(
-        ts, pts, slopes, np.zeros(2), pts, np.einsum("ij,ij->i", pts, pts),
+        ts, pts, slopes, np.zeros(2), pts.T.copy(), np.einsum("ij,ij->i", pts, pts),
         np.array([0, 5]), inner, starts, rows, np.zeros(0), np.array([0, 0]), x, 2,
     )  # fmt: skip
     closest_bracketed(inner, starts, rows, np.zeros(1, dtype=np.int64), x, z, np.ones(1), z)
-    cand = candidates(pts, np.einsum("ij,ij->i", pts, pts), np.array([0, 5]), x, 2)
+    cand = candidates(pts.T.copy(), np.einsum("ij,ij->i", pts, pts), np.array([0, 5]), x, 2)
     bracket_rows(ts, pts, slopes, x, cand[:, 0, 0].copy())
 
 

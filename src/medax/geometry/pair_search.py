@@ -42,8 +42,9 @@ class PolySearch:
         sizes = [c._search[0].size for c in curves]
         self.bounds = np.concatenate(([0], np.cumsum(sizes))).astype(np.int64)
         self.centre = self.pts.mean(axis=0)
-        self.cpts = np.ascontiguousarray(self.pts - self.centre)
-        self.pp = np.einsum("mj,mj->m", self.cpts, self.cpts)
+        cpts = self.pts - self.centre
+        self.ct = np.ascontiguousarray(cpts.T)  # (dim, m)
+        self.pp = np.einsum("mj,mj->m", cpts, cpts)
         brs = [np.asarray(c.breaks(), dtype=np.float64) for c in curves]
         self.breaks = np.concatenate(brs) if brs else np.zeros(0)
         self.break_bounds = np.concatenate(([0], np.cumsum([b.size for b in brs]))).astype(np.int64)
@@ -53,7 +54,7 @@ class PolySearch:
         (n, curves), foot points (n, curves, dim), distances (n, curves)."""
         x = np.ascontiguousarray(points, dtype=np.float64)
         return kernels.closest_search(  # type: ignore[no-any-return]
-            self.ts, self.pts, self.slopes, self.centre, self.cpts, self.pp, self.bounds,
+            self.ts, self.pts, self.slopes, self.centre, self.ct, self.pp, self.bounds,
             self.inner, self.starts, self.rows, self.breaks, self.break_bounds, x, self.k,
         )  # fmt: skip
 
