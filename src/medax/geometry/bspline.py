@@ -325,16 +325,7 @@ def stacked_jet(
 ) -> FloatArray:
     """:meth:`BSpline.jet_rows` of points on several curves at once (``table``:
     :meth:`BSpline.stacked_rows`; ``offset`` (n,) ``2 j`` for a point on curve ``j``)."""
-    t = np.minimum(np.maximum(np.asarray(t, dtype=np.float64), 0.0), 1.0)
-    return stacked_jet_in(table, t, offset)
-
-
-def stacked_jet_in(
-    table: tuple[FloatArray, FloatArray, FloatArray], t: FloatArray, offset: FloatArray
-) -> FloatArray:
-    """:func:`stacked_jet` at parameters ``t`` (n,) already in ``[0, 1]`` (a tracking's:
-    not clamped again)."""
     inner, starts, rows = table
-    t = np.ascontiguousarray(t, dtype=np.float64)
+    t = np.minimum(np.maximum(np.asarray(t, dtype=np.float64), 0.0), 1.0)
     off = np.ascontiguousarray(offset, dtype=np.float64)
     return kernels.jet_rows(inner, starts, rows, t, off)  # type: ignore[no-any-return]

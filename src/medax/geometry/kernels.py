@@ -44,7 +44,7 @@ SAFE_STEPS = 60
 
 
 # ---- jets ---------------------------------------------------------------------------------
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _span(inner: FloatArray, u: float) -> int:
     """The span of stacked parameter ``u``: the number of ``inner`` breaks ``<= u`` (binary
     search; a NaN ``u`` counts as above them all, as numpy's ``searchsorted`` has it)."""
@@ -59,7 +59,7 @@ def _span(inner: FloatArray, u: float) -> int:
     return lo
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _jet1(rows: FloatArray, span: int, s: float, out: FloatArray) -> None:
     """Into ``out`` (3, dim): value, first and second derivative of the piece ``span`` of
     ``rows`` (degree + 1, dim, spans; value coefficients, highest power first) at local
@@ -104,7 +104,7 @@ def jet_rows(
 
 
 # ---- Newton steps -------------------------------------------------------------------------
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _g_dg(w: FloatArray, x: FloatArray) -> tuple[float, float]:
     """``g = (C - x) . C'`` and ``g' = C' . C' + (C - x) . C''`` from a jet ``w`` (3, dim)."""
     g = 0.0
@@ -118,7 +118,7 @@ def _g_dg(w: FloatArray, x: FloatArray) -> tuple[float, float]:
     return g, speed2 + curv
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _clamp(v: float, lo: float, hi: float) -> float:
     """``min(max(v, lo), hi)`` with numpy's NaN propagation."""
     if v != v:
@@ -126,7 +126,7 @@ def _clamp(v: float, lo: float, hi: float) -> float:
     return min(max(v, lo), hi)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _safe_step(
     g: float, dg: float, s: float, a: float, b: float, last: bool
 ) -> tuple[float, float, float, bool, float]:
@@ -230,7 +230,7 @@ def _refine(
 
 
 # ---- closest points on polynomial tables --------------------------------------------------
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _corner(
     inner: FloatArray,
     starts: FloatArray,
@@ -319,7 +319,7 @@ def candidates(ct: FloatArray, pp: FloatArray, bounds: np.ndarray, x: FloatArray
     return out
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _bracket(  # type: ignore[no-untyped-def]
     ts: FloatArray,
     pts: FloatArray,
@@ -465,7 +465,7 @@ def closest_search(  # type: ignore[no-untyped-def]
     return t_out, foot_out, dist_out
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _iqi_start(
     t0: float, t1: float, t2: float, g3: FloatArray, ta: float, tb: float, ga: float, gb: float
 ) -> float:
@@ -538,8 +538,179 @@ def closest_bracketed(  # type: ignore[no-untyped-def]
     return t_out, foot_out
 
 
+# ---- certification -----------------------------------------------------------------------
+@njit(cache=True, error_model="numpy")
+def certify_rows(  # type: ignore[no-untyped-def]
+    ts: FloatArray,
+    ct: FloatArray,
+    pp: FloatArray,
+    x: FloatArray,
+    t: FloatArray,
+    distance: FloatArray,
+    half: float,
+    quarter: float,
+    sag: float,
+    slack: float,
+):
+    """:func:`medax.geometry.curve.certify_closest` per point: ``x`` (n, dim) centred as
+    the samples (``ct`` (dim, m), ``pp`` (m,) as in :func:`candidates`; parameters ``ts``
+    (m,), evenly spaced), local feet ``t`` (n,) at ``distance`` (n,). The nearest local
+    minimum of the sample distance that is not within 1.5 spacings of the foot (among the
+    5 samples around it) at ``s``; certified (True) where the larger of ``s - half`` and
+    ``sqrt(s^2 - quarter) - sag`` is at least ``distance - slack``."""
+    n, dim = x.shape
+    m = ct.shape[1]
+    dt = ts[1] - ts[0]
+    ok = np.empty(n, dtype=np.bool_)
+    d2 = np.empty(m)
+    for i in range(n):
+        xx = 0.0
+        for d in range(dim):
+            xx += x[i, d] * x[i, d]
+        x0 = x[i, 0]
+        for j in range(m):
+            d2[j] = ct[0, j] * x0
+        for d in range(1, dim):
+            xd = x[i, d]
+            for j in range(m):
+                d2[j] += ct[d, j] * xd
+        for j in range(m):
+            d2[j] = pp[j] - 2.0 * d2[j]
+        f = int(np.floor(t[i] / dt))
+        other = np.inf
+        for j in range(m):
+            v = d2[j]
+            if j > 0 and not v <= d2[j - 1]:
+                continue
+            if j < m - 1 and not v <= d2[j + 1]:
+                continue
+            if f - 2 <= j <= f + 2 and abs(ts[j] - t[i]) <= 1.5 * dt:
+                continue  # the foot's own minimum
+            if v < other:
+                other = v
+        other = max(other + xx, 0.0)  # the nearest other sample, squared
+        b1 = np.sqrt(other) - half
+        b2 = np.sqrt(max(other - quarter, 0.0)) - sag
+        bound = b1 if b2 != b2 or b1 >= b2 else b2  # (fmax: inf - inf is no bound)
+        ok[i] = bound >= distance[i] - slack
+    return ok
+
+
+# ---- tracking: Newton steps from warm starts ----------------------------------------------
+@njit(cache=True, error_model="numpy")
+def _track1(
+    w: FloatArray, xs: FloatArray, i: int, t: float, tol: float, last: bool, foot: FloatArray
+) -> tuple[float, float, bool]:
+    """One tracking step (:func:`medax.geometry.curve.track_rows`) of point ``xs[:, i]``
+    (xs (dim, n)) from its foot ``t`` with the jet ``w`` (3, dim) there: a Newton step on
+    ``g = (C - x) . C'`` (a gradient step scaled by the speed where ``g' <= 0``), clamped to
+    ``[0, 1]``; into ``foot[:, i]`` the Taylor point of the step. Returns the new foot, the
+    curvature term ``|(C - x) . C''| / g'`` (inf unless settled; where ``g' <= 0``: 0 for a
+    foot held at an end, else inf) and whether the row is done (a step of at most ``tol``
+    that is a Newton step or held, or the ``last`` step)."""
+    dim = xs.shape[0]
+    c = w[0, 0] - xs[0, i]
+    g = c * w[1, 0]
+    speed2 = w[1, 0] * w[1, 0]
+    dg = c * w[2, 0]
+    for d in range(1, dim):
+        c = w[0, d] - xs[d, i]
+        g += c * w[1, d]
+        speed2 += w[1, d] * w[1, d]
+        dg += c * w[2, d]
+    dg += speed2
+    pos = dg > 0.0
+    den = dg if pos else speed2
+    if den < 1e-300:
+        den = 1e-300
+    new = t - g / den
+    if new == new:
+        new = min(max(new, 0.0), 1.0)
+    ds = new - t
+    zero = ds == 0.0
+    settled = abs(ds) <= tol and (pos or zero)
+    kap = abs(dg - speed2) / den
+    if not settled:
+        kap = np.inf
+    if not pos:
+        kap = 0.0 if zero and (new == 0.0 or new == 1.0) else np.inf
+    half = 0.5 * ds
+    for d in range(dim):
+        foot[d, i] = (w[2, d] * half + w[1, d]) * ds + w[0, d]
+    return new, kap, last or settled
+
+
+@njit(cache=True, error_model="numpy")
+def track_table(  # type: ignore[no-untyped-def]
+    inner: FloatArray,
+    starts: FloatArray,
+    rows: FloatArray,
+    offset: FloatArray,
+    xs: FloatArray,
+    t0: FloatArray,
+    tol: FloatArray,
+    iters: int,
+):
+    """:func:`medax.geometry.curve.track_rows` on a polynomial table (:func:`jet_rows`;
+    point ``i`` on curve ``offset[i] / 2``, empty ``offset``: curve 0): points ``xs``
+    (dim, n) from feet ``t0`` (n,, in [0, 1]), step tolerances ``tol`` (n,, or (1,) for
+    all), at most ``iters`` steps per row (:func:`_track1`). Feet (n,), foot points
+    (dim, n), curvature terms (n,)."""
+    n = t0.size
+    dim = xs.shape[0]
+    t_out = t0.copy()
+    foot = np.empty((dim, n))
+    kap = np.zeros(n)
+    w = np.empty((3, dim))
+    for i in range(n):
+        ti = t_out[i]
+        off = offset[i] if offset.size else 0.0
+        tl = tol[i] if tol.size > 1 else tol[0]
+        for it in range(iters):
+            span = _span(inner, ti + off)
+            _jet1(rows, span, ti - starts[span], w)
+            ti, kap[i], done = _track1(w, xs, i, ti, tl, it == iters - 1, foot)
+            if done:
+                break
+        t_out[i] = ti
+    return t_out, foot, kap
+
+
+@njit(cache=True, error_model="numpy")
+def track_step_rows(  # type: ignore[no-untyped-def]
+    jets: FloatArray, xs: FloatArray, t: FloatArray, tol: FloatArray, last: bool
+):
+    """One tracking step (:func:`_track1`) of every row, the jets ``jets`` (3 * dim, n)
+    evaluated by the caller (curves without a polynomial table): new feet (n,), foot points
+    (dim, n), curvature terms (n,), done (n,)."""
+    n = t.size
+    dim = xs.shape[0]
+    new = np.empty(n)
+    foot = np.empty((dim, n))
+    kap = np.empty(n)
+    done = np.empty(n, dtype=np.bool_)
+    w = np.empty((3, dim))
+    for i in range(n):
+        for o in range(3):
+            for d in range(dim):
+                w[o, d] = jets[o * dim + d, i]
+        tl = tol[i] if tol.size > 1 else tol[0]
+        new[i], kap[i], done[i] = _track1(w, xs, i, t[i], tl, last, foot)
+    return new, foot, kap, done
+
+
 # ---- the first-run compile message --------------------------------------------------------
-_COMPILED = (jet_rows, newton_rows, candidates, bracket_rows, closest_search, closest_bracketed)
+_COMPILED = (
+    jet_rows,
+    newton_rows,
+    candidates,
+    bracket_rows,
+    closest_search,
+    closest_bracketed,
+    track_table,
+    track_step_rows,
+    certify_rows,
+)
 _announced = False
 
 
@@ -586,6 +757,10 @@ def warm_up() -> None:
     closest_bracketed(inner, starts, rows, np.zeros(1, dtype=np.int64), x, z, np.ones(1), z)
     cand = candidates(pts.T.copy(), np.einsum("ij,ij->i", pts, pts), np.array([0, 5]), x, 2)
     bracket_rows(ts, pts, slopes, x, cand[:, 0, 0].copy())
+    xs = np.zeros((2, 1))
+    track_table(inner, starts, rows, np.zeros(0), xs, t, np.ones(1), 8)
+    track_step_rows(np.zeros((6, 1)), xs, t, np.ones(1), False)
+    certify_rows(ts, pts.T.copy(), ts.copy(), x, t, t, 0.1, 0.01, 0.0, 0.0)
 
 
 def _as_rows(t: FloatArray) -> FloatArray:
