@@ -232,8 +232,8 @@ class BSpline(Curve):
         """:attr:`_pieces` for :meth:`jet_rows`: the interior breaks, all breaks, and the
         value's coefficients (degree+1, dim, m) by power (highest first), then coordinate,
         spans last (the derivatives' follow from them: :func:`kernels.jet_rows`)."""
+        kernels.announce_compile()  # (every compiled jet and query uses this table)
         x, coefs = self._pieces
-        m, k1, _, dim = coefs.shape
         rows = np.ascontiguousarray(coefs[:, :, 0, :].transpose(1, 2, 0))
         return np.ascontiguousarray(x[1:-1]), x, rows
 

@@ -163,6 +163,7 @@ class Curve(ABC):
         2 x.p + |p|^2 loses digits far from the origin) as coordinate rows (dim, m), and
         their squared norms (m,): the sample-distance tables of
         :func:`kernels.candidates` and :func:`kernels.certify_rows`."""
+        kernels.announce_compile()
         pts = self._search[1]
         centre = pts.mean(axis=0)
         c = pts - centre
@@ -284,6 +285,7 @@ def track_rows(
     enough). Polynomial tables run in one compiled call (:func:`kernels.track_table`);
     other jets are evaluated here between compiled steps (:func:`kernels.track_step_rows`).
     """
+    kernels.announce_compile()
     t = np.minimum(np.maximum(np.asarray(t0, dtype=np.float64), 0.0), 1.0)
     tol = np.ascontiguousarray(np.atleast_1d(np.asarray(step_tol, dtype=np.float64)))
     xs = np.ascontiguousarray(xs, dtype=np.float64)

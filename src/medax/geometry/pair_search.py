@@ -33,7 +33,6 @@ class PolySearch:
         table = BSpline.stacked_rows(curves)
         if table is None:
             raise ValueError("PolySearch needs non-rational B-splines of a low degree")
-        kernels.announce_compile()
         self.k, self.n_curves, self.dim = k, len(curves), curves[0].dim
         self.inner, self.starts, self.rows = table
         self.ts = np.concatenate([c._search[0] for c in curves])
