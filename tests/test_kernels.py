@@ -208,3 +208,21 @@ def test_kernels_are_cached_after_a_run():
     """Every kernel has its numba cache index once it has run (the warm start loads them)."""
     kernels.warm_up()
     assert kernels._cached(kernels._COMPILED)
+
+
+def test_cli_shows_the_compile_message_by_default_and_q_hides_it(monkeypatch, tmp_path, capsys):
+    """The first run's pause is announced on stderr without -v (a stage message), and -q
+    silences it."""
+    from medax.cli.main import main
+    from medax.samples import copy_samples
+
+    copy_samples(["regions.json"], tmp_path)
+    args = ["axis", str(tmp_path / "regions.json"), "--region", "wavy"]
+    monkeypatch.setattr(kernels, "_cached", lambda kerns: False)
+    monkeypatch.setattr(kernels, "_announced", False)
+    assert main([*args, "-o", str(tmp_path / "a.json")]) == 0
+    err = capsys.readouterr().err
+    assert "medax: compiling numeric kernels (first run only)..." in err
+    monkeypatch.setattr(kernels, "_announced", False)
+    assert main([*args, "-o", str(tmp_path / "b.json"), "-q"]) == 0
+    assert "compiling" not in capsys.readouterr().err

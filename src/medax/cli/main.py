@@ -109,31 +109,35 @@ def configure_logging(verbose: int = 0, quiet: int = 0) -> Iterator[None]:
     """Route the ``medax`` loggers to stderr for one command; restore them afterwards.
 
     Levels (``verbose - quiet``): below 0 (``-q``) warnings only; 0 the command's stage
-    messages (the ``medax.cli`` loggers at INFO); 1 (``-v``) also the library's progress with
-    counts (``medax`` at INFO); 2 (``-vv``) debug messages. The handler writes to the current
+    messages (the ``medax.cli`` loggers at INFO, and the first run's "compiling numeric
+    kernels" of ``medax.geometry.kernels``: seconds without output otherwise); 1 (``-v``)
+    also the library's progress with counts (``medax`` at INFO); 2 (``-vv``) debug messages. The handler writes to the current
     ``sys.stderr`` and is removed on exit, so in-process calls (tests, notebooks) neither
     accumulate handlers nor leave levels changed. A command run inside another (``medax
     demo`` calls :func:`main`) keeps the outer command's handler and levels.
     """
     lib, cli = logging.getLogger("medax"), logging.getLogger("medax.cli")
+    kern = logging.getLogger("medax.geometry.kernels")
     if any(isinstance(h.formatter, _Prefix) for h in lib.handlers):
         yield
         return
     level = verbose - quiet
     lib_level = logging.DEBUG if level >= 2 else logging.INFO if level == 1 else logging.WARNING
     cli_level = logging.WARNING if level < 0 else min(lib_level, logging.INFO)
-    saved = (lib.level, cli.level)
+    saved = (lib.level, cli.level, kern.level)
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(_Prefix())
     lib.addHandler(handler)
     lib.setLevel(lib_level)
     cli.setLevel(cli_level)
+    kern.setLevel(cli_level)
     try:
         yield
     finally:
         lib.removeHandler(handler)
         lib.setLevel(saved[0])
         cli.setLevel(saved[1])
+        kern.setLevel(saved[2])
 
 
 def main(argv: Sequence[str] | None = None) -> int:
