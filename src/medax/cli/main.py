@@ -112,9 +112,10 @@ def configure_logging(verbose: int = 0, quiet: int = 0) -> Iterator[None]:
     messages (the ``medax.cli`` loggers at INFO, and the first run's "compiling numeric
     kernels" of ``medax.geometry.kernels``: seconds without output otherwise); 1 (``-v``)
     also the library's progress with counts (``medax`` at INFO); 2 (``-vv``) debug messages.
-    The handler writes to the current ``sys.stderr`` and is removed on exit, so in-process calls (tests, notebooks) neither
-    accumulate handlers nor leave levels changed. A command run inside another (``medax
-    demo`` calls :func:`main`) keeps the outer command's handler and levels.
+    The handler writes to the current ``sys.stderr`` and is removed on exit, so in-process
+    calls (tests, notebooks) neither accumulate handlers nor leave levels changed. A command
+    run inside another (``medax demo`` calls :func:`main`) keeps the outer command's handler
+    and levels.
     """
     lib, cli = logging.getLogger("medax"), logging.getLogger("medax.cli")
     kern = logging.getLogger("medax.geometry.kernels")
