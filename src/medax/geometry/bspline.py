@@ -244,9 +244,11 @@ class BSpline(Curve):
         if "_poly" not in self.__dict__:
             from medax.geometry.pair_search import PolySearch  # (imports this module)
 
-            low = self.weights is None and self.degree <= POWER_BASIS_MAX_DEGREE
-            self.__dict__["_poly"] = PolySearch([self]) if low else None
+            self.__dict__["_poly"] = PolySearch([self]) if self.has_poly_table() else None
         return self.__dict__["_poly"]
+
+    def has_poly_table(self) -> bool:
+        return self.weights is None and self.degree <= POWER_BASIS_MAX_DEGREE
 
     def chord_smooth(self) -> bool:
         """C1 with a piecewise polynomial ``C''``: no interior knot of multiplicity above

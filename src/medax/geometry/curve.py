@@ -75,6 +75,11 @@ class Curve(ABC):
         None where a kind has no such fast path (callers then use :meth:`jet`)."""
         return None
 
+    def has_poly_table(self) -> bool:
+        """Whether the curve is evaluated by polynomial pieces (:meth:`poly_search`,
+        ``_row_pieces``): the compiled kernels then evaluate it themselves."""
+        return False
+
     def poly_search(self) -> Any:
         """The compiled search tables of a kind evaluated by polynomial pieces
         (:class:`~medax.geometry.pair_search.PolySearch`: global and bracketed closest points
@@ -248,7 +253,7 @@ def track_closest(
     ``g' <= 0``) never stop a row."""
     x = np.asarray(points, dtype=np.float64)
     xs = np.ascontiguousarray(x.T)
-    if curve.poly_search() is not None:  # a polynomial table: one compiled call
+    if curve.has_poly_table():  # one compiled call
         t, foot_rows, _ = track_rows(curve, xs, t0, step_tol, iters)
     else:
 
@@ -294,7 +299,7 @@ def track_rows(
     if isinstance(curve, tuple):
         table, offset = curve[0], np.ascontiguousarray(curve[1], dtype=np.float64)
     elif isinstance(curve, Curve):
-        if curve.poly_search() is None:
+        if not curve.has_poly_table():
             raise TypeError(f"{curve.kind} has no polynomial table: pass its jets")
         table = curve._row_pieces  # type: ignore[attr-defined]
     if table is not None:
