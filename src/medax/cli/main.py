@@ -12,6 +12,7 @@ removed (outputs are all written at the end, or none).
 from __future__ import annotations
 
 import argparse
+import gc
 import importlib
 import logging
 import signal
@@ -152,7 +153,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         _terminate_as_interrupt()
     verbose = args.verbose_before + getattr(args, "verbose", 0)
     with configure_logging(verbose, args.quiet_before + getattr(args, "quiet", 0)):
-        return _run(args)
+        code = _run(args)
+    if argv is None:
+        # the process ends next: its objects need no last garbage collection (numba's
+        # typing tables alone made the interpreter's final pass 0.14 s of CPU)
+        gc.freeze()
+    return code
 
 
 def _run(args: argparse.Namespace) -> int:
