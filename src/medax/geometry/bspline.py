@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from functools import cached_property, lru_cache
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.interpolate import BSpline as _ScipyBSpline
@@ -21,6 +21,9 @@ def clamped_uniform_knots(n_ctrl: int, degree: int) -> FloatArray:
     inner = np.linspace(0.0, 1.0, n_inner + 2)[1:-1]
     return np.concatenate((np.zeros(degree + 1), inner, np.ones(degree + 1)))
 
+
+if TYPE_CHECKING:  # (pair_search imports this module)
+    from medax.geometry.pair_search import PolySearch
 
 #: above this degree the power basis loses digits (6e-10 seen on degree-13 NURBS from
 #: OCCT fillets): evaluate with scipy's de Boor instead
@@ -237,7 +240,7 @@ class BSpline(Curve):
         rows = np.ascontiguousarray(coefs[:, :, 0, :].transpose(1, 2, 0))
         return np.ascontiguousarray(x[1:-1]), x, rows
 
-    def poly_search(self) -> Any:
+    def poly_search(self) -> PolySearch | None:
         """The compiled search tables of this curve
         (:class:`~medax.geometry.pair_search.PolySearch`), or None for a rational curve or
         one of a high degree (built on first use)."""

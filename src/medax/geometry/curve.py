@@ -10,13 +10,16 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from medax.geometry import kernels
 from medax.geometry._types import FloatArray
+
+if TYPE_CHECKING:  # (pair_search imports this module)
+    from medax.geometry.pair_search import PolySearch
 
 #: 10-point Gauss-Legendre nodes and weights on [-1, 1] (for :meth:`Curve.length`)
 _GAUSS = np.polynomial.legendre.leggauss(10)
@@ -80,7 +83,7 @@ class Curve(ABC):
         ``_row_pieces``): the compiled kernels then evaluate it themselves."""
         return False
 
-    def poly_search(self) -> Any:
+    def poly_search(self) -> PolySearch | None:
         """The compiled search tables of a kind evaluated by polynomial pieces
         (:class:`~medax.geometry.pair_search.PolySearch`: global and bracketed closest points
         in one kernel call each), None for the others (their jets come from Python)."""

@@ -761,8 +761,3 @@ def warm_up() -> None:
     track_table(inner, starts, rows, np.zeros(0), xs, t, np.ones(1), 8)
     track_step_rows(np.zeros((6, 1)), xs, t, np.ones(1), False)
     certify_rows(ts, pts.T.copy(), ts.copy(), x, t, t, 0.1, 0.01, 0.0, 0.0)
-
-
-def _as_rows(t: FloatArray) -> FloatArray:
-    """Parameters as a contiguous float64 array (the kernels' argument type)."""
-    return np.ascontiguousarray(t, dtype=np.float64)

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from medax.errors import CurveError
 from medax.geometry import kernels
 from medax.geometry._types import FloatArray
 from medax.geometry.bspline import POWER_BASIS_MAX_DEGREE, BSpline
@@ -32,7 +33,10 @@ class PolySearch:
     def __init__(self, curves: list[BSpline], k: int = 2) -> None:
         table = BSpline.stacked_rows(curves)
         if table is None:
-            raise ValueError("PolySearch needs non-rational B-splines of a low degree")
+            raise CurveError(
+                "compiled search tables need non-rational B-splines of degree at most "
+                f"{POWER_BASIS_MAX_DEGREE}"
+            )
         self.k, self.n_curves, self.dim = k, len(curves), curves[0].dim
         self.inner, self.starts, self.rows = table
         self.ts = np.concatenate([c._search[0] for c in curves])
