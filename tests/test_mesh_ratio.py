@@ -405,17 +405,14 @@ def test_planar_solve_gives_the_general_nodes(name, monkeypatch):
     assert np.abs(fast.params - slow.params).max() <= 1e-12 * r.diagonal
 
 
-def test_certify_closest_is_the_documented_rule(monkeypatch):
-    """The blocked certification equals the rule written out on the whole table: no local
+def test_certify_closest_is_the_documented_rule():
+    """The compiled certification equals the rule written out on the whole table: no local
     minimum of the sample distances beyond 1.5 spacings of the foot is nearer than the
     foot's distance minus the slack, allowing the larger of 0.55 sample spacings between
     samples and the chord bound ``sqrt(s^2 - l^2 / 4) - e``."""
-    import medax.geometry.curve as gc
-
     r = REGIONS["wavy"]
     lo, hi = r.corners.min(axis=0), r.corners.max(axis=0)
     x = np.random.default_rng(11).uniform(lo, hi, (700, 2))
-    monkeypatch.setattr(gc, "_TABLE_BLOCK", 5000)  # several blocks
     for c in r.sides:
         ts, pts = c._search
         t0 = np.random.default_rng(1).uniform(0.0, 1.0, len(x))

@@ -74,11 +74,11 @@ class DistanceField:
 
     def closest(self, x: FloatArray) -> tuple[Closest, Closest]:
         """Global closest points on A1 and A2 for space points ``x`` (n, dim); two B-spline
-        constraints are searched together (:class:`PairSearch`: one query's numpy calls)."""
+        constraints are searched together (:class:`PairSearch`: one compiled call)."""
         if self._pair is False:
             self._pair = PairSearch.build(self.a1, self.a2)
         pair = self._pair
-        if isinstance(pair, PairSearch) and pair.fits(x.shape[0]):
+        if isinstance(pair, PairSearch):
             return pair.closest(x)
         return self.a1.closest(x), self.a2.closest(x)
 

@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import math
 from functools import cached_property, lru_cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.interpolate import BSpline as _ScipyBSpline
 
 from medax.errors import CurveError
+from medax.geometry import kernels
 from medax.geometry._types import FloatArray
 from medax.geometry.curve import Curve
 
@@ -20,10 +22,13 @@ def clamped_uniform_knots(n_ctrl: int, degree: int) -> FloatArray:
     return np.concatenate((np.zeros(degree + 1), inner, np.ones(degree + 1)))
 
 
+if TYPE_CHECKING:  # (pair_search imports this module)
+    from medax.geometry.pair_search import PolySearch
+
 #: above this degree the power basis loses digits (6e-10 seen on degree-13 NURBS from
 #: OCCT fillets): evaluate with scipy's de Boor instead
 POWER_BASIS_MAX_DEGREE = 5
-_HORNER_BLOCK = 16384  # points per block of the power-basis evaluation
+_NO_OFFSET = np.zeros(0)  # kernels.jet_rows: all points on the table's only curve
 
 
 @lru_cache(maxsize=8)
@@ -186,37 +191,16 @@ class BSpline(Curve):
         return self._raw_many(t, (nu,))[0]
 
     def _raw_many(self, t: FloatArray, orders: tuple[int, ...]) -> list[FloatArray]:
-        """Homogeneous (or plain) derivatives of the given orders, sharing the span search
-        and the coefficient gather."""
+        """Homogeneous (or plain) derivatives of the given orders (each (n, dim[+1])), from
+        one compiled jet evaluation (:func:`kernels.jet_rows`)."""
         # np.minimum/np.maximum: np.clip costs microseconds more per call on small arrays
         t = np.minimum(np.maximum(np.asarray(t, dtype=np.float64), 0.0), 1.0)
         if self.degree > POWER_BASIS_MAX_DEGREE:
             return [np.asarray(self._spl(t, nu)) for nu in orders]
-        x, coefs = self._pieces
-        # the span of each t in [0, 1] (x[0] = 0, x[-1] = 1): counted among the interior
-        # breaks only, it needs no clipping
-        i = np.searchsorted(x[1:-1], t, side="right")
-        s = (t - x[i])[:, None, None]
-        top = max(orders) + 1
-        if t.size <= _HORNER_BLOCK:  # one block: no staging array
-            c = coefs[i, :, :top]
-            w = c[:, 0].copy()
-            for m in range(1, c.shape[1]):
-                w *= s
-                w += c[:, m]
-            return [w[:, nu] for nu in orders]
-        v = np.empty((t.size, top, coefs.shape[-1]))
-        # in blocks of points: the gathered coefficients (n, degree+1, orders, dim) stay
-        # in cache instead of being written to and read back from memory
-        for a in range(0, t.size, _HORNER_BLOCK):
-            b = a + _HORNER_BLOCK
-            c = coefs[i[a:b], :, :top]
-            vb = v[a:b]
-            vb[...] = c[:, 0]
-            for m in range(1, c.shape[1]):
-                vb *= s[a:b]
-                vb += c[:, m]
-        return [v[:, nu] for nu in orders]
+        inner, x, rows = self._row_pieces
+        w = kernels.jet_rows(inner, x, rows, np.ascontiguousarray(t.ravel()), _NO_OFFSET)
+        dim = rows.shape[1]
+        return [w[nu * dim : (nu + 1) * dim].T for nu in orders]
 
     def jet(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         h0, h1, h2 = self._raw_many(t, (0, 1, 2))
@@ -250,11 +234,24 @@ class BSpline(Curve):
     def _row_pieces(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """:attr:`_pieces` for :meth:`jet_rows`: the interior breaks, all breaks, and the
         value's coefficients (degree+1, dim, m) by power (highest first), then coordinate,
-        spans last (the derivatives' follow from them: :func:`_horner_rows`)."""
+        spans last (the derivatives' follow from them: :func:`kernels.jet_rows`)."""
+        kernels.announce_compile()  # (every compiled jet and query uses this table)
         x, coefs = self._pieces
-        m, k1, _, dim = coefs.shape
         rows = np.ascontiguousarray(coefs[:, :, 0, :].transpose(1, 2, 0))
         return np.ascontiguousarray(x[1:-1]), x, rows
+
+    def poly_search(self) -> PolySearch | None:
+        """The compiled search tables of this curve
+        (:class:`~medax.geometry.pair_search.PolySearch`), or None for a rational curve or
+        one of a high degree (built on first use)."""
+        if "_poly" not in self.__dict__:
+            from medax.geometry.pair_search import PolySearch  # (imports this module)
+
+            self.__dict__["_poly"] = PolySearch([self]) if self.has_poly_table() else None
+        return self.__dict__["_poly"]
+
+    def has_poly_table(self) -> bool:
+        return self.weights is None and self.degree <= POWER_BASIS_MAX_DEGREE
 
     def chord_smooth(self) -> bool:
         """C1 with a piecewise polynomial ``C''``: no interior knot of multiplicity above
@@ -290,8 +287,7 @@ class BSpline(Curve):
             return None
         inner, x, rows = self._row_pieces
         t = np.minimum(np.maximum(np.asarray(t, dtype=np.float64), 0.0), 1.0)
-        i = np.searchsorted(inner, t, side="right")
-        return _horner_rows(rows, i, t - x[i])
+        return kernels.jet_rows(inner, x, rows, np.ascontiguousarray(t), _NO_OFFSET)  # type: ignore[no-any-return]
 
     def evaluate(self, t: FloatArray) -> FloatArray:
         h = self._raw(t, 0)
@@ -334,52 +330,7 @@ def stacked_jet(
 ) -> FloatArray:
     """:meth:`BSpline.jet_rows` of points on several curves at once (``table``:
     :meth:`BSpline.stacked_rows`; ``offset`` (n,) ``2 j`` for a point on curve ``j``)."""
-    t = np.minimum(np.maximum(np.asarray(t, dtype=np.float64), 0.0), 1.0)
-    return stacked_jet_in(table, t, offset)
-
-
-def stacked_jet_in(
-    table: tuple[FloatArray, FloatArray, FloatArray], t: FloatArray, offset: FloatArray
-) -> FloatArray:
-    """:func:`stacked_jet` at parameters ``t`` (n,) already in ``[0, 1]`` (a tracking's:
-    not clamped again)."""
     inner, starts, rows = table
-    i = np.searchsorted(inner, t + offset, side="right")
-    return _horner_rows(rows, i, t - starts[i])
-
-
-def _horner_rows(rows: FloatArray, i: np.ndarray, s: FloatArray) -> FloatArray:
-    """Value, first and second derivative as component rows (3 * dim, n) of the pieces
-    ``i`` (n,) at their local parameters ``s`` (n,), from the value's power-basis
-    coefficients ``rows`` (degree + 1, dim, spans), highest power first, by Horner's rule.
-    The derivatives' coefficients are formed from the gathered ones as :meth:`BSpline._pack`
-    forms them (``p a_p``, then ``(p - 1) p a_p``: the same numbers), so that only the
-    value's are gathered (measured 1.4x faster than gathering all three orders)."""
-    k, dim = rows.shape[0] - 1, rows.shape[1]
-    a = rows.take(i, axis=2)  # (k + 1, dim, n): one gather
-    out = np.empty((3 * dim, s.size))
-    powers = _powers(k)
-    for order in range(3):
-        w = out[order * dim : (order + 1) * dim]
-        if order > k:
-            w[...] = 0.0
-            continue
-        if order:
-            a = a[:-1] * powers[order - 1 : -1]
-        if a.shape[0] == 1:
-            np.copyto(w, a[0])
-            continue
-        np.multiply(a[0], s, out=w)  # (the first product written at once: one call less)
-        w += a[1]
-        for p in range(2, a.shape[0]):
-            w *= s
-            w += a[p]
-    return out
-
-
-@lru_cache(maxsize=8)
-def _powers(k: int) -> FloatArray:
-    """The powers ``k, ..., 1, 0`` of the coefficients of :func:`_horner_rows`, (k + 1, 1, 1)."""
-    powers = np.arange(k, -1, -1, dtype=np.float64)[:, None, None]
-    powers.flags.writeable = False
-    return powers
+    t = np.minimum(np.maximum(np.asarray(t, dtype=np.float64), 0.0), 1.0)
+    off = np.ascontiguousarray(offset, dtype=np.float64)
+    return kernels.jet_rows(inner, starts, rows, t, off)  # type: ignore[no-any-return]

@@ -10,12 +10,16 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.spatial import cKDTree
 
+from medax.geometry import kernels
 from medax.geometry._types import FloatArray
+
+if TYPE_CHECKING:  # (pair_search imports this module)
+    from medax.geometry.pair_search import PolySearch
 
 #: 10-point Gauss-Legendre nodes and weights on [-1, 1] (for :meth:`Curve.length`)
 _GAUSS = np.polynomial.legendre.leggauss(10)
@@ -72,6 +76,17 @@ class Curve(ABC):
         """The :meth:`jet` as component rows (3 * dim, n): ``C``, ``C'``, ``C''``, each
         coordinate a contiguous row (cheaper arithmetic on them than on (n, dim) columns);
         None where a kind has no such fast path (callers then use :meth:`jet`)."""
+        return None
+
+    def has_poly_table(self) -> bool:
+        """Whether the curve is evaluated by polynomial pieces (:meth:`poly_search`,
+        ``_row_pieces``): the compiled kernels then evaluate it themselves."""
+        return False
+
+    def poly_search(self) -> PolySearch | None:
+        """The compiled search tables of a kind evaluated by polynomial pieces
+        (:class:`~medax.geometry.pair_search.PolySearch`: global and bracketed closest points
+        in one kernel call each), None for the others (their jets come from Python)."""
         return None
 
     def transformed(self, offset: FloatArray, scale: float) -> Curve:
@@ -151,15 +166,16 @@ class Curve(ABC):
         return 0.55 * chord, 0.25 * (1.0 + 1e-9) * chord * chord, sag
 
     @cached_property
-    def _table(self) -> tuple[FloatArray, FloatArray]:
-        """The centre (dim,) of the search samples, and the samples centred on it (|x|^2 -
-        2 x.p + |p|^2 loses digits far from the origin) as rows ``(-2 p, |p|^2)``
-        (m, dim + 1), so that one product with ``(x, 1)`` gives ``|x - p|^2 - |x|^2``
-        (:func:`_distance_table`)."""
+    def _table(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The centre (dim,) of the search samples, the samples centred on it (|x|^2 -
+        2 x.p + |p|^2 loses digits far from the origin) as coordinate rows (dim, m), and
+        their squared norms (m,): the sample-distance tables of
+        :func:`kernels.candidates` and :func:`kernels.certify_rows`."""
+        kernels.announce_compile()
         pts = self._search[1]
         centre = pts.mean(axis=0)
         c = pts - centre
-        return centre, np.column_stack((-2.0 * c, np.einsum("mj,mj->m", c, c)))
+        return centre, np.ascontiguousarray(c.T), np.einsum("mj,mj->m", c, c)
 
     def closest_in(
         self, points: FloatArray, lo: FloatArray, hi: FloatArray, start: FloatArray
@@ -189,9 +205,6 @@ def closest_near(curve: Curve, points: FloatArray, t0: FloatArray, width: float)
     hi = np.clip(t0 + width, 0.0, 1.0)
     t, foot = curve.closest_in(x, lo, hi, t0)
     return Closest(t=t, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
-
-
-_TRACK_BLOCK = 16384  # points per block of track_closest
 
 
 def has_closed_form_closest(curve: Curve) -> bool:
@@ -242,151 +255,90 @@ def track_closest(
     ``|C'''| s^3 / 6``): no separate evaluation of the feet. Gradient steps (where
     ``g' <= 0``) never stop a row."""
     x = np.asarray(points, dtype=np.float64)
-    t = np.minimum(np.maximum(np.asarray(t0, dtype=np.float64), 0.0), 1.0)
-    foot = np.empty_like(x)
-    for s in range(0, t.size, _TRACK_BLOCK):  # blocks: the temporaries stay in cache
-        e = min(t.size, s + _TRACK_BLOCK)
-        t[s:e], foot[s:e] = _track_block(curve, x[s:e], t[s:e], step_tol, iters)
-    return Closest(t=t, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
-
-
-def _track_block(
-    curve: Curve, x: FloatArray, t: FloatArray, step_tol: float, iters: int
-) -> tuple[FloatArray, FloatArray]:
-    """:func:`track_closest` on one block: feet (n,) and foot points (n, dim), by the row
-    tracking (:func:`_track_rows`), on :meth:`Curve.jet` turned into rows for kinds that
-    have no :meth:`Curve.jet_rows` (the same steps and stopping rule either way)."""
-    if curve.jet_rows(t[:1]) is not None:
-        jet: RowJet = lambda tr, rows: curve.jet_rows(tr)  # noqa: E731
+    xs = np.ascontiguousarray(x.T)
+    if curve.has_poly_table():  # one compiled call
+        t, foot_rows, _ = track_rows(curve, xs, t0, step_tol, iters)
     else:
 
         def jet(tr: FloatArray, rows: np.ndarray | slice | None) -> FloatArray:
             return np.concatenate([c.T for c in curve.jet(tr)])
 
-    t, foot_rows, _ = _track_rows(jet, np.ascontiguousarray(x.T), t, step_tol, iters)
-    return t, foot_rows.T
+        t, foot_rows, _ = track_rows(jet, xs, t0, step_tol, iters)
+    foot = foot_rows.T
+    return Closest(t=t, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
 
 
-#: component-row jets of the points ``rows`` (indices or a slice; None: all) of a tracking
-#: at parameters ``t``
-RowJet = Callable[[FloatArray, "np.ndarray | slice | None"], "FloatArray | None"]
+#: component-row jets of the points ``rows`` (indices; None: all) of a tracking at
+#: parameters ``t``
+RowJet = Callable[[FloatArray, "np.ndarray | None"], "FloatArray | None"]
+#: the polynomial table of several curves (:meth:`BSpline.stacked_rows`) and each point's
+#: curve offset ``2 j`` (n,) (:func:`medax.geometry.bspline.stacked_jet`)
+TableJet = tuple[tuple[FloatArray, FloatArray, FloatArray], FloatArray]
 
 
 def track_rows(
-    curve: Curve | RowJet,
+    curve: Curve | RowJet | TableJet,
     xs: FloatArray,
     t0: FloatArray,
     step_tol: float | FloatArray = 1e-6,
     iters: int = 8,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """:func:`track_closest` for points given as component rows ``xs`` (dim, n), on a
-    curve with :meth:`Curve.jet_rows` (or, for several curves at once, a :data:`RowJet`
-    that evaluates each point's own curve, with ``step_tol`` then per point): feet (n,) and
-    foot points as rows (dim, n), and ``|(C - x) . C''| / g'`` at the last step (n,; the
-    curvature term of the distance's Hessian times the distance, see
-    :mod:`medax.mesh.free_field`; 0 for a foot held at an end, inf away from a local
-    minimum or where the steps ran out before one was short enough)."""
+    curve with :meth:`Curve.jet_rows`, on several curves at once (a :data:`TableJet`, or a
+    :data:`RowJet` that evaluates each point's own curve; ``step_tol`` then per point),
+    or on any curve's jets as a :data:`RowJet`: feet (n,) and foot points as rows (dim, n),
+    and ``|(C - x) . C''| / g'`` at the last step (n,; the curvature term of the distance's
+    Hessian times the distance, see :mod:`medax.mesh.free_field`; 0 for a foot held at an
+    end, inf away from a local minimum or where the steps ran out before one was short
+    enough). Polynomial tables run in one compiled call (:func:`kernels.track_table`);
+    other jets are evaluated here between compiled steps (:func:`kernels.track_step_rows`).
+    """
+    kernels.announce_compile()
     t = np.minimum(np.maximum(np.asarray(t0, dtype=np.float64), 0.0), 1.0)
-    if isinstance(curve, Curve):
-        single = curve
-        jet: RowJet = lambda tr, rows: single.jet_rows(tr)  # noqa: E731
-    else:
-        jet = curve
-    return _track_rows(jet, xs, t, step_tol, iters)
+    tol = np.ascontiguousarray(np.atleast_1d(np.asarray(step_tol, dtype=np.float64)))
+    xs = np.ascontiguousarray(xs, dtype=np.float64)
+    table: tuple[FloatArray, FloatArray, FloatArray] | None = None
+    offset = _NO_OFFSET
+    if isinstance(curve, tuple):
+        table, offset = curve[0], np.ascontiguousarray(curve[1], dtype=np.float64)
+    elif isinstance(curve, Curve):
+        if not curve.has_poly_table():
+            raise TypeError(f"{curve.kind} has no polynomial table: pass its jets")
+        table = curve._row_pieces  # type: ignore[attr-defined]
+    if table is not None:
+        inner, starts, rows = table
+        return kernels.track_table(inner, starts, rows, offset, xs, t, tol, iters)  # type: ignore[no-any-return]
+    return _track_rows(curve, xs, t, tol, iters)  # type: ignore[arg-type]
 
 
-_STEP_CHUNK = 8192  # rows per evaluation of a tracking step (its temporaries stay in cache)
+_NO_OFFSET = np.zeros(0)
 
 
 def _track_rows(
-    jet: RowJet, xs: FloatArray, t: FloatArray, step_tol: float | FloatArray, iters: int
+    jet: RowJet, xs: FloatArray, t: FloatArray, tol: FloatArray, iters: int
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """:func:`_track_block` on component rows (``jet``: :meth:`Curve.jet_rows` of the rows'
-    curve; points ``xs`` (dim, n)): the same steps and stopping rule, coordinates as
-    contiguous rows; feet (n,), foot points (dim, n) and the curvature terms of
-    :func:`track_rows`. Each step runs in chunks of ``_STEP_CHUNK`` rows (small
-    temporaries: no fresh pages per step), and the rows still moving after it are stepped
-    together (one short tail of steps, not one per block)."""
+    """:func:`track_rows` with jets from Python (``jet``; points ``xs`` (dim, n), step
+    tolerances ``tol`` (n,) or (1,)): the compiled step (:func:`kernels.track_step_rows`)
+    of the rows still moving, until each is done; feet (n,), foot points (dim, n) and
+    curvature terms (n,)."""
     t = t.copy()
     foot, curv = np.empty((xs.shape[0], t.size)), np.empty(t.size)
-    per_row = np.ndim(step_tol) > 0
     rows: np.ndarray | None = None  # rows still moving (None: all)
     for it in range(iters):
-        last = it == iters - 1
-        n = t.size if rows is None else rows.size
-        moving = []
-        for s in range(0, n, _STEP_CHUNK):
-            e = min(n, s + _STEP_CHUNK)
-            at: np.ndarray | slice = slice(s, e) if rows is None else rows[s:e]
-            tol = step_tol[at] if per_row else step_tol  # type: ignore[index]
-            # (a row's foot and term are stored at every step: the last one stays)
-            t[at], foot[:, at], curv[at], done = _track_step(jet, xs[:, at], t[at], at, tol, last)
-            if not last:
-                moving.append(np.flatnonzero(~done) + s if rows is None else rows[s:e][~done])
-        if last or not moving:  # (not moving: no rows at all)
-            break
-        rows = np.concatenate(moving)
+        at: np.ndarray | slice = slice(None) if rows is None else rows
+        w = jet(t[at], rows)
+        assert w is not None
+        tr = tol if tol.size == 1 else tol[at]
+        new, f, k, done = kernels.track_step_rows(
+            np.ascontiguousarray(w), np.ascontiguousarray(xs[:, at]), t[at], tr, it == iters - 1
+        )
+        # (a row's foot and term are stored at every step: the last one stays)
+        t[at], foot[:, at], curv[at] = new, f, k
+        left = np.flatnonzero(~done)
+        rows = left if rows is None else rows[left]
         if rows.size == 0:
             break
     return t, foot, curv
-
-
-def _track_step(
-    jet: RowJet,
-    xr: FloatArray,
-    tr: FloatArray,
-    at: np.ndarray | slice,
-    step_tol: float | FloatArray,
-    last: bool,
-) -> tuple[FloatArray, FloatArray, FloatArray, np.ndarray]:
-    """One step of :func:`_track_rows` on the rows ``at`` (points ``xr`` (dim, m), feet
-    ``tr`` (m,)): new feet, the Taylor foot points (dim, m), the curvature terms, and which
-    rows are done (all on the ``last`` step)."""
-    dim = xr.shape[0]
-    w = jet(tr, at)
-    assert w is not None
-    c0, c1, c2 = w[:dim], w[dim : 2 * dim], w[2 * dim :]
-    c = c0 - xr
-    g = c[0] * c1[0]
-    speed2 = c1[0] * c1[0]
-    dg = c[0] * c2[0]
-    for k in range(1, dim):
-        g += c[k] * c1[k]
-        speed2 += c1[k] * c1[k]
-        dg += c[k] * c2[k]
-    dg += speed2
-    # away from a local minimum (dg <= 0) a gradient step scaled by the speed
-    pos = dg > 0.0
-    den = np.where(pos, dg, speed2)
-    np.maximum(den, 1e-300, out=den)
-    ds = np.divide(g, den, out=g)
-    ds = np.subtract(tr, ds, out=ds)
-    np.minimum(np.maximum(ds, 0.0, out=ds), 1.0, out=ds)
-    new = ds.copy()
-    ds -= tr  # the step taken
-    # a short Newton step, or a foot held at an end of the curve
-    zero = ds == 0.0
-    settled = np.abs(ds) <= step_tol
-    settled &= pos | zero
-    done = np.ones(tr.size, dtype=bool) if last else settled
-    # |(C - x) . C''| / g'; inf where the steps ran out unsettled (the foot, and its
-    # Taylor point, may then be off); where g' <= 0 (away from a local minimum, settled
-    # only if held) 0 for a foot held at an end (the distance is to the end point
-    # there), else inf
-    kap = np.subtract(dg, speed2, out=dg)
-    np.abs(kap, out=kap)
-    kap /= den
-    kap[~settled] = np.inf
-    neg = np.flatnonzero(~pos)
-    if neg.size:
-        nn = new[neg]
-        kap[neg] = np.where(zero[neg] & ((nn == 0.0) | (nn == 1.0)), 0.0, np.inf)
-    half = 0.5 * ds
-    c2 *= half
-    c2 += c1
-    c2 *= ds
-    c2 += c0  # C(t) + C'(t) ds + C''(t) ds^2 / 2
-    return new, c2, kap, done
 
 
 def certify_closest(
@@ -406,36 +358,12 @@ def certify_closest(
     :meth:`Curve.closest` (no refinement); rows not certified need the full query.
     """
     ts = curve._search[0]
-    centre, aug = curve._table  # centred on the samples
-    x = np.asarray(points, dtype=np.float64) - centre
-    t = np.asarray(t, dtype=np.float64)
-    n, m = x.shape[0], aug.shape[0]
+    centre, ct, pp = curve._table  # centred on the samples
+    x = np.ascontiguousarray(np.asarray(points, dtype=np.float64) - centre)
+    t = np.ascontiguousarray(t, dtype=np.float64)
+    d = np.ascontiguousarray(distance, dtype=np.float64)
     half, quarter, sag = curve._gaps
-    dt = ts[1] - ts[0]
-    ok = np.empty(n, dtype=bool)
-    # the samples within 1.5 spacings of the foot (excluded): among the 5 nearest indices
-    near = np.floor(t / dt).astype(np.int64)[:, None] + np.arange(-2, 3)
-    near = np.minimum(np.maximum(near, 0), m - 1)
-    excluded = np.abs(ts[near] - t[:, None]) <= 1.5 * dt
-    xx = np.einsum("ij,ij->i", x, x)
-    xt = _augmented(x)
-    cols = max(1, _TABLE_BLOCK // m)
-    d2_buf, min_buf = np.empty((m, cols)), np.empty((m, cols), dtype=bool)
-    le_buf = np.empty((m - 1, cols), dtype=bool)
-    for s in range(0, n, cols):
-        e = min(n, s + cols)
-        d2, im = d2_buf[:, : e - s], min_buf[:, : e - s]
-        _distance_table(aug, xt[:, s:e], d2, im, le_buf[:, : e - s])
-        rr, kk = np.nonzero(excluded[s:e])
-        im[near[s:e][rr, kk], rr] = False
-        other = np.minimum.reduce(d2, axis=0, where=im, initial=np.inf)
-        other += xx[s:e]
-        np.maximum(other, 0.0, out=other)  # the nearest other sample, squared
-        bound = np.sqrt(other) - half
-        with np.errstate(invalid="ignore"):  # (inf - inf: no other part, or no chord bound)
-            np.fmax(bound, np.sqrt(np.maximum(other - quarter, 0.0)) - sag, out=bound)
-        ok[s:e] = bound >= distance[s:e] - slack
-    return ok
+    return kernels.certify_rows(ts, ct, pp, x, t, d, half, quarter, sag, float(slack))  # type: ignore[no-any-return]
 
 
 def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
@@ -445,27 +373,30 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
     (distinct parts of the curve, not neighbouring samples of one part). Each is refined in
     the bracket of its two neighbouring samples: ``g = (C - x) . C'`` at the three samples
     (from the tabulated samples and slopes: no curve evaluation) picks the half with the
-    sign change, whose linear interpolation starts :func:`_newton_in_brackets`; a bracket
-    without a sign change keeps its nearest sample (an end of the curve).
+    sign change, whose inverse quadratic interpolation starts a bracketed Newton iteration;
+    a bracket without a sign change keeps its nearest sample (an end of the curve). Curves
+    with polynomial tables run it all in one compiled call
+    (:func:`medax.geometry.kernels.closest_search`); the others evaluate their jets from
+    Python between the compiled steps (:func:`_newton_in_brackets`).
     """
-    ts, pts = curve._search
-    slopes = curve._slopes
-    n, m = points.shape[0], ts.size
+    n = points.shape[0]
     if n == 0:
         return Closest(t=np.zeros(0), foot=np.zeros((0, curve.dim)), distance=np.zeros(0))
+    poly = curve.poly_search()
+    if poly is not None and poly.k == k:
+        t2, f2, d2 = poly.closest(points)
+        return Closest(t=t2[:, 0], foot=f2[:, 0], distance=d2[:, 0])
+    ts, pts = curve._search
     cand = _candidate_samples(curve, points, k).ravel()
-    x = np.repeat(points, k, axis=0)
-    j3 = np.minimum(np.maximum(cand[:, None] + _THREE, 0), m - 1)  # (nk, 3) samples
-    g, d2, ia, ga, gb, interior = sign_brackets(pts, slopes, j3, x)
-    best = np.argmin(d2, axis=1)
-    rows = np.arange(x.shape[0])
-    jb = j3[rows, best]
-    t, foot = ts[jb], pts[jb]
+    x = np.ascontiguousarray(np.repeat(points, k, axis=0))
+    t, foot, ta, tb, s0, interior, w_lo, w_hi = kernels.bracket_rows(
+        ts, np.ascontiguousarray(pts), np.ascontiguousarray(curve._slopes), x, cand
+    )
     if np.any(interior):
-        ta, tb = ts[ia[interior]], ts[ia[interior] + 1]
-        start = _start(ts[j3[interior]], g[interior], ta, tb, ga[interior], gb[interior])
-        t[interior], foot[interior] = _quick_newton(curve, x[interior], ta, tb, start)
-    at_breaks(curve, curve.breaks(), x, ts[j3[:, 0]], ts[j3[:, 2]], t, foot)
+        t[interior], foot[interior] = _newton_in_brackets(
+            curve, x[interior], ta[interior], tb[interior], s0[interior]
+        )
+    at_breaks(curve, curve.breaks(), x, w_lo, w_hi, t, foot)
     dist = np.linalg.norm(foot - x, axis=1).reshape(n, k)
     pick = np.argmin(dist, axis=1)
     r = np.arange(n)
@@ -506,43 +437,6 @@ def at_breaks(
     t[r], foot[r] = e[rows][nearer], c[nearer]
 
 
-def sign_brackets(
-    pts: FloatArray, slopes: FloatArray, j3: np.ndarray, x: FloatArray
-) -> tuple[FloatArray, FloatArray, np.ndarray, FloatArray, FloatArray, np.ndarray]:
-    """For points ``x`` (n, dim) and three consecutive sample indices ``j3`` (n, 3) each,
-    from the tabulated samples ``pts`` and slopes ``slopes`` (m, dim): ``g = (C - x) . C'``
-    (n, 3), the squared distances (n, 3), the left sample ``ia`` (n,) of the half with the
-    sign change and ``g`` at its ends ``ga``, ``gb`` (n,), and whether that change is a
-    minimum inside (n,) (``ga < 0 < gb``)."""
-    c = pts[j3] - x[:, None, :]
-    g = np.einsum("nij,nij->ni", c, slopes[j3])
-    d2 = np.einsum("nij,nij->ni", c, c)
-    left = g[:, 1] >= 0.0  # the sign change is in [j-1, j] (else in [j, j+1])
-    ia = np.where(left, j3[:, 0], j3[:, 1])
-    ga = np.where(left, g[:, 0], g[:, 1])
-    gb = np.where(left, g[:, 1], g[:, 2])
-    return g, d2, ia, ga, gb, (ga < 0.0) & (gb > 0.0)
-
-
-def _start(
-    t3: FloatArray, g3: FloatArray, ta: FloatArray, tb: FloatArray, ga: FloatArray, gb: FloatArray
-) -> FloatArray:
-    """Start (n,) for the root of ``g`` in ``[ta, tb]`` (``g(ta) = ga < 0 < gb = g(tb)``):
-    inverse quadratic interpolation through the three samples ``t3``, ``g3`` (n, 3) (error
-    ~ h^3 instead of the h^2 of regula falsi: Newton then needs one step less), regula falsi
-    where that leaves the bracket or is undefined (repeated samples at the curve's ends)."""
-    g0, g1, g2 = g3[:, 0], g3[:, 1], g3[:, 2]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = (
-            t3[:, 0] * g1 * g2 / ((g0 - g1) * (g0 - g2))
-            + t3[:, 1] * g0 * g2 / ((g1 - g0) * (g1 - g2))
-            + t3[:, 2] * g0 * g1 / ((g2 - g0) * (g2 - g1))
-        )
-    falsi = ta + (tb - ta) * ga / (ga - gb)
-    return np.where((s > ta) & (s < tb), s, falsi)
-
-
-_THREE = np.arange(-1, 2)
 #: a Newton step on the foot parameter at most this long ends a row: Newton converging
 #: quadratically, the foot parameter is then off by about ``K s^2`` (``K = g'' / 2 g'``),
 #: ~1e-16. Far from the curve the distance is stationary at the foot and would allow far
@@ -550,68 +444,22 @@ _THREE = np.arange(-1, 2)
 #: near it (the deviation check's points on the surfaces) the distance is off by
 #: ``|C'| K s^2``: 1e-6 left 3e-12 on a merged face's profile, 1e-8 leaves round-off, at
 #: no measurable cost on the wavy axis (27 - 29 ms both)
-_STEP_TOL = 1e-8
+_STEP_TOL = kernels.STEP_TOL
 
 
 _TREE_ABOVE = 2_000_000  # point x sample table size above which a k-d tree answers (x 50)
-_TABLE_BLOCK = 65_536  # entries per block of the tables actually computed (in cache: ~3x faster)
-
-
-def _augmented(x: FloatArray) -> FloatArray:
-    """Points ``x`` (n, dim) as columns ``(x, 1)`` (dim + 1, n), for :func:`_distance_table`."""
-    xt = np.empty((x.shape[1] + 1, x.shape[0]))
-    xt[:-1], xt[-1] = x.T, 1.0
-    return xt
-
-
-def _distance_table(
-    aug: FloatArray, xt: FloatArray, d2: FloatArray, is_min: np.ndarray, le: np.ndarray
-) -> None:
-    """Into ``d2`` (m, c) the table ``|x - p|^2 - |x|^2`` of the samples' rows ``aug``
-    (:attr:`Curve._table`) and points ``xt`` (dim + 1, c) (:func:`_augmented`), in one
-    product (an added pass for ``|p|^2`` cost more than the product); into ``is_min`` (m, c)
-    whether each sample is a local minimum of its point's column (``le`` (m - 1, c):
-    scratch). Samples along rows, points along columns: the neighbour comparisons run over
-    contiguous memory, not one short row per point (measured 1.6x faster)."""
-    np.matmul(aug, xt, out=d2)
-    np.less_equal(d2[1:], d2[:-1], out=is_min[1:])
-    is_min[0] = True
-    np.less_equal(d2[:-1], d2[1:], out=le)
-    is_min[:-1] &= le
 
 
 def _candidate_samples(curve: Curve, points: FloatArray, k: int) -> np.ndarray:
     """Indices (n, k) of the ``k`` nearest local minima of the sample distance per point."""
-    ts, pts = curve._search
-    n, m = points.shape[0], pts.shape[0]
+    n, m = points.shape[0], curve._search[0].size
     if m * n > 50 * _TREE_ABOVE:  # very long curves: nearest samples from the k-d tree
         _, idx = curve._tree.query(points, k=4 * k)
         return np.asarray(idx)[:, ::4][:, :k]
-    centre, aug = curve._table
-    xt = _augmented(points - centre)
-    out = np.empty((n, k), dtype=np.int64)
-    cols = max(1, _TABLE_BLOCK // m)
-    d2_buf, min_buf = np.empty((m, cols)), np.empty((m, cols), dtype=bool)
-    le_buf = np.empty((m - 1, cols), dtype=bool)
-    for s in range(0, n, cols):
-        e = min(n, s + cols)
-        # |x - p|^2 up to the per-point constant |x|^2 (which does not change the minima)
-        d2, is_min = d2_buf[:, : e - s], min_buf[:, : e - s]
-        _distance_table(aug, xt[:, s:e], d2, is_min, le_buf[:, : e - s])
-        score = np.where(is_min, d2, np.inf).T  # (points, samples) for the row argmins
-        score = np.ascontiguousarray(score)
-        # the k best local minima by repeated argmin (faster than argpartition for small k);
-        # rows with fewer than k local minima repeat their best one
-        rr = np.arange(e - s)
-        best = np.argmin(score, axis=1)
-        part = np.empty((e - s, k), dtype=np.int64)
-        part[:, 0] = best
-        for j in range(1, k):
-            score[rr, part[:, j - 1]] = np.inf
-            nxt = np.argmin(score, axis=1)
-            part[:, j] = np.where(np.isfinite(score[rr, nxt]), nxt, best)
-        out[s:e] = part
-    return out
+    centre, ct, pp = curve._table
+    x = np.ascontiguousarray(points - centre)
+    bounds = np.array([0, m], dtype=np.int64)
+    return kernels.candidates(ct, pp, bounds, x, k)[:, 0]  # type: ignore[no-any-return]
 
 
 def _bracketed_newton(
@@ -625,10 +473,14 @@ def _bracketed_newton(
     and foot points (n, dim).
 
     ``g(t) = (C - x) . C'`` is the half derivative of the squared distance. Where ``g`` has
-    the same sign at both bracket ends the minimum is at an end; otherwise
-    :func:`_quick_newton` from ``start`` (default: the linear interpolation of ``g`` between
-    the bracket ends).
+    the same sign at both bracket ends the minimum is at an end; otherwise the bracketed
+    Newton iteration from ``start`` (default: the linear interpolation of ``g`` between the
+    bracket ends); in one compiled call for curves with polynomial tables
+    (:func:`medax.geometry.kernels.closest_bracketed`).
     """
+    poly = curve.poly_search()
+    if poly is not None:
+        return poly.closest_in(np.zeros(x.shape[0], dtype=np.int64), x, lo, hi, start)  # type: ignore[no-any-return]
     n = x.shape[0]
     c0, c1, _ = curve.jet(np.concatenate((lo, hi)))
     c = c0 - np.concatenate((x, x))
@@ -648,72 +500,36 @@ def _bracketed_newton(
         s0 = a + (b - a) * ga / (ga - gb)  # regula falsi start: g < 0 at a, > 0 at b
     else:
         s0 = np.minimum(np.maximum(start[interior], a), b)
-    t[interior], foot[interior] = _quick_newton(curve, x[interior], a, b, s0)
+    t[interior], foot[interior] = _newton_in_brackets(curve, x[interior], a, b, s0)
     return t, foot
-
-
-def _quick_newton(
-    curve: Curve, x: FloatArray, a: FloatArray, b: FloatArray, s: FloatArray, steps: int = 3
-) -> tuple[FloatArray, FloatArray]:
-    """:func:`_newton_in_brackets` for good starts ``s`` (n,): up to ``steps`` plain Newton
-    steps on all rows (clamped to ``[a, b]``, no per-row bookkeeping: a few numpy calls
-    each), stopping once every row's step was a Newton step of at most ``_STEP_TOL``; then
-    the safeguarded iteration for the rows that did not settle (from where they are)."""
-    for _ in range(steps):
-        c0, c1, c2 = curve.jet(s)
-        c = c0 - x
-        g = np.einsum("ij,ij->i", c, c1)
-        dg = np.einsum("ij,ij->i", c1, c1) + np.einsum("ij,ij->i", c, c2)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            new = np.minimum(np.maximum(s - g / dg, a), b)
-        ds = new - s
-        ok = (dg > 0.0) & (np.abs(ds) <= _STEP_TOL)
-        if ok.all():
-            break
-        s = new
-    foot = c0 + ds[:, None] * (c1 + (0.5 * ds)[:, None] * c2)  # Taylor: no evaluation
-    if ok.all():
-        return new, foot
-    bad = ~ok
-    ss = np.where(np.isfinite(new), new, s)[bad]
-    new[bad], foot[bad] = _newton_in_brackets(curve, x[bad], a[bad], b[bad], ss)
-    return new, foot
 
 
 def _newton_in_brackets(
     curve: Curve, x: FloatArray, a: FloatArray, b: FloatArray, s: FloatArray, iters: int = 60
 ) -> tuple[FloatArray, FloatArray]:
     """The root of ``g(t) = (C(t) - x) . C'(t)`` in ``[a, b]`` (n,) where ``g(a) < 0 < g(b)``,
-    from ``s`` (n,): parameters (n,) and foot points (n, dim).
+    from ``s`` (n,): parameters (n,) and foot points (n, dim), for curves without polynomial
+    tables (their jets evaluated here, the steps compiled: :func:`kernels.newton_rows`).
 
     Newton steps kept inside the shrinking sign-change bracket (bisection when a step leaves
     it or ``g' <= 0``); a row stops at its first step of at most ``_STEP_TOL`` (see there),
     its foot the second-order Taylor expansion of that step's jet (off by ``|C^(3)| s^3 / 6``):
     no separate evaluation of the feet.
     """
-    a, b, s = a.copy(), b.copy(), s.copy()
+    a = np.array(a, dtype=np.float64)
+    b = np.array(b, dtype=np.float64)
+    s = np.array(s, dtype=np.float64)
+    s = np.where(np.isfinite(s), s, 0.5 * (a + b))
+    x = np.ascontiguousarray(x, dtype=np.float64)
     foot = np.empty_like(x)
     rows = np.arange(s.size)
     for it in range(iters):
-        sr, xr = s[rows], x[rows]
-        c0, c1, c2 = curve.jet(sr)
-        c = c0 - xr
-        g = np.einsum("ij,ij->i", c, c1)
-        dg = np.einsum("ij,ij->i", c1, c1) + np.einsum("ij,ij->i", c, c2)
-        aa = np.where(g < 0.0, sr, a[rows])
-        bb = np.where(g > 0.0, sr, b[rows])
-        # g / dg where dg > 0, else inf (a bisection below); no division warnings
-        step = np.divide(g, dg, out=np.full_like(g, np.inf), where=dg > 0.0)
-        new = sr - step
-        small = np.abs(step) <= _STEP_TOL
-        bad = ~(new >= aa) | ~(new <= bb)  # also catches nan
-        kept = np.minimum(np.maximum(new, aa), bb)
-        new = np.where(small, kept, np.where(bad, 0.5 * (aa + bb), new))
-        done = small | (bb - aa <= 4e-16) | (g == 0.0) | (it == iters - 1)
-        a[rows], b[rows], s[rows] = aa, bb, new
-        ds = np.where(small, kept - sr, 0.0)[done]
-        foot[rows[done]] = c0[done] + ds[:, None] * (c1[done] + (0.5 * ds)[:, None] * c2[done])
-        s[rows[done]] = np.where(small[done], kept[done], sr[done])
+        sr, ar, br, xr = s[rows], a[rows], b[rows], x[rows]
+        c0, c1, c2 = (np.ascontiguousarray(c) for c in curve.jet(sr))
+        fr = np.empty_like(xr)
+        done = kernels.newton_rows(c0, c1, c2, xr, sr, ar, br, it == iters - 1, fr)
+        s[rows], a[rows], b[rows] = sr, ar, br
+        foot[rows[done]] = fr[done]
         rows = rows[~done]
         if rows.size == 0:
             break

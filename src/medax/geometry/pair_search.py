@@ -1,51 +1,81 @@
-"""Global closest points on two polynomial B-splines at once (the two constraints of a
-distance field), one query's worth of numpy calls instead of two.
+"""Global and local closest points on polynomial B-splines by the compiled kernels
+(:mod:`medax.geometry.kernels`), one kernel call per query.
 
-The algorithm is that of :func:`medax.geometry.curve.closest_by_search` (the ``k`` best local
-minima of the sampled distance per curve, each refined in the bracket of its neighbouring
-samples); the two curves' search samples, slopes and polynomial pieces are stacked, curve 2
-shifted to the parameter range ``[2, 3]``, so that one table pass, one start and one Newton
-iteration serve both. Small batches cost numpy call overhead, not flops: the axis tracer's
-field queries are mostly 1 - 100 points.
+:class:`PolySearch` stacks the search samples, slopes, polynomial pieces and C0 corners of
+one or more non-rational B-splines of degree at most
+:data:`~medax.geometry.bspline.POWER_BASIS_MAX_DEGREE` (curve ``j`` at parameter offset
+``2 j`` in the span search); the algorithm is that of
+:func:`medax.geometry.curve.closest_by_search` (the ``k`` best local minima of the sampled
+distance per curve, each refined in the bracket of its neighbouring samples).
+:class:`PairSearch` serves the two constraints of a distance field with one call: the axis
+tracer's field queries are mostly 1 - 100 points, where numpy's time was per-call overhead.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from medax.errors import CurveError
+from medax.geometry import kernels
 from medax.geometry._types import FloatArray
 from medax.geometry.bspline import POWER_BASIS_MAX_DEGREE, BSpline
-from medax.geometry.curve import (
-    Closest,
-    Curve,
-    _bracketed_newton,
-    _quick_newton,
-    _start,
-    at_breaks,
-    sign_brackets,
-)
+from medax.geometry.curve import Closest, Curve
 
 #: parameter offset of the second curve in the stacked tables
 SHIFT = 2.0
-#: batches whose distance table (points x samples) is larger than this use two queries
-#: (blocked to stay in cache: faster for a few hundred points and more)
-MAX_TABLE = 40_000
 
 
-class _Pieces:
-    """The stacked polynomial pieces, evaluated like :meth:`BSpline.jet` (duck-typed as a
-    curve for the Newton iteration)."""
+class PolySearch:
+    """The stacked search tables of ``curves`` (non-rational, power basis: see
+    :meth:`BSpline.stacked_rows`) for :func:`kernels.closest_search` and
+    :func:`kernels.closest_bracketed`."""
 
-    def __init__(self, starts: FloatArray, coefs: FloatArray) -> None:
-        self.starts, self.coefs = starts, coefs
-        self.powers = np.arange(coefs.shape[1] - 1, -1, -1, dtype=np.float64)
+    def __init__(self, curves: list[BSpline], k: int = 2) -> None:
+        table = BSpline.stacked_rows(curves)
+        if table is None:
+            raise CurveError(
+                "compiled search tables need non-rational B-splines of degree at most "
+                f"{POWER_BASIS_MAX_DEGREE}"
+            )
+        self.k, self.n_curves, self.dim = k, len(curves), curves[0].dim
+        self.inner, self.starts, self.rows = table
+        self.ts = np.concatenate([c._search[0] for c in curves])
+        self.pts = np.ascontiguousarray(np.concatenate([c._search[1] for c in curves]))
+        self.slopes = np.ascontiguousarray(np.concatenate([c._slopes for c in curves]))
+        sizes = [c._search[0].size for c in curves]
+        self.bounds = np.concatenate(([0], np.cumsum(sizes))).astype(np.int64)
+        self.centre = self.pts.mean(axis=0)
+        cpts = self.pts - self.centre
+        self.ct = np.ascontiguousarray(cpts.T)  # (dim, m)
+        self.pp = np.einsum("mj,mj->m", cpts, cpts)
+        brs = [np.asarray(c.breaks(), dtype=np.float64) for c in curves]
+        self.breaks = np.concatenate(brs) if brs else np.zeros(0)
+        self.break_bounds = np.concatenate(([0], np.cumsum([b.size for b in brs]))).astype(np.int64)
 
-    def jet(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Value, first and second derivative (each (n, dim)) at stacked parameters (n,)."""
-        i = np.searchsorted(self.starts, t, side="right") - 1
-        s = np.power.outer(t - self.starts[i], self.powers)  # (n, degree + 1)
-        w = np.einsum("nk,nkqd->nqd", s, self.coefs[i])
-        return w[:, 0], w[:, 1], w[:, 2]
+    def closest(self, points: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Global closest points of ``points`` (n, dim) on every curve: parameters
+        (n, curves), foot points (n, curves, dim), distances (n, curves)."""
+        x = np.ascontiguousarray(points, dtype=np.float64)
+        return kernels.closest_search(  # type: ignore[no-any-return]
+            self.ts, self.pts, self.slopes, self.centre, self.ct, self.pp, self.bounds,
+            self.inner, self.starts, self.rows, self.breaks, self.break_bounds, x, self.k,
+        )  # fmt: skip
+
+    def closest_in(
+        self, curve: np.ndarray, points: FloatArray, lo: FloatArray, hi: FloatArray,
+        start: FloatArray | None = None,
+    ) -> tuple[FloatArray, FloatArray]:  # fmt: skip
+        """The nearest point to ``points[i]`` (n, dim) on curve ``curve[i]`` (n,; int) with
+        parameter in ``[lo[i], hi[i]]`` (n,), bracketed Newton from ``start`` (n,; default:
+        regula falsi): parameters (n,) and foot points (n, dim)."""
+        x = np.ascontiguousarray(points, dtype=np.float64)
+        lo = np.ascontiguousarray(lo, dtype=np.float64)
+        hi = np.ascontiguousarray(hi, dtype=np.float64)
+        s = np.full(lo.size, np.nan) if start is None else np.asarray(start, dtype=np.float64)
+        c = np.ascontiguousarray(curve, dtype=np.int64)
+        return kernels.closest_bracketed(  # type: ignore[no-any-return]
+            self.inner, self.starts, self.rows, c, x, lo, hi, np.ascontiguousarray(s)
+        )
 
 
 class PairSearch:
@@ -53,28 +83,8 @@ class PairSearch:
     points; :meth:`build` returns ``None`` where the stacking does not apply."""
 
     def __init__(self, c1: BSpline, c2: BSpline, k: int = 2) -> None:
-        (t1, p1), (t2, p2) = c1._search, c2._search
-        self.k, self.m1, self.m = k, t1.size, t1.size + t2.size
-        self.ts = np.concatenate((t1, t2 + SHIFT))
-        self.breaks = np.concatenate((c1.breaks(), c2.breaks() + SHIFT))  # C0 corners
-        self.pts = np.concatenate((p1, p2))
-        self.slopes = np.concatenate((c1._slopes, c2._slopes))
-        self.centre = self.pts.mean(axis=0)
-        self.cpts = self.pts - self.centre
-        self.pp = np.einsum("mj,mj->m", self.cpts, self.cpts)
-        deg = max(c1.degree, c2.degree)
-        starts, coefs = [], []
-        for shift, c in ((0.0, c1), (SHIFT, c2)):
-            x, cf = c._pieces  # (spans, degree + 1, 3, dim), highest power first
-            pad = np.zeros((cf.shape[0], deg - c.degree, *cf.shape[2:]))
-            starts.append(x[:-1] + shift)
-            coefs.append(np.concatenate((pad, cf), axis=1))
-        self.pieces = _Pieces(np.concatenate(starts), np.concatenate(coefs))
-        # the three-sample window of each sample (m, 3), kept on its own curve
-        j = np.arange(self.m)
-        lo = np.where(j < self.m1, 0, self.m1)[:, None]
-        hi = np.where(j < self.m1, self.m1 - 1, self.m - 1)[:, None]
-        self.window = np.minimum(np.maximum(j[:, None] + np.arange(-1, 2), lo), hi)
+        self.k = k
+        self.search = PolySearch([c1, c2], k)
 
     @staticmethod
     def build(c1: Curve, c2: Curve) -> PairSearch | None:
@@ -91,38 +101,13 @@ class PairSearch:
             return None
         return PairSearch(c1, c2)  # type: ignore[arg-type]
 
-    def fits(self, n: int) -> bool:
-        """Whether a batch of ``n`` points is small enough for one stacked table."""
-        return n * self.m <= MAX_TABLE
-
     def closest(self, points: FloatArray) -> tuple[Closest, Closest]:
         """Global closest points (n, dim) on curve 1 and on curve 2."""
-        x0 = np.asarray(points, dtype=np.float64)
-        n, k = x0.shape[0], self.k
-        cand = self._candidates(x0).ravel()  # (n * 2k,): k on curve 1, then k on curve 2
-        x = np.repeat(x0, 2 * k, axis=0)
-        j3 = self.window[cand]  # (n * 2k, 3)
-        g, d2, ia, ga, gb, interior = sign_brackets(self.pts, self.slopes, j3, x)
-        jb = j3[np.arange(x.shape[0]), np.argmin(d2, axis=1)]
-        t, foot = self.ts[jb], self.pts[jb]
-        if np.any(interior):
-            ta, tb = self.ts[ia[interior]], self.ts[ia[interior] + 1]
-            s0 = _start(self.ts[j3[interior]], g[interior], ta, tb, ga[interior], gb[interior])
-            t[interior], foot[interior] = _quick_newton(
-                self.pieces,  # type: ignore[arg-type]
-                x[interior], ta, tb, s0,
-            )  # fmt: skip
-        at_breaks(self.pieces, self.breaks, x, self.ts[j3[:, 0]], self.ts[j3[:, 2]], t, foot)
-        dist = np.linalg.norm(foot - x, axis=1).reshape(n, 2, k)
-        pick = np.argmin(dist, axis=2)  # (n, 2)
-        r = np.arange(n)
-        t, foot = t.reshape(n, 2, k), foot.reshape(n, 2, k, -1)
-        out = []
-        for j, shift in ((0, 0.0), (1, SHIFT)):
-            pj = pick[:, j]
-            tj = t[r, j, pj] - shift
-            out.append(Closest(t=tj, foot=foot[r, j, pj], distance=dist[r, j, pj]))
-        return out[0], out[1]
+        t, foot, dist = self.search.closest(points)
+        return (
+            Closest(t=t[:, 0], foot=foot[:, 0], distance=dist[:, 0]),
+            Closest(t=t[:, 1], foot=foot[:, 1], distance=dist[:, 1]),
+        )
 
     def closest_near(
         self, on2: np.ndarray, points: FloatArray, t0: FloatArray, width: float
@@ -133,31 +118,8 @@ class PairSearch:
         Parameters (n,), foot points (n, dim) and distances (n,)."""
         x = np.asarray(points, dtype=np.float64)
         t0 = np.asarray(t0, dtype=np.float64)
-        shift = np.where(on2, SHIFT, 0.0)
-        lo = np.minimum(np.maximum(t0 - width, 0.0), 1.0) + shift
-        hi = np.minimum(np.maximum(t0 + width, 0.0), 1.0) + shift
-        start = np.minimum(np.maximum(t0, 0.0), 1.0) + shift
-        t, foot = _bracketed_newton(self.pieces, x, lo, hi, start=start)  # type: ignore[arg-type]
-        return Closest(t=t - shift, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
-
-    def _candidates(self, points: FloatArray) -> np.ndarray:
-        """Indices (n, 2, k) into the stacked samples: the ``k`` nearest local minima of the
-        sample distance on each curve (rows with fewer repeat their best one)."""
-        x = points - self.centre
-        d2 = self.pp[None, :] - 2.0 * (x @ self.cpts.T)
-        m1 = self.m1
-        is_min = np.ones(d2.shape, dtype=bool)
-        is_min[:, 1:] &= d2[:, 1:] <= d2[:, :-1]
-        is_min[:, :-1] &= d2[:, :-1] <= d2[:, 1:]
-        # the two curves' blocks are not neighbours: their end samples compare inward only
-        is_min[:, m1 - 1] = d2[:, m1 - 1] <= d2[:, m1 - 2]
-        is_min[:, m1] = d2[:, m1] <= d2[:, m1 + 1]
-        score = np.where(is_min, d2, np.inf)
-        k = self.k
-        # the k smallest scores of each block, in any order (one call; where a block has
-        # fewer than k local minima the extras are other samples: refined like the others,
-        # they are never nearer than the best local minimum, which is always among them)
-        out = np.empty((x.shape[0], 2, k), dtype=np.int64)
-        out[:, 0] = np.argpartition(score[:, :m1], k - 1, axis=1)[:, :k]
-        out[:, 1] = np.argpartition(score[:, m1:], k - 1, axis=1)[:, :k] + m1
-        return out
+        lo = np.minimum(np.maximum(t0 - width, 0.0), 1.0)
+        hi = np.minimum(np.maximum(t0 + width, 0.0), 1.0)
+        start = np.minimum(np.maximum(t0, 0.0), 1.0)
+        t, foot = self.search.closest_in(on2.astype(np.int64), x, lo, hi, start)
+        return Closest(t=t, foot=foot, distance=np.linalg.norm(foot - x, axis=1))

@@ -22,7 +22,7 @@ import numpy as np
 
 from medax.geometry._types import FloatArray
 from medax.geometry.arc import Arc
-from medax.geometry.bspline import BSpline, stacked_jet_in
+from medax.geometry.bspline import BSpline
 from medax.geometry.curve import Curve, certify_closest, has_closed_form_closest, track_rows
 from medax.geometry.line import Line
 from medax.geometry.region import Region
@@ -102,7 +102,7 @@ class FreeField:
         (:func:`~medax.geometry.curve.certify_closest`, slack ``self.slack``) and queried
         globally where that is not shown; rows with a second start in ``t1`` (NaN: none)
         track it too and keep the nearer foot. The tracked sides' Newton runs once for all
-        of them (:func:`stacked_jet`)."""
+        of them (one compiled call on their stacked table: :func:`track_rows`)."""
         n = xs.shape[1]
         t_out: list[FloatArray | None] = [None] * 4
         f_out: list[FloatArray | None] = [None] * 4
@@ -146,12 +146,7 @@ class FreeField:
                 if len(tols) == 1
                 else np.repeat(np.array([self.step_tol[k] for k in sides]), sizes)
             )
-
-            def jet(tr: FloatArray, rows: np.ndarray | slice | None) -> FloatArray:
-                # (a tracking's parameters are in [0, 1])
-                return stacked_jet_in(table, tr, offset if rows is None else offset[rows])
-
-            t_all, f_all, h_all = track_rows(jet, pts, starts, tol)
+            t_all, f_all, h_all = track_rows((table, offset), pts, starts, tol)
         else:  # (curves that do not stack: one tracking per run)
             res = [
                 track_rows(self.curves[r[0]], pts[:, a : a + m], starts[a : a + m],
