@@ -490,24 +490,6 @@ def test_targets_blend_and_separable_rows():
     np.testing.assert_allclose(rb2.reshape(n2 - 1, n1 - 1), cols[None, 1:-1] + 0.01 * v)
 
 
-def test_stacked_jets_equal_each_curves_own():
-    """Several B-splines in one table (cubics and a quintic): each point's jet is its own
-    curve's, bit for bit, at the ends, at knots and inside; row jets equal the column jets."""
-    from medax.geometry.bspline import BSpline, stacked_jet
-
-    curves = [*REGIONS["wavy"].sides, _free_form_region("mixed").sides[0]]
-    table = BSpline.stacked_rows(curves)
-    assert table is not None
-    t = np.concatenate(
-        (np.random.default_rng(3).uniform(0, 1, 500), [0.0, 1.0, 0.5, 1 / 3, 2 / 3, 0.25])
-    )
-    for j, c in enumerate(curves):
-        got = stacked_jet(table, t, np.full(t.size, 2.0 * j))
-        assert np.array_equal(got, c.jet_rows(t))
-        c0, c1, c2 = c.jet(t)
-        np.testing.assert_allclose(got, np.vstack((c0.T, c1.T, c2.T)), rtol=0, atol=1e-12)
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize(
     ("name", "divisions", "tol"), [("wavy", (512, 512), 1e-6), ("wavy", (300, 200), 0.0),
