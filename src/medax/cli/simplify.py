@@ -26,7 +26,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="remove fillets from a STEP solid without changing its shape",
         description="Split each fillet along its medial curve, merge the halves into the "
         "supporting faces, rebuild and validate the solid; write it as STEP, IGES or BRep (by "
-        "the output's extension). Every output is checked before any work and all are "
+        "the output's extension; STEP faces are coloured and named by merged group). Every output is checked before any work and all are "
         "written together or none.",
     )
     p.add_argument("part", help="input part (.step/.stp, .iges/.igs, .brep)")
@@ -68,6 +68,7 @@ def run(args: argparse.Namespace) -> int:
     from medax.cad.simplify.pipeline import BUILD_TOL
     from medax.cad.simplify.readback import read_back
     from medax.cad.simplify.step_out import SHAPE_SUFFIXES, shape_format, write_shape
+    from medax.cad.xcaf import group_styles
 
     check_outputs(
         [
@@ -97,7 +98,10 @@ def run(args: argparse.Namespace) -> int:
     tols = simplify_tolerances(args.tol)
     report = stamp("simplify-report", report, classes[0].unit, tols, time="s")
     with staged_outputs() as out:  # all outputs or none
-        staged = write_shape(shape, out.path(args.output, "-o"), fmt)
+        styles = group_styles([r.shape for r in results], [r.report() for r in results])
+        staged = write_shape(
+            shape, out.path(args.output, "-o"), fmt, styles, Path(args.output).stem, args.output
+        )
         progress(f"reading {Path(args.output).name} back")
         diag = max(r.diagonal for r in results)
         report["written_file"] = read_back(

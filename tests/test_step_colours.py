@@ -1,0 +1,127 @@
+"""STEP outputs with a colour and a name per face (XCAF): read back with OCCT's XCAF reader
+and checked against what each face is, told from its geometry in the file (a fillet is a
+cylinder, a corner blend a sphere, ...), not from medax's classification."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.GeomAbs import GeomAbs_Cylinder, GeomAbs_Plane, GeomAbs_Sphere
+from OCP.TopoDS import TopoDS
+
+from medax.cad.simplify import parts as P
+from medax.cad.simplify.step_out import write_step
+from medax.cad.xcaf import read_styled_step
+from medax.cli.main import main
+from medax.viz.before_after import GREY, group_colour
+from medax.viz.view3d import CLASS_COLOURS
+
+pytestmark = pytest.mark.slow
+
+
+def _kind(face):
+    """'plane', 'cylinder', 'sphere' or 'other', and the plane's normal / the radius."""
+    s = BRepAdaptor_Surface(TopoDS.Face(face))
+    t = s.GetType()
+    if t == GeomAbs_Plane:
+        d = s.Plane().Axis().Direction()
+        return "plane", np.array([d.X(), d.Y(), d.Z()])
+    if t == GeomAbs_Cylinder:
+        return "cylinder", s.Cylinder().Radius()
+    if t == GeomAbs_Sphere:
+        return "sphere", s.Sphere().Radius()
+    return "other", None
+
+
+def _close(rgb, want):
+    return rgb is not None and np.allclose(rgb, want, atol=2e-6)
+
+
+@pytest.fixture(scope="module")
+def parts(tmp_path_factory):
+    d = tmp_path_factory.mktemp("in")
+    paths = {}
+    for name, built in (("box4", P.box_vertical_fillets()), ("box12", P.box_all_fillets())):
+        paths[name] = d / f"{name}.step"
+        write_step(built.shape, paths[name])
+    return paths
+
+
+def test_classify_step_colours_and_names(parts, tmp_path):
+    out = tmp_path / "classes.step"
+    assert main(["-q", "classify", str(parts["box12"]), "--no-axes", "--step", str(out)]) == 0
+    shape, faces = read_styled_step(out)
+    assert len(faces) == 26
+    kinds = [_kind(f.face) for f in faces]
+    assert sorted(k for k, _ in kinds) == ["cylinder"] * 12 + ["plane"] * 6 + ["sphere"] * 8
+    seen = set()
+    for f, (kind, value) in zip(faces, kinds, strict=True):
+        m = re.fullmatch(r"(fillet|corner blend|supporting|protection) (\d+)( r=([\d.]+))?", f.name)
+        assert m, f.name
+        seen.add(int(m.group(2)))
+        cls = {"cylinder": "fillet", "sphere": "corner_blend", "plane": "supporting"}[kind]
+        assert m.group(1) == cls.replace("_", " "), (f.name, kind)
+        assert _close(f.rgb, CLASS_COLOURS[cls]), (f.name, f.rgb)
+        if kind != "plane":  # the radius in the name is the surface's
+            assert abs(float(m.group(4)) - value) < 1e-9, f.name
+        else:
+            assert m.group(3) is None
+    assert seen == set(range(26))  # every face index once
+
+
+def test_classify_step_protection(parts, tmp_path):
+    """4 vertical fillets: the side planes support them, top and bottom (normal along the
+    fillets' axes, met at the cross edges) are protection faces."""
+    out = tmp_path / "classes.step"
+    assert main(["-q", "classify", str(parts["box4"]), "--no-axes", "--step", str(out)]) == 0
+    _, faces = read_styled_step(out)
+    for f in faces:
+        kind, value = _kind(f.face)
+        if kind == "cylinder":
+            want = "fillet"
+        else:
+            assert kind == "plane"
+            want = "protection" if abs(value[2]) > 0.99 else "supporting"
+        assert f.name.startswith(want + " "), (f.name, kind)
+        assert _close(f.rgb, CLASS_COLOURS[want])
+
+
+def test_simplify_step_colours_by_group(parts, tmp_path):
+    """4 vertical fillets removed: each side face absorbed the halves of its two fillets
+    (its own colour, named by the input faces it came from); top and bottom are untouched
+    (grey). The written file still passes simplify's read-back check."""
+    from medax.cad.reader import read_part
+
+    out = tmp_path / "simple.step"
+    assert main(["-q", "simplify", str(parts["box4"]), "-o", str(out)]) == 0
+    (solid_in,) = read_part(parts["box4"]).solids
+    from medax.cad.simplify.occ import faces_of
+
+    kinds_in = [_kind(f) for f in faces_of(solid_in)]
+    shape, faces = read_styled_step(out)
+    assert len(faces) == 6
+    colours = []
+    for f in faces:
+        kind, normal = _kind(f.face)
+        assert kind != "cylinder"  # fillets gone
+        if kind == "plane" and abs(normal[2]) > 0.99:
+            assert re.fullmatch(r"face \d+", f.name), f.name
+            assert _close(f.rgb, GREY)
+            continue
+        m = re.fullmatch(r"merged from faces ([\d,]+) \(fillet halves ([\d,]+)\)", f.name)
+        assert m, f.name
+        members = [int(i) for i in m.group(1).split(",")]
+        halves = [int(i) for i in m.group(2).split(",")]
+        # the input faces named: the two fillets beside it and one plane facing the same way
+        assert len(halves) == 2 and all(kinds_in[i][0] == "cylinder" for i in halves)
+        (plane,) = sorted(set(members) - set(halves))
+        assert kinds_in[plane][0] == "plane"
+        n_in = kinds_in[plane][1]
+        if kind == "plane":
+            assert abs(abs(float(np.dot(n_in, normal))) - 1.0) < 1e-9
+        colours.append(f.rgb)
+    assert len(colours) == 4
+    assert all(any(_close(c, group_colour(k)) for c in colours) for k in range(4))
