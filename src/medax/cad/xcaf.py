@@ -132,9 +132,10 @@ def read_styled_step(path: str | Path) -> tuple[Any, list[StyledFace]]:
     while exp.More():
         face = exp.Current()
         colour = Quantity_Color()
-        rgb = None
+        rgb: RGB | None = None
         if colours.GetColor(face, XCAFDoc_ColorSurf, colour):
-            rgb = tuple(float(v) for v in colour.Values(Quantity_TOC_sRGB))  # type: ignore[assignment]
+            r, g, b = colour.Values(Quantity_TOC_sRGB)
+            rgb = (float(r), float(g), float(b))
         sub = TDF_Label()
         text = _name(sub) if shapes.FindSubShape(top, face, sub) else None
         out.append(StyledFace(face, rgb, text))

@@ -26,8 +26,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="remove fillets from a STEP solid without changing its shape",
         description="Split each fillet along its medial curve, merge the halves into the "
         "supporting faces, rebuild and validate the solid; write it as STEP, IGES or BRep (by "
-        "the output's extension; STEP faces are coloured and named by merged group). Every output is checked before any work and all are "
-        "written together or none.",
+        "the output's extension; STEP faces are coloured and named by merged group). Every "
+        "output is checked before any work and all are written together or none.",
     )
     p.add_argument("part", help="input part (.step/.stp, .iges/.igs, .brep)")
     p.add_argument(
