@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import base64
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -167,11 +168,28 @@ def view_model(
     }
 
 
+def write_view(
+    model: dict[str, Any], path: str | Path, unit: str, tolerances: dict[str, float]
+) -> None:
+    """Write ``model`` to ``path`` (a staged temporary): ``view3d`` JSON with the header
+    when ``path`` ends in ``.json``, else a self-contained HTML page with the viewer."""
+    from medax.io_utils import write_json
+    from medax.schemas import stamp
+    from medax.viz.webview import view_page
+
+    p = Path(path)
+    if p.suffix.lower() == ".json":
+        write_json(p, stamp("view3d", model, unit, tolerances), "--view3d")
+    else:
+        label = f"{model['source']}: {model['title']}" if model["source"] else model["title"]
+        p.write_text(view_page([(model["title"], model)], label), encoding="utf-8")
+
+
 def classified_view(solids: Sequence[Any], source: str = "") -> dict[str, Any]:
     """The view of classified solids (:class:`~medax.cad.report.ClassifiedSolid`): faces
     coloured by class, with their fillets' axes."""
     items = []
-    axes = []
+    axes: list[FloatArray] = []
     for cs in solids:
         c = cs.classification
         styles = class_styles([c])

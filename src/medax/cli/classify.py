@@ -16,6 +16,7 @@ from medax.errors import InputError
 log = logging.getLogger(__name__)
 VIEW_SUFFIXES = (".png", ".svg")
 STEP_SUFFIXES = (".step", ".stp")
+VIEW3D_SUFFIXES = (".html", ".htm", ".json")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -35,6 +36,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--step",
         help="the (healed) part as STEP with each face coloured by class and named "
         "('fillet 12 r=2.5')",
+    )
+    p.add_argument(
+        "--view3d",
+        help="interactive 3D view: a self-contained HTML page (.html) or its data (.json, "
+        "kind view3d) for medax batch's report",
     )
     p.add_argument(
         "--angle",
@@ -73,6 +79,7 @@ def run(args: argparse.Namespace) -> int:
             Output("--report", args.report, JSON_SUFFIXES),
             Output("--png", args.png, VIEW_SUFFIXES),
             Output("--step", args.step, STEP_SUFFIXES),
+            Output("--view3d", args.view3d, VIEW3D_SUFFIXES),
         ],
         {"input part": args.part},
     )
@@ -87,7 +94,14 @@ def run(args: argparse.Namespace) -> int:
             render_solids(solids, tmp, title=Path(args.part).name, view=(elev, azim))
         if args.step is not None:
             write_classes_step(solids, out.path(args.step, "--step"), args.step)
-    for path in (args.report, args.png, args.step):
+        if args.view3d is not None:
+            from medax.cad.view_data import classified_view, write_view
+
+            model = classified_view(solids, Path(args.part).name)
+            write_view(
+                model, out.path(args.view3d, "--view3d"), report["unit"], report["tolerances"]
+            )
+    for path in (args.report, args.png, args.step, args.view3d):
         if path is not None:
             print(f"wrote {path}")
     return 0
