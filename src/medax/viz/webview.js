@@ -11,7 +11,8 @@
  *
  * Mouse: drag to orbit, wheel to zoom, right-drag or shift-drag to pan, click a face to see
  * what it is (picking: the faces drawn with their id as colour into an offscreen buffer).
- * After the first frame the viewer's element gets data-status="rendered" (tests read it);
+ * After the first frame the viewer's element gets data-status="rendered" and data-rect (the
+ * canvas's place in the page, CSS pixels: left, top, width, height; tests read them);
  * errors go into the page's #medax-errors element. The URL fragment #pick=FX,FY (fractions
  * of the canvas) picks that point once after the first frame.
  */
@@ -222,6 +223,8 @@ void main() { gl_FragColor = vec4(uCol, 1.0); }`;
         drawn = true;
         const m = /pick=([\d.]+),([\d.]+)/.exec(location.hash);
         if (m) pick(parseFloat(m[1]) * canvas.clientWidth, parseFloat(m[2]) * canvas.clientHeight);
+        const b = canvas.getBoundingClientRect();
+        root.dataset.rect = [b.left, b.top, b.width, b.height].map(Math.round).join(',');
         root.dataset.status = 'rendered';
       }
     }
