@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import re
 import shutil
 import signal
 import threading
@@ -348,7 +349,18 @@ def test_mesh_step_meshes_the_simplified_part_and_pictures_go_in_the_report(
     mesh = json.loads((out / rec["outputs"]["mesh_report"]).read_text())
     assert mesh["input"].endswith("simplified.step")
     assert set(rec["outputs"]) >= {"classify_png", "simplify_png", "mesh_png", "mesh"}
-    assert (out / "report.html").read_text().count("data:image/png;base64,") == 3
+    page = (out / "report.html").read_text()
+    assert page.count("data:image/png;base64,") == 3
+    # the mesh quality histograms: one bar per bin, the bars' counts are the quads
+    hists = re.findall(r'<svg class="hist".*?</svg>', page)
+    assert len(hists) == 3
+    for svg in hists:
+        counts = [int(n) for n in re.findall(r": (\d+) quads</title>", svg)]
+        assert sum(counts) == rec["counts"]["mesh_quads"]
+    # the part's own report has the 3D view of the classified and the simplified part
+    own = (out / "bracket" / "report.html").read_text()
+    assert own.count('class="mx-model"') == 2 and own.count('<svg class="hist"') == 3
+    assert 'href="../bracket/mesh.msh"' in own
     log = (out / "bracket" / "batch.log").read_text()
     assert "$ medax mesh" in log and "wrote" in log
 

@@ -97,3 +97,32 @@ def test_bad_shapes():
         quad_quality(np.zeros((4, 2)), np.zeros((2, 3), dtype=int))
     with pytest.raises(MeshError, match="out of range"):
         quad_quality(np.zeros((4, 2)), np.array([[0, 1, 2, 4]]))
+
+
+def test_quality_histograms_count_known_quads():
+    """Squares (scaled Jacobian 1, angles 90) and rhombi of 62 / 118 degrees (scaled
+    Jacobian sin 62, inside its bin) land in the bins their exact values fall in."""
+    from medax.cad.part_report import HISTOGRAM_BINS, histograms
+
+    c, s = np.cos(np.radians(62.0)), np.sin(np.radians(62.0))
+    square = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
+    rhombus = [[0, 0, 0], [1, 0, 0], [1 + c, s, 0], [c, s, 0]]
+    pts = np.array([*[np.add(p, [3 * k, 0, 0]) for k in range(5) for p in square],
+                    *[np.add(p, [3 * k, 5, 0]) for k in range(3) for p in rhombus]])  # fmt: skip
+    quads = np.arange(len(pts)).reshape(-1, 4)
+    h = histograms(quad_quality(pts, quads))
+    assert set(h) == set(HISTOGRAM_BINS)
+    for name, (lo, hi, n) in HISTOGRAM_BINS.items():
+        assert len(h[name]["counts"]) == n and sum(h[name]["counts"]) == 8
+        assert h[name]["edges"][0] == lo and h[name]["edges"][-1] == hi
+
+    def bin_of(name, value):
+        lo, hi, n = HISTOGRAM_BINS[name]
+        return min(int((value - lo) / (hi - lo) * n), n - 1)
+
+    sj = h["scaled_jacobian"]["counts"]
+    assert sj[bin_of("scaled_jacobian", 1.0)] == 5 and sj[bin_of("scaled_jacobian", s)] == 3
+    assert h["min_angle"]["counts"][bin_of("min_angle", 62.0)] == 3
+    assert h["min_angle"]["counts"][-1] == 5  # 90 degrees: the last bin holds its top edge
+    assert h["max_angle"]["counts"][bin_of("max_angle", 118.0)] == 3
+    assert h["max_angle"]["counts"][0] == 5

@@ -47,6 +47,7 @@ th{background:#eee;cursor:pointer;user-select:none}td:first-child,td:nth-child(2
 tr.ok td:nth-child(2){color:#060}tr.refused td:nth-child(2){color:#a60}
 tr.failed td:nth-child(2),tr.timeout td:nth-child(2){color:#b00;font-weight:bold}
 section{margin:1.5em 0;border-top:1px solid #ccc}img{max-width:32%;margin:4px;border:1px solid #ddd}
+svg.hist{margin:4px;border:1px solid #ddd;vertical-align:top}
 code{background:#f4f4f4;padding:1px 3px}
 """
 _SORT = """
@@ -196,6 +197,7 @@ def _part_section(
         if key in outputs and (outdir / outputs[key]).is_file():
             data = base64.b64encode((outdir / outputs[key]).read_bytes()).decode("ascii")
             imgs.append(f'<img alt="{e(alt)}" title="{e(alt)}" src="data:image/png;base64,{data}">')
+    imgs.extend(_histograms(outputs, outdir))
     files = [*outputs.values(), f"{r['part_dir']}/batch.log"]
     links = [f'<a href="{e(prefix + p)}">{e(Path(p).name)}</a>' for p in files]
     if heading:
@@ -207,4 +209,63 @@ def _part_section(
     return (
         f'<section id="{e(r["part_dir"])}">{title}'
         f"<p>{'<br>'.join(lines)}</p><p>{' '.join(links)}</p>{''.join(imgs)}</section>"
+    )
+
+
+#: histogram titles per metric of the mesh report
+HISTOGRAMS = {
+    "scaled_jacobian": "scaled Jacobian",
+    "min_angle": "smallest angle (deg)",
+    "max_angle": "largest angle (deg)",
+}
+
+
+def _histograms(outputs: Mapping[str, str], outdir: Path) -> list[str]:
+    """Inline SVG bar charts of the mesh report's quality histograms (summed over its
+    solids); none when there is no mesh report or it has no histograms."""
+    rel = outputs.get("mesh_report")
+    if rel is None or not (outdir / rel).is_file():
+        return []
+    try:
+        rep = json.loads((outdir / rel).read_text(encoding="utf-8"))
+    except ValueError:
+        return []
+    solids = rep.get("solids", [rep])
+    out = []
+    for name, title in HISTOGRAMS.items():
+        hists = [s["histograms"][name] for s in solids if name in s.get("histograms", {})]
+        if not hists:
+            continue
+        edges = hists[0]["edges"]
+        counts = [sum(c) for c in zip(*(h["counts"] for h in hists), strict=True)]
+        out.append(histogram_svg(edges, counts, title))
+    return out
+
+
+def histogram_svg(edges: Sequence[float], counts: Sequence[int], title: str) -> str:
+    """A bar chart (inline SVG, 320 x 150 px) of ``counts`` over the bins ``edges``."""
+    e = html.escape
+    w, h, top, bottom, left = 320, 150, 22, 20, 8
+    n = len(counts)
+    peak = max(max(counts), 1)
+    bw = (w - 2 * left) / n
+    bars = []
+    for k, c in enumerate(counts):
+        bh = (h - top - bottom) * c / peak
+        x, y = left + k * bw, h - bottom - bh
+        tip = f"{edges[k]:g} to {edges[k + 1]:g}: {c} quads"
+        bars.append(
+            f'<rect x="{x:.1f}" y="{y:.1f}" width="{bw - 1:.1f}" height="{bh:.1f}" '
+            f'fill="#4a7fc0"><title>{e(tip)}</title></rect>'
+        )
+    total = sum(counts)
+    return (
+        f'<svg class="hist" width="{w}" height="{h}" viewBox="0 0 {w} {h}" '
+        f'role="img" aria-label="{e(title)}">'
+        f'<text x="{w / 2}" y="14" text-anchor="middle" font-size="12">{e(title)}, '
+        f"{total} quads</text>{''.join(bars)}"
+        f'<line x1="{left}" y1="{h - bottom}" x2="{w - left}" y2="{h - bottom}" stroke="#444"/>'
+        f'<text x="{left}" y="{h - 5}" font-size="11">{edges[0]:g}</text>'
+        f'<text x="{w - left}" y="{h - 5}" font-size="11" text-anchor="end">{edges[-1]:g}</text>'
+        "</svg>"
     )

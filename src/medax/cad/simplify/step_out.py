@@ -51,12 +51,9 @@ def write_shape(
     ``name``: the STEP product's name; ``label``: the file's name in messages."""
     from medax.cad.reader import quiet_occt
 
-    fmt = fmt or shape_format(path)
+    writer = _WRITERS[fmt or shape_format(path)]
     with atomic_path(path) as tmp, quiet_occt():
-        if fmt == "step" and styles:
-            write_styled_step(shape, tmp, styles, name, path if label is None else label)
-        else:
-            _WRITERS[fmt](shape, tmp, path if label is None else label)
+        writer(shape, tmp, path if label is None else label, styles, name)
     return Path(path)
 
 
@@ -69,7 +66,12 @@ def write_step(shape: Any, path: str | Path) -> Path:
     return Path(path)
 
 
-def _step(shape: Any, tmp: Path, path: str | Path) -> None:
+def _step(
+    shape: Any, tmp: Path, path: str | Path, styles: Sequence[FaceStyle] = (), name: str = ""
+) -> None:
+    if styles:
+        write_styled_step(shape, tmp, styles, name, path)
+        return
     writer = STEPControl_Writer()
     if writer.Transfer(shape, STEPControl_AsIs) != IFSelect_RetDone:
         raise CadError(f"{path}: the shape could not be transferred to STEP")
@@ -77,7 +79,7 @@ def _step(shape: Any, tmp: Path, path: str | Path) -> None:
         raise CadError(f"{path}: writing the STEP file failed")
 
 
-def _iges(shape: Any, tmp: Path, path: str | Path) -> None:
+def _iges(shape: Any, tmp: Path, path: str | Path, *_: Any) -> None:
     writer = IGESControl_Writer("MM", 1)  # mode 1: faces as B-rep entities (type 186)
     if not writer.AddShape(shape):
         raise CadError(f"{path}: the shape could not be transferred to IGES")
@@ -86,12 +88,13 @@ def _iges(shape: Any, tmp: Path, path: str | Path) -> None:
         raise CadError(f"{path}: writing the IGES file failed")
 
 
-def _brep(shape: Any, tmp: Path, path: str | Path) -> None:
+def _brep(shape: Any, tmp: Path, path: str | Path, *_: Any) -> None:
     if not BRepTools.Write_s(shape, str(tmp)):
         raise CadError(f"{path}: writing the BRep file failed")
 
 
-_WRITERS: dict[str, Callable[[Any, Path, str | Path], None]] = {
+#: format -> writer(shape, temporary, name in messages, face styles, product name)
+_WRITERS: dict[str, Callable[[Any, Path, str | Path, Sequence[FaceStyle], str], None]] = {
     "step": _step,
     "iges": _iges,
     "brep": _brep,
