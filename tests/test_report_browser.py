@@ -149,6 +149,9 @@ def test_reports_are_self_contained_with_the_3d_data(reports):
         assert "http://" not in page and "https://" not in page
         assert len(page) < 400_000, len(page)  # coarse tessellation: small pages
     assert "http://" not in run and "https://" not in run
+    sizes = {p.relative_to(reports): p.stat().st_size for p in reports.rglob("*.html")}
+    sizes |= {p.relative_to(reports): p.stat().st_size for p in reports.rglob("*.view.json")}
+    print("sizes:", {str(k): v for k, v in sorted(sizes.items())})
 
 
 def test_part_report_renders_with_class_colours_and_picks_faces(chromium, reports, tmp_path):
@@ -168,6 +171,7 @@ def test_part_report_renders_with_class_colours_and_picks_faces(chromium, report
     # the plate's top (supporting) fills a large share of the view, the two fillets less
     assert support.sum() > 20_000, support.sum()
     assert fillet.sum() > 1_500, fillet.sum()
+    print(f"screenshot: {support.sum()} supporting, {fillet.sum()} fillet pixels")
     # click on a fillet pixel (the middle of the fillet pixels' largest row run)
     ys, xs = np.nonzero(fillet)
     k = np.argsort(ys * 10_000 + xs)[len(ys) // 2]
