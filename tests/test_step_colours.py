@@ -125,3 +125,33 @@ def test_simplify_step_colours_by_group(parts, tmp_path):
         colours.append(f.rgb)
     assert len(colours) == 4
     assert all(any(_close(c, group_colour(k)) for c in colours) for k in range(4))
+
+
+def test_simplify_step_highlights_kept_blends(tmp_path):
+    """Two fillets meeting in a mitre: one is kept (the only cylinder left: black, named
+    with its radius and reason), the other merged into its two supporting faces."""
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+
+    import medax.cad.parts as catalogue
+    from medax.viz.before_after import KEPT
+
+    box = BRepPrimAPI_MakeBox(30.0, 20.0, 10.0).Shape()
+
+    def top_front_right(m):
+        return abs(m[2] - 10.0) < 1e-9 and (abs(m[1]) < 1e-9 or abs(m[0] - 30.0) < 1e-9)
+
+    part = catalogue.fillet(box, catalogue._select(box, top_front_right), 2.0, "mitred")
+    src, out = tmp_path / "mitred.step", tmp_path / "simple.step"
+    write_step(part.shape, src)
+    assert main(["-q", "simplify", str(src), "-o", str(out)]) == 0
+    _, faces = read_styled_step(out)
+    assert len(faces) == 7
+    (kept,) = [f for f in faces if _kind(f.face)[0] == "cylinder"]
+    m = re.fullmatch(r"kept blend (\d+) r=2: .*meets fillet (\d+) in a mitre.*", kept.name)
+    assert m, kept.name
+    assert _close(kept.rgb, KEPT)
+    removed = m.group(2)
+    merged = [f for f in faces if f.name.startswith("merged from faces")]
+    assert len(merged) == 2  # the removed fillet's two halves went to its two supports
+    assert all(removed in re.search(r"halves ([\d,]+)", f.name).group(1).split(",") for f in merged)
+    assert all(not _close(f.rgb, KEPT) and not _close(f.rgb, GREY) for f in merged)
