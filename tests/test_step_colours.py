@@ -155,3 +155,16 @@ def test_simplify_step_highlights_kept_blends(tmp_path):
     assert len(merged) == 2  # the removed fillet's two halves went to its two supports
     assert all(removed in re.search(r"halves ([\d,]+)", f.name).group(1).split(",") for f in merged)
     assert all(not _close(f.rgb, KEPT) and not _close(f.rgb, GREY) for f in merged)
+
+
+@pytest.mark.parametrize(
+    ("option", "name", "why"),
+    [
+        ("--step", "c.igs", "'.igs' is not a known extension"),
+        ("--view3d", "v.txt", "'.txt' is not a known extension"),
+    ],
+)
+def test_new_outputs_are_checked_before_any_work(parts, tmp_path, capsys, option, name, why):
+    code = main(["classify", str(parts["box4"]), option, str(tmp_path / name)])
+    assert code == 1 and why in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
