@@ -3,8 +3,9 @@ a part's faces tessellated coarsely, with what each face is, its edges and fille
 
 Triangles come from ``BRepMesh_IncrementalMesh`` with a coarse deflection
 (:data:`VIEW_DEFLECTION` x the part's diagonal, :data:`VIEW_ANGLE` rad): the view is for
-looking, and the file stays small (the corpus's parts: 13 kB for 7 faces, 0.36 MB for 122,
-2.3 - 2.6 MB for 555 and 1036 faces). Arrays are
+looking, and the file stays small (corpus parts: 6 kB for 7 faces, 0.26 MB for 122, 1.5 -
+1.9 MB for 1036 and 555 faces). Straight edges are drawn with 2 points, circles with one
+per :data:`ARC_STEP` rad, other curves with :data:`EDGE_POINTS`. Arrays are
 little-endian float32 / uint32, base64-encoded:
 
 - ``positions``: (n, 3) vertices, each face's vertices contiguous (``faces[i].vertices`` =
@@ -28,14 +29,15 @@ from typing import Any
 
 import numpy as np
 from OCP.BRep import BRep_Tool
-from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepAdaptor import BRepAdaptor_Curve, BRepAdaptor_Surface
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
+from OCP.GeomAbs import GeomAbs_Circle, GeomAbs_Line
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_REVERSED
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS
 
 from medax.cad.simplify.occ import shape_map
-from medax.cad.topology import build_topology, edge_params, edge_points
+from medax.cad.topology import build_topology, edge_points
 from medax.cad.xcaf import FaceStyle, class_styles, group_styles
 from medax.errors import CadError
 from medax.geometry._types import FloatArray
@@ -44,8 +46,9 @@ from medax.geometry._types import FloatArray
 VIEW_DEFLECTION = 4e-3
 #: its angular deflection (radians)
 VIEW_ANGLE = 0.35
-#: points per edge polyline
+#: points per edge polyline (ends included): a line gets 2, a circle one per ARC_STEP rad
 EDGE_POINTS = 17
+ARC_STEP = 0.2
 #: points per fillet axis polyline
 AXIS_POINTS = 48
 
@@ -102,7 +105,16 @@ def _edge_segments(shape: Any) -> FloatArray:
         edge = TopoDS.Edge(emap.FindKey(i))
         if BRep_Tool.Degenerated_s(edge):
             continue
-        pts, _ = edge_points(edge, edge_params(edge, EDGE_POINTS))
+        ad = BRepAdaptor_Curve(edge)
+        a, b = ad.FirstParameter(), ad.LastParameter()
+        kind = ad.GetType()
+        if kind == GeomAbs_Line:
+            n = 2
+        elif kind == GeomAbs_Circle:  # one point per ARC_STEP radians
+            n = max(3, int(np.ceil(abs(b - a) / ARC_STEP)) + 1)
+        else:
+            n = EDGE_POINTS
+        pts, _ = edge_points(edge, np.linspace(a, b, n))
         out.append(np.stack([pts[:-1], pts[1:]], axis=1))
     return np.concatenate(out) if out else np.zeros((0, 2, 3))
 
