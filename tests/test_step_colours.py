@@ -168,3 +168,52 @@ def test_new_outputs_are_checked_before_any_work(parts, tmp_path, capsys, option
     code = main(["classify", str(parts["box4"]), option, str(tmp_path / name)])
     assert code == 1 and why in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_located_solid_keeps_its_styles(tmp_path):
+    """A solid placed by a location (as some BRep files hold it): each face still gets its
+    colour and name, at its placed position."""
+    from OCP.gp import gp_Trsf, gp_Vec
+    from OCP.TopLoc import TopLoc_Location
+
+    from medax.cad.simplify.occ import faces_of
+    from medax.cad.xcaf import FaceStyle, write_styled_step
+
+    t = gp_Trsf()
+    t.SetTranslation(gp_Vec(100.0, 0.0, 0.0))
+    solid = P.box_vertical_fillets().shape.Moved(TopLoc_Location(t))
+    assert not solid.Location().IsIdentity()
+    styles = []
+    for k, face in enumerate(faces_of(solid)):
+        rgb = CLASS_COLOURS["fillet"] if _kind(face)[0] == "cylinder" else GREY
+        styles.append(FaceStyle(face, rgb, f"face {k}"))
+    out = tmp_path / "located.step"
+    write_styled_step(solid, out, styles, "located")
+    _, faces = read_styled_step(out)
+    assert [f.name for f in faces] == [s.name for s in styles]
+    for f in faces:
+        want = CLASS_COLOURS["fillet"] if _kind(f.face)[0] == "cylinder" else GREY
+        assert _close(f.rgb, want)
+    from OCP.Bnd import Bnd_Box
+    from OCP.BRepBndLib import BRepBndLib
+
+    box = Bnd_Box()
+    BRepBndLib.Add_s(faces[0].face, box)
+    assert box.CornerMin().X() >= 100.0 - 1e-6  # placed, not at the origin
+    # a compound of the placed solid and an unplaced one (two solids of a part)
+    from medax.cad.simplify.occ import compound
+
+    other = P.box_all_fillets().shape
+    both = compound([solid, other])
+    more = [
+        FaceStyle(f, CLASS_COLOURS["supporting"], f"other {k}")
+        for k, f in enumerate(faces_of(other))
+    ]
+    write_styled_step(both, out, styles + more, "two")
+    _, faces = read_styled_step(out)
+    assert sorted(f.name for f in faces) == sorted(s.name for s in styles + more)
+    for f in faces:
+        want = CLASS_COLOURS["supporting"] if f.name.startswith("other") else GREY
+        if _kind(f.face)[0] == "cylinder" and not f.name.startswith("other"):
+            want = CLASS_COLOURS["fillet"]
+        assert _close(f.rgb, want), f.name

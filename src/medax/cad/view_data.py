@@ -149,11 +149,17 @@ def view_model(
         fmap = shape_map(shape, TopAbs_FACE)
         if fmap.Size() != len(styles) or len(infos) != len(styles):
             raise ValueError("one style and one info per face of the solid expected")
+        # the styles' order numbers the faces; the topology's maps may order them otherwise
+        slot = [fmap.FindIndex(s.face) - 1 for s in styles]
+        if sorted(slot) != list(range(len(styles))):
+            raise ValueError("the styles are not the faces of the solid, each once")
+        index_of = {j: i for i, j in enumerate(slot)}
         for i, (style, info) in enumerate(zip(styles, infos, strict=True)):
-            face = TopoDS.Face(fmap.FindKey(i + 1))
+            face = TopoDS.Face(style.face)
             pts, tris = face_mesh(face)
+            j = slot[i]
             neighbours = sorted(
-                {g for e in topo.face_edges[i] for g in topo.edge_faces[e] if g != i}
+                {index_of[g] for e in topo.face_edges[j] for g in topo.edge_faces[e] if g != j}
             )
             item: dict[str, Any] = {
                 "solid": k,

@@ -28,13 +28,15 @@ from OCP.STEPCAFControl import STEPCAFControl_Reader, STEPCAFControl_Writer
 from OCP.STEPControl import STEPControl_AsIs
 from OCP.TCollection import TCollection_ExtendedString
 from OCP.TDataStd import TDataStd_Name
-from OCP.TDF import TDF_AttributeIterator, TDF_ChildIterator, TDF_Label
+from OCP.TDF import TDF_AttributeIterator, TDF_ChildIterator
 from OCP.TDocStd import TDocStd_Document
 from OCP.TopAbs import TopAbs_FACE
 from OCP.TopExp import TopExp_Explorer
+from OCP.TopLoc import TopLoc_Location
 from OCP.XCAFApp import XCAFApp_Application
-from OCP.XCAFDoc import XCAFDoc_ColorSurf, XCAFDoc_DocumentTool
+from OCP.XCAFDoc import XCAFDoc_ColorSurf, XCAFDoc_ColorTool, XCAFDoc_DocumentTool
 
+from medax.cad.simplify.occ import shape_map
 from medax.errors import CadError
 
 RGB = tuple[float, float, float]
@@ -83,21 +85,49 @@ def write_styled_step(
 ) -> None:
     """Write ``shape`` as STEP (AP214) to ``path`` with each face of ``styles`` coloured and
     named. ``name``: the product's name; ``label``: the file's name in messages (default
-    ``path``). Faces not in ``styles`` get no colour. CadError when OCCT fails."""
+    ``path``). Faces not in ``styles`` get no colour. CadError when OCCT fails.
+
+    A shape placed by locations (a located solid, as readers return some parts, or a
+    compound of them) is written as an assembly: each placed piece once, unplaced, as a part
+    whose faces carry the styles, and placed by its component's location. (Styled directly,
+    OCCT's writer loses the names of most located faces.)"""
     where = path if label is None else label
     doc = _new_document()
     shapes = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
     colours = XCAFDoc_DocumentTool.ColorTool_s(doc.Main())
-    top = shapes.AddShape(shape, False)
-    if name:
-        TDataStd_Name.Set_s(top, TCollection_ExtendedString(name))
-    for s in styles:
-        sub = shapes.AddSubShape(top, s.face)
+
+    def style(part: Any, s: FaceStyle, face: Any) -> None:
+        sub = shapes.AddSubShape(part, face)
         if sub.IsNull():
             raise CadError(f"{where}: a styled face is not a face of the shape written")
         r, g, b = (min(max(float(v), 0.0), 1.0) for v in s.rgb)
         colours.SetColor(sub, Quantity_Color(r, g, b, Quantity_TOC_sRGB), XCAFDoc_ColorSurf)
         TDataStd_Name.Set_s(sub, TCollection_ExtendedString(s.name))
+
+    pieces = _placed_pieces(shape)
+    if pieces is None:
+        top = shapes.AddShape(shape, False)
+        for s in styles:
+            style(top, s, s.face)
+    else:
+        top = shapes.NewShape()
+        maps = [shape_map(piece, TopAbs_FACE) for piece, _ in pieces]
+        protos = []
+        for k, (piece, loc) in enumerate(pieces):
+            proto = shapes.AddShape(piece.Located(TopLoc_Location()), False)
+            TDataStd_Name.Set_s(proto, TCollection_ExtendedString(f"{name or 'part'} {k}"))
+            shapes.AddComponent(top, proto, loc)
+            protos.append(proto)
+        for s in styles:
+            owner = next((k for k, m in enumerate(maps) if m.FindIndex(s.face) > 0), None)
+            if owner is None:
+                raise CadError(f"{where}: a styled face is not a face of the shape written")
+            # the face as in the unplaced piece: the piece's location taken off
+            rel = pieces[owner][1].Inverted().Multiplied(s.face.Location())
+            style(protos[owner], s, s.face.Located(rel))
+        shapes.UpdateAssemblies()
+    if name:
+        TDataStd_Name.Set_s(top, TCollection_ExtendedString(name))
     writer = STEPCAFControl_Writer()  # defines the STEP parameters (Interface_Static)
     writer.SetColorMode(True)
     writer.SetNameMode(True)
@@ -108,9 +138,31 @@ def write_styled_step(
         raise CadError(f"{where}: writing the STEP file failed")
 
 
+def _placed_pieces(shape: Any) -> list[tuple[Any, Any]] | None:
+    """None when no face of ``shape`` is placed by a location; else its pieces (``shape``
+    itself, or a compound's children) with their locations."""
+    from OCP.TopAbs import TopAbs_COMPOUND
+    from OCP.TopoDS import TopoDS_Iterator
+
+    exp = TopExp_Explorer(shape, TopAbs_FACE)
+    while exp.More() and exp.Current().Location().IsIdentity():
+        exp.Next()
+    if not exp.More():
+        return None
+    if shape.ShapeType() != TopAbs_COMPOUND:
+        return [(shape, shape.Location())]
+    out = []
+    it = TopoDS_Iterator(shape)  # children with the compound's location composed
+    while it.More():
+        out.append((it.Value(), it.Value().Location()))
+        it.Next()
+    return out
+
+
 def read_styled_step(path: str | Path) -> tuple[Any, list[StyledFace]]:
     """The first shape of the STEP file ``path`` and its faces (explorer order) with their
-    colours and names, as OCCT's XCAF reader finds them. CadError when it cannot be read."""
+    colours and names, as OCCT's XCAF reader finds them (on the face, or on the face of
+    the part an assembly places). CadError when it cannot be read."""
     reader = STEPCAFControl_Reader()
     reader.SetColorMode(True)
     reader.SetNameMode(True)
@@ -120,27 +172,51 @@ def read_styled_step(path: str | Path) -> tuple[Any, list[StyledFace]]:
             raise CadError(f"{path}: cannot be read as STEP")
     shapes = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
     colours = XCAFDoc_DocumentTool.ColorTool_s(doc.Main())
-    # the shape tool's children are the shapes; the first holds the part (a sequence of
-    # labels from GetFreeShapes crashes OCP 8's binding, so the labels are walked instead)
-    it = TDF_ChildIterator(shapes.Label(), False)
-    if not it.More():
+    # the shape tool's children are the shapes, the first the part or its assembly (a
+    # sequence of labels from GetFreeShapes crashes OCP 8's binding: the labels are walked)
+    labels = _children(shapes.Label())
+    if not labels:
         raise CadError(f"{path}: holds no shape")
-    top = it.Value()
-    shape = shapes.GetShape_s(top)
+    shape = shapes.GetShape_s(labels[0])
+    # every styled sub-shape label of every part: its face (unplaced), colour and name
+    styled = []
+    for part in labels:
+        for sub in _children(part):
+            face = shapes.GetShape_s(sub)
+            if face.IsNull() or face.ShapeType() != TopAbs_FACE:
+                continue
+            colour = Quantity_Color()
+            rgb = None
+            if XCAFDoc_ColorTool.GetColor_s(sub, XCAFDoc_ColorSurf, colour):
+                rgb = _srgb(colour)
+            styled.append((face, rgb, _name(sub)))
     out = []
     exp = TopExp_Explorer(shape, TopAbs_FACE)
     while exp.More():
         face = exp.Current()
+        # the same face in the part (placed or not): the same underlying TShape
+        match = next((m for m in styled if m[0].IsPartner(face)), None)
         colour = Quantity_Color()
-        rgb: RGB | None = None
-        if colours.GetColor(face, XCAFDoc_ColorSurf, colour):
-            r, g, b = colour.Values(Quantity_TOC_sRGB)
-            rgb = (float(r), float(g), float(b))
-        sub = TDF_Label()
-        text = _name(sub) if shapes.FindSubShape(top, face, sub) else None
-        out.append(StyledFace(face, rgb, text))
+        rgb = match[1] if match else None
+        if rgb is None and colours.GetColor(face, XCAFDoc_ColorSurf, colour):
+            rgb = _srgb(colour)
+        out.append(StyledFace(face, rgb, match[2] if match else None))
         exp.Next()
     return shape, out
+
+
+def _children(label: Any) -> list[Any]:
+    it = TDF_ChildIterator(label, False)
+    out = []
+    while it.More():
+        out.append(it.Value())
+        it.Next()
+    return out
+
+
+def _srgb(colour: Any) -> RGB:
+    r, g, b = colour.Values(Quantity_TOC_sRGB)
+    return (float(r), float(g), float(b))
 
 
 def _name(label: Any) -> str | None:
