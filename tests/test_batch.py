@@ -166,6 +166,34 @@ def test_html_report_is_one_file_with_pictures_inlined(tmp_path):
     assert write_report([rec], summary, tmp_path).read_text() == page
 
 
+def test_run_report_embeds_3d_data_up_to_its_budget(tmp_path, monkeypatch):
+    """Parts whose view data would pass the budget are left to their own reports."""
+    from medax.batch import html as H
+
+    records = []
+    for name, size in (("a", 1000), ("b", 5000), ("c", 1000)):
+        (tmp_path / name).mkdir()
+        data = {"title": "classified", "pad": "x" * size}
+        (tmp_path / name / "classify.view.json").write_text(json.dumps(data))
+        records.append(
+            {
+                "input": f"{name}.step",
+                "part_dir": name,
+                "status": "ok",
+                "steps": {},
+                "outputs": {"classify_view": f"{name}/classify.view.json"},
+                "time_s": 1.0,
+            }
+        )
+    monkeypatch.setattr(H, "MAX_VIEW_BYTES", 4000)
+    page = H.report_html(records, summarize(records, 1.0), tmp_path)
+    assert page.count('class="mx-model"') == 2  # a and c; b alone is over the budget
+    assert "a: classified" in page and "c: classified" in page and "b: classified" not in page
+    H.write_report(records, summarize(records, 1.0), tmp_path)
+    for name in "abc":  # every part's own report has its view
+        assert (tmp_path / name / "report.html").read_text().count('class="mx-model"') == 1
+
+
 @pytest.mark.slow
 def test_batch_records_outputs_and_resume(parts, cluster, tmp_path, capsys):
     out = tmp_path / "out"

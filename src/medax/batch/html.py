@@ -94,6 +94,9 @@ def report_html(
     first: dict[str, int] = {}
     budget = MAX_VIEW_BYTES
     for r in records:
+        files = [out / r["outputs"][k] for k, _ in VIEWS if k in r.get("outputs", {})]
+        if sum(p.stat().st_size for p in files if p.is_file()) > budget:
+            continue  # not read: seen in the part's own report
         views = _views(r, out)
         size = sum(n for _, _, n in views)
         if views and size <= budget:
