@@ -176,7 +176,7 @@ def test_part_report_renders_with_class_colours_and_picks_faces(chromium, report
     ys, xs = np.nonzero(fillet)
     k = np.argsort(ys * 10_000 + xs)[len(ys) // 2]
     fx, fy = (xs[k] + 0.5 - left) / width, (ys[k] + 0.5 - top) / height
-    picked = _dom(chromium, page, f"#pick={fx:.4f},{fy:.4f}")
+    picked = _dom(chromium, page, f"#click={fx:.4f},{fy:.4f}")
     info = re.search(r'class="mx-info" data-face="(\d+)" data-label="(\w+)">([^<]*)<', picked)
     assert info, picked[-3000:]
     assert info.group(2) == "fillet" and "radius 2" in info.group(3), info.group(3)
@@ -185,6 +185,22 @@ def test_part_report_renders_with_class_colours_and_picks_faces(chromium, report
     assert face["class"] == "fillet"
     assert f"neighbours {', '.join(map(str, face['neighbours']))}" in info.group(3)
     print(f"chromium: 3 page loads in {time.perf_counter() - t0:.1f} s")
+
+
+def test_drag_orbits_and_the_wheel_zooms(chromium, reports):
+    """Mouse input replayed through the viewer's handlers: a drag of 100 px to the right
+    turns the camera by 1 rad about the vertical, 40 px down tilts it by 0.4 rad, and a
+    wheel of -500 brings it closer by exp(-0.5)."""
+    dom = _dom(chromium, reports / "box-12-edges" / REPORT, "#drag=100,40&wheel=-500")
+    assert _errors(dom).strip() == ""
+    first = re.search(r'data-first-camera="([^"]+)"', dom)
+    now = re.search(r'data-camera="([^"]+)"', dom)
+    assert first and now
+    y0, p0, d0 = (float(v) for v in first.group(1).split(","))
+    y1, p1, d1 = (float(v) for v in now.group(1).split(","))
+    assert y1 - y0 == pytest.approx(-1.0, abs=1e-4)
+    assert p1 - p0 == pytest.approx(0.4, abs=1e-4)
+    assert d1 / d0 == pytest.approx(np.exp(-0.5), rel=1e-4)
 
 
 def test_run_report_loads_without_errors(chromium, reports):

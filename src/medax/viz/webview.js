@@ -13,8 +13,9 @@
  * what it is (picking: the faces drawn with their id as colour into an offscreen buffer).
  * After the first frame the viewer's element gets data-status="rendered" and data-rect (the
  * canvas's place in the page, CSS pixels: left, top, width, height; tests read them);
- * errors go into the page's #medax-errors element. The URL fragment #pick=FX,FY (fractions
- * of the canvas) picks that point once after the first frame.
+ * errors go into the page's #medax-errors element. The URL fragment can replay mouse input
+ * after the first frame (#drag=DX,DY, #wheel=DY, #click=FX,FY; see replay); data-camera
+ * holds yaw, pitch (rad) and distance after each frame, data-first-camera the first.
  */
 (function () {
   'use strict';
@@ -219,13 +220,37 @@ void main() { gl_FragColor = vec4(uCol, 1.0); }`;
       drawFaces(false);
       drawLines('edges', [0.12, 0.12, 0.12]);
       drawLines('axes', [0.05, 0.05, 0.05]);  // on the fillets: the faces are pushed back
+      root.dataset.camera = [cam.yaw, cam.pitch, cam.dist].map((v) => v.toPrecision(6)).join(',');
       if (!drawn) {
         drawn = true;
-        const m = /pick=([\d.]+),([\d.]+)/.exec(location.hash);
-        if (m) pick(parseFloat(m[1]) * canvas.clientWidth, parseFloat(m[2]) * canvas.clientHeight);
         const b = canvas.getBoundingClientRect();
         root.dataset.rect = [b.left, b.top, b.width, b.height].map(Math.round).join(',');
+        root.dataset.firstCamera = root.dataset.camera;
+        replay(b);
         root.dataset.status = 'rendered';
+      }
+    }
+
+    /** The mouse input the URL fragment names, sent through the same event handlers as a
+     * user's: #drag=DX,DY (from the canvas's centre, pixels), #wheel=DY, #click=FX,FY
+     * (fractions of the canvas); for tests and for links to a view. */
+    function replay(b) {
+      const h = location.hash, cx = b.left + b.width / 2, cy = b.top + b.height / 2;
+      const mouse = (target, type, x, y) => target.dispatchEvent(
+        new MouseEvent(type, { clientX: x, clientY: y, button: 0, bubbles: true }));
+      const d = /drag=(-?[\d.]+),(-?[\d.]+)/.exec(h);
+      if (d) {
+        mouse(canvas, 'mousedown', cx, cy);
+        mouse(window, 'mousemove', cx + parseFloat(d[1]), cy + parseFloat(d[2]));
+        mouse(window, 'mouseup', cx + parseFloat(d[1]), cy + parseFloat(d[2]));
+      }
+      const w = /wheel=(-?[\d.]+)/.exec(h);
+      if (w) canvas.dispatchEvent(new WheelEvent('wheel', { deltaY: parseFloat(w[1]), clientX: cx, clientY: cy, bubbles: true, cancelable: true }));
+      const c = /click=([\d.]+),([\d.]+)/.exec(h);
+      if (c) {
+        const x = b.left + parseFloat(c[1]) * b.width, y = b.top + parseFloat(c[2]) * b.height;
+        mouse(canvas, 'mousedown', x, y);
+        mouse(canvas, 'mouseup', x, y);
       }
     }
     function request() { if (!queued) { queued = true; requestAnimationFrame(draw); } }
