@@ -258,4 +258,8 @@ def simplified_view(
             else:
                 infos.append({"label": "untouched"})
         items.append((shape, styles, infos))
-    return view_model(items, (), "simplified", source)
+    model = view_model(items, (), "simplified", source)
+    for entry in model["legend"]:
+        if entry["label"] == "merged":  # one swatch stands for a colour per merged face
+            entry["label"] = "merged, a colour per face"
+    return model
