@@ -91,6 +91,12 @@ def _rough_diagonal(shape: Any) -> float:
 
 
 def _mesh(shape: Any, source: str) -> None:
+    """Mesh ``shape`` at the view's deflection, dropping any finer triangulation an earlier
+    picture left (BRepMesh keeps one that is fine enough), so the data's size is the same
+    with or without pictures."""
+    from OCP.BRepTools import BRepTools
+
+    BRepTools.Clean_s(shape)
     try:
         deflection = VIEW_DEFLECTION * _rough_diagonal(shape)
         BRepMesh_IncrementalMesh(shape, deflection, False, VIEW_ANGLE, False)
