@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import re
 import shutil
 import signal
 import threading
@@ -163,6 +164,34 @@ def test_html_report_is_one_file_with_pictures_inlined(tmp_path):
     assert "too_narrow" in page and "<script>" in page
     assert "http://" not in page and "https://" not in page and 'src="http' not in page
     assert write_report([rec], summary, tmp_path).read_text() == page
+
+
+def test_run_report_embeds_3d_data_up_to_its_budget(tmp_path, monkeypatch):
+    """Parts whose view data would pass the budget are left to their own reports."""
+    from medax.batch import html as H
+
+    records = []
+    for name, size in (("a", 1000), ("b", 5000), ("c", 1000)):
+        (tmp_path / name).mkdir()
+        data = {"title": "classified", "pad": "x" * size}
+        (tmp_path / name / "classify.view.json").write_text(json.dumps(data))
+        records.append(
+            {
+                "input": f"{name}.step",
+                "part_dir": name,
+                "status": "ok",
+                "steps": {},
+                "outputs": {"classify_view": f"{name}/classify.view.json"},
+                "time_s": 1.0,
+            }
+        )
+    monkeypatch.setattr(H, "MAX_VIEW_BYTES", 4000)
+    page = H.report_html(records, summarize(records, 1.0), tmp_path)
+    assert page.count('class="mx-model"') == 2  # a and c; b alone is over the budget
+    assert "a: classified" in page and "c: classified" in page and "b: classified" not in page
+    H.write_report(records, summarize(records, 1.0), tmp_path)
+    for name in "abc":  # every part's own report has its view
+        assert (tmp_path / name / "report.html").read_text().count('class="mx-model"') == 1
 
 
 @pytest.mark.slow
@@ -348,7 +377,18 @@ def test_mesh_step_meshes_the_simplified_part_and_pictures_go_in_the_report(
     mesh = json.loads((out / rec["outputs"]["mesh_report"]).read_text())
     assert mesh["input"].endswith("simplified.step")
     assert set(rec["outputs"]) >= {"classify_png", "simplify_png", "mesh_png", "mesh"}
-    assert (out / "report.html").read_text().count("data:image/png;base64,") == 3
+    page = (out / "report.html").read_text()
+    assert page.count("data:image/png;base64,") == 3
+    # the mesh quality histograms: one bar per bin, the bars' counts are the quads
+    hists = re.findall(r'<svg class="hist".*?</svg>', page)
+    assert len(hists) == 3
+    for svg in hists:
+        counts = [int(n) for n in re.findall(r": (\d+) quads</title>", svg)]
+        assert sum(counts) == rec["counts"]["mesh_quads"]
+    # the part's own report has the 3D view of the classified and the simplified part
+    own = (out / "bracket" / "report.html").read_text()
+    assert own.count('class="mx-model"') == 2 and own.count('<svg class="hist"') == 3
+    assert 'href="../bracket/mesh.msh"' in own
     log = (out / "bracket" / "batch.log").read_text()
     assert "$ medax mesh" in log and "wrote" in log
 

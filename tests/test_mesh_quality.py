@@ -100,12 +100,11 @@ def test_bad_shapes():
 
 
 def test_quality_histograms_count_known_quads():
-    """Squares (scaled Jacobian 1, angles 90) and rhombi of 60 / 120 degrees (scaled
-    Jacobian sin 60) land in the bins their exact values fall in."""
+    """Squares (scaled Jacobian 1, angles 90) and rhombi of 62 / 118 degrees (scaled
+    Jacobian sin 62, inside its bin) land in the bins their exact values fall in."""
     from medax.cad.part_report import HISTOGRAM_BINS, histograms
-    from medax.mesh.quality import quad_quality
 
-    c, s = np.cos(np.radians(60.0)), np.sin(np.radians(60.0))
+    c, s = np.cos(np.radians(62.0)), np.sin(np.radians(62.0))
     square = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
     rhombus = [[0, 0, 0], [1, 0, 0], [1 + c, s, 0], [c, s, 0]]
     pts = np.array([*[np.add(p, [3 * k, 0, 0]) for k in range(5) for p in square],
@@ -123,7 +122,7 @@ def test_quality_histograms_count_known_quads():
 
     sj = h["scaled_jacobian"]["counts"]
     assert sj[bin_of("scaled_jacobian", 1.0)] == 5 and sj[bin_of("scaled_jacobian", s)] == 3
-    assert h["min_angle"]["counts"][bin_of("min_angle", 60.0)] == 3
+    assert h["min_angle"]["counts"][bin_of("min_angle", 62.0)] == 3
     assert h["min_angle"]["counts"][-1] == 5  # 90 degrees: the last bin holds its top edge
-    assert h["max_angle"]["counts"][bin_of("max_angle", 120.0)] == 3
+    assert h["max_angle"]["counts"][bin_of("max_angle", 118.0)] == 3
     assert h["max_angle"]["counts"][0] == 5

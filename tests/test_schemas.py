@@ -50,6 +50,8 @@ def outputs(tmp_path_factory):
         "mesh.json": ["mesh", REGIONS, "--region", "wavy", "--divisions", "8,8", "-o",
                       str(d / "m.vtu"), "--report"],
         "classes.json": ["classify", boss, "--report"],
+        "view3d.json": ["classify", boss, "--view3d"],
+        "view3d-simple.json": ["simplify", boss, "-o", str(d / "s2.step"), "--view3d"],
         "simplify.json": ["simplify", boss, "-o", str(d / "s.step"), "--report"],
         "part.json": ["mesh", bracket, "--size", "5", "-o", str(d / "p.msh"), "--report"],
     }  # fmt: skip
@@ -66,6 +68,8 @@ def outputs(tmp_path_factory):
         ("axis-both.json", "axis", "mm"),
         ("mesh.json", "mesh-report", "mm"),
         ("classes.json", "classify-report", "mm"),
+        ("view3d.json", "view3d", "mm"),
+        ("view3d-simple.json", "view3d", "mm"),
         ("simplify.json", "simplify-report", "mm"),
         ("part.json", "part-mesh-report", "mm"),
     ],

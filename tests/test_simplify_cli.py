@@ -143,7 +143,7 @@ def test_cli_refuses_a_file_that_reads_back_moved(box_step, tmp_path, monkeypatc
 
     honest = step_out._WRITERS["step"]
 
-    def moved(shape, tmp, path):
+    def moved(shape, tmp, path, *_styles_and_name):  # the moved copy has other faces
         t = gp_Trsf()
         t.SetTranslation(gp_Vec(0.0, 0.0, 5e-3))
         honest(BRepBuilderAPI_Transform(shape, t, True).Shape(), tmp, path)

@@ -33,10 +33,16 @@ from typing import Any
 STEPS = ("classify", "simplify", "mesh")
 #: output file names in a part's folder, per step
 OUTPUT_NAMES = {
-    "classify": {"classify_report": "classify.json", "classify_png": "classify.png"},
+    "classify": {
+        "classify_report": "classify.json",
+        "classified": "classified.step",
+        "classify_view": "classify.view.json",
+        "classify_png": "classify.png",
+    },
     "simplify": {
         "simplified": "simplified.step",
         "simplify_report": "simplify.json",
+        "simplify_view": "simplify.view.json",
         "simplify_png": "simplify.png",
     },
     "mesh": {"mesh": "mesh.msh", "mesh_report": "mesh.json", "mesh_png": "mesh.png"},
@@ -277,12 +283,14 @@ def step_argv(
         names = {k: v for k, v in names.items() if not k.endswith("_png")}
     if step == "classify":
         argv = ["classify", task.path, "--report", names["classify_report"]]
+        argv += ["--step", names["classified"], "--view3d", names["classify_view"]]
         argv += ["--angle", repr(opts["angle"]), "--tol", repr(opts["tol"])]
         if pictures:
             argv += ["--png", names["classify_png"]]
     elif step == "simplify":
         argv = ["simplify", task.path, "-o", names["simplified"]]
         argv += ["--report", names["simplify_report"], "--tol", repr(opts["simplify_tol"])]
+        argv += ["--view3d", names["simplify_view"]]
         if pictures:
             argv += ["--png", names["simplify_png"]]
     elif step == "mesh":

@@ -20,6 +20,26 @@ SJ_DEFINITIONS = {
 }
 
 
+#: histogram bins per metric: (low, high, bins); values outside are counted in the end bins
+HISTOGRAM_BINS = {
+    "scaled_jacobian": (-1.0, 1.0, 20),
+    "min_angle": (0.0, 90.0, 18),
+    "max_angle": (90.0, 180.0, 18),
+}
+
+
+def histograms(q: Any) -> dict[str, dict[str, list[float] | list[int]]]:
+    """Per metric of :data:`HISTOGRAM_BINS`, ``edges`` (bins + 1) and ``counts`` (bins) of
+    the quads' values (:class:`~medax.mesh.quality.QuadQuality`); a value outside the
+    range counts in the nearest end bin, so the counts sum to the number of quads."""
+    out: dict[str, dict[str, list[float] | list[int]]] = {}
+    for name, (lo, hi, n) in HISTOGRAM_BINS.items():
+        v = np.clip(getattr(q, name), lo, hi)
+        counts, edges = np.histogram(v[np.isfinite(v)], bins=n, range=(lo, hi))
+        out[name] = {"edges": [float(x) for x in edges], "counts": [int(c) for c in counts]}
+    return out
+
+
 def _stats(v: FloatArray) -> dict[str, float]:
     if v.size == 0:
         return {}
@@ -76,5 +96,6 @@ def part_report(mesh: PartMesh, source: str = "", size: float | None = None) -> 
         "min_angle": _stats(q.min_angle),
         "max_angle": _stats(q.max_angle),
         "n_inverted": int(np.count_nonzero(q.scaled_jacobian <= 0.0)),
+        "histograms": histograms(q),
         "faces": faces,
     }

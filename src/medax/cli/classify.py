@@ -15,6 +15,8 @@ from medax.errors import InputError
 
 log = logging.getLogger(__name__)
 VIEW_SUFFIXES = (".png", ".svg")
+STEP_SUFFIXES = (".step", ".stp")
+VIEW3D_SUFFIXES = (".html", ".htm", ".json")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -30,6 +32,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("part", help="CAD file: .step/.stp, .iges/.igs or .brep")
     p.add_argument("--report", help="JSON report (classes.json)")
     p.add_argument("--png", help="shaded 3D view coloured by class (.png or .svg)")
+    p.add_argument(
+        "--step",
+        help="the (healed) part as STEP with each face coloured by class and named "
+        "('fillet 12 r=2.5')",
+    )
+    p.add_argument(
+        "--view3d",
+        help="interactive 3D view: a self-contained HTML page (.html) or its data (.json, "
+        "kind view3d) for medax batch's report",
+    )
     p.add_argument(
         "--angle",
         type=float,
@@ -63,7 +75,12 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as err:
         raise InputError(f"--view must be ELEVATION,AZIMUTH in degrees, got '{args.view}'") from err
     check_outputs(
-        [Output("--report", args.report, JSON_SUFFIXES), Output("--png", args.png, VIEW_SUFFIXES)],
+        [
+            Output("--report", args.report, JSON_SUFFIXES),
+            Output("--png", args.png, VIEW_SUFFIXES),
+            Output("--step", args.step, STEP_SUFFIXES),
+            Output("--view3d", args.view3d, VIEW3D_SUFFIXES),
+        ],
         {"input part": args.part},
     )
     report, solids = classify_part(args.part, args.angle, args.tol, not args.no_axes)
@@ -75,7 +92,16 @@ def run(args: argparse.Namespace) -> int:
         if args.png is not None:
             tmp = out.path(args.png, "--png")
             render_solids(solids, tmp, title=Path(args.part).name, view=(elev, azim))
-    for path in (args.report, args.png):
+        if args.step is not None:
+            write_classes_step(solids, out.path(args.step, "--step"), args.step)
+        if args.view3d is not None:
+            from medax.cad.view_data import classified_view, write_view
+
+            model = classified_view(solids, Path(args.part).name)
+            write_view(
+                model, out.path(args.view3d, "--view3d"), report["unit"], report["tolerances"]
+            )
+    for path in (args.report, args.png, args.step, args.view3d):
         if path is not None:
             print(f"wrote {path}")
     return 0
@@ -124,6 +150,19 @@ def summary_lines(report: dict[str, Any]) -> list[str]:
             if "axis_error" in f:
                 lines.append(f"  no axis on fillet face {f['face']}: {f['axis_error']}")
     return lines
+
+
+def write_classes_step(solids: list[Any], path: str | Path, label: str | Path) -> None:
+    """The classified solids as STEP at ``path``, each face coloured by class and named
+    (:func:`medax.cad.xcaf.class_styles`); ``label``: the file's name in messages."""
+    from medax.cad.reader import quiet_occt
+    from medax.cad.simplify.occ import compound
+    from medax.cad.xcaf import class_styles, write_styled_step
+
+    cls = [s.classification for s in solids]
+    shape = cls[0].shape if len(cls) == 1 else compound([c.shape for c in cls])
+    with quiet_occt():
+        write_styled_step(shape, path, class_styles(cls), Path(label).stem, label)
 
 
 def render_solids(

@@ -7,8 +7,8 @@ all 12 edges filleted (26 -> 6 faces: eight sphere corners split, fitted faces) 
 with rounded vertical edges whose top loop was filleted after them (18 -> 6 faces: the tori
 ride on the vertical fillets and are split by bridges) and a plate with a slanted boss
 whose root blend is a B-spline rolling ball (11 -> 10 faces: the ring route's periodic
-fitted faces): the input STEP, the simplified STEP, the JSON report and the before/after
-picture of each.
+fitted faces): the input STEP, the simplified STEP (faces coloured by merged group), the JSON
+report, the before/after picture and the interactive 3D view (HTML) of each.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from medax.cli.main import main
 
 
 def demo(outdir: Path) -> list[Path]:
-    """Write ``simplify-<part>{-input.step,.step,.json,.png}`` into ``outdir``."""
+    """Write ``simplify-<part>{-input.step,.step,.json,.png,.html}`` into ``outdir``."""
     from medax.cad import parts as catalogue
     from medax.cad.simplify import parts
     from medax.cad.simplify.step_out import write_step
@@ -34,9 +34,11 @@ def demo(outdir: Path) -> list[Path]:
         ("slanted-boss", catalogue.slanted_boss()),
     ):
         src = write_step(part.shape, outdir / f"simplify-{name}-input.step")
-        out, rep, png = (outdir / f"simplify-{name}{ext}" for ext in (".step", ".json", ".png"))
-        code = main(["simplify", str(src), "-o", str(out), "--report", str(rep), "--png", str(png)])
-        if code != 0:
+        out, rep, png, view = (
+            outdir / f"simplify-{name}{ext}" for ext in (".step", ".json", ".png", ".html")
+        )
+        argv = ["simplify", str(src), "-o", str(out), "--report", str(rep), "--png", str(png)]
+        if main([*argv, "--view3d", str(view)]) != 0:
             raise RuntimeError(f"demo simplify of {name} failed")
-        written += [src, out, rep, png]
+        written += [src, out, rep, png, view]
     return written

@@ -12,6 +12,7 @@ import logging
 from pathlib import Path
 from typing import Any
 
+from medax.cli.classify import VIEW3D_SUFFIXES
 from medax.cli.options import check_tol
 from medax.cli.outputs import JSON_SUFFIXES, PLOT_SUFFIXES, Output, check_outputs
 from medax.io_utils import staged_outputs, write_json
@@ -26,8 +27,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="remove fillets from a STEP solid without changing its shape",
         description="Split each fillet along its medial curve, merge the halves into the "
         "supporting faces, rebuild and validate the solid; write it as STEP, IGES or BRep (by "
-        "the output's extension). Every output is checked before any work and all are "
-        "written together or none.",
+        "the output's extension; STEP faces are coloured and named by merged group). Every "
+        "output is checked before any work and all are written together or none.",
     )
     p.add_argument("part", help="input part (.step/.stp, .iges/.igs, .brep)")
     p.add_argument(
@@ -35,6 +36,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--report", help="JSON report (faces, blends removed/kept, validation)")
     p.add_argument("--png", help="before/after picture (.png, .svg or .pdf)")
+    p.add_argument(
+        "--view3d",
+        help="interactive 3D view of the result, faces coloured by merged group: an HTML "
+        "page (.html) or its data (.json, kind view3d)",
+    )
     p.add_argument("--tol", type=float, default=1e-5, help="deviation tolerance x diagonal (1e-5)")
     p.set_defaults(run=run)
 
@@ -68,12 +74,14 @@ def run(args: argparse.Namespace) -> int:
     from medax.cad.simplify.pipeline import BUILD_TOL
     from medax.cad.simplify.readback import read_back
     from medax.cad.simplify.step_out import SHAPE_SUFFIXES, shape_format, write_shape
+    from medax.cad.xcaf import group_styles
 
     check_outputs(
         [
             Output("-o", args.output, tuple(SHAPE_SUFFIXES)),
             Output("--report", args.report, JSON_SUFFIXES),
             Output("--png", args.png, PLOT_SUFFIXES),
+            Output("--view3d", args.view3d, VIEW3D_SUFFIXES),
         ],
         {"input part": args.part},
     )
@@ -97,7 +105,10 @@ def run(args: argparse.Namespace) -> int:
     tols = simplify_tolerances(args.tol)
     report = stamp("simplify-report", report, classes[0].unit, tols, time="s")
     with staged_outputs() as out:  # all outputs or none
-        staged = write_shape(shape, out.path(args.output, "-o"), fmt)
+        styles = group_styles([r.shape for r in results], [r.report() for r in results])
+        staged = write_shape(
+            shape, out.path(args.output, "-o"), fmt, styles, Path(args.output).stem, args.output
+        )
         progress(f"reading {Path(args.output).name} back")
         diag = max(r.diagonal for r in results)
         report["written_file"] = read_back(
@@ -107,6 +118,13 @@ def run(args: argparse.Namespace) -> int:
             write_json(out.path(args.report, "--report"), report, "--report")
         if args.png is not None:
             _png(classes[0].shape, results[0], out.path(args.png, "--png"), Path(args.part).name)
+        if args.view3d is not None:
+            from medax.cad.view_data import simplified_view, write_view
+
+            model = simplified_view(
+                [r.shape for r in results], [r.report() for r in results], Path(args.part).name
+            )
+            write_view(model, out.path(args.view3d, "--view3d"), report["units"]["length"], tols)
     for k, r in enumerate(results):
         label = f"{args.part}" + (f" solid {k}" if len(results) > 1 else "")
         print(
@@ -124,7 +142,7 @@ def run(args: argparse.Namespace) -> int:
             f"the input's own edge tolerances ({written['allowed_deviation']:.2g} allowed); "
             "a .brep output keeps it exact"
         )
-    for path in (args.output, args.report, args.png):
+    for path in (args.output, args.report, args.png, args.view3d):
         if path is not None:
             print(f"wrote {path}")
     return 0

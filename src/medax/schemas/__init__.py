@@ -30,6 +30,7 @@ SCHEMAS = {
     "simplify-report": "simplify-report.schema.json",
     "batch-record": "batch-record.schema.json",
     "batch-summary": "batch-summary.schema.json",
+    "view3d": "view3d.schema.json",
 }
 #: the shared definitions (header, statistics) the other schemas refer to
 COMMON = "common.schema.json"

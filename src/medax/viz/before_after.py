@@ -28,7 +28,8 @@ KEPT = (0.12, 0.12, 0.12)
 PANEL = (660, 600)
 
 
-def _colour(key: int) -> tuple[float, float, float]:
+def group_colour(key: int) -> tuple[float, float, float]:
+    """The colour of key ``key`` (see :func:`plot_before_after`), RGB 0-1."""
     from matplotlib import colormaps
 
     fixed = {-1: GREY, -2: FILLET, -3: KEPT}
@@ -66,7 +67,7 @@ def plot_before_after(
     ):
         ax = fig.add_axes((0.5 * k, 0.0, 0.5, 0.92))
         shaded = [
-            Faces(t.reshape(-1, 3), np.arange(3 * len(t)).reshape(-1, 3), _colour(key))
+            Faces(t.reshape(-1, 3), np.arange(3 * len(t)).reshape(-1, 3), group_colour(key))
             for t, key in zip(faces, keys, strict=True)
         ]
         render_faces([*shaded, frame], ax, outline=True, view=(28.0, -58.0), size=PANEL)

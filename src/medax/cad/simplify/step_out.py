@@ -2,11 +2,12 @@
 
 The format comes from the extension (:data:`SHAPE_SUFFIXES`); each writer writes to a
 temporary file beside the target (:func:`medax.io_utils.atomic_path`), then renames it.
+STEP faces can carry colours and names (:mod:`medax.cad.xcaf`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +17,7 @@ from OCP.IGESControl import IGESControl_Writer
 from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
 
 from medax.cad.reader import EXTENSIONS
+from medax.cad.xcaf import FaceStyle, write_styled_step
 from medax.errors import CadError, InputError
 from medax.io_utils import atomic_path
 
@@ -35,14 +37,23 @@ def shape_format(path: str | Path) -> str:
     return fmt
 
 
-def write_shape(shape: Any, path: str | Path, fmt: str | None = None) -> Path:
+def write_shape(
+    shape: Any,
+    path: str | Path,
+    fmt: str | None = None,
+    styles: Sequence[FaceStyle] = (),
+    name: str = "",
+    label: str | Path | None = None,
+) -> Path:
     """Write ``shape`` as ``fmt`` (default: by ``path``'s extension); CadError when OCCT
-    fails (the target is then untouched)."""
+    fails (the target is then untouched). ``styles``: colours and names of faces, written
+    to STEP only (XCAF, :mod:`medax.cad.xcaf`; IGES and BRep get the plain shape);
+    ``name``: the STEP product's name; ``label``: the file's name in messages."""
     from medax.cad.reader import quiet_occt
 
     writer = _WRITERS[fmt or shape_format(path)]
     with atomic_path(path) as tmp, quiet_occt():
-        writer(shape, tmp, path)
+        writer(shape, tmp, path if label is None else label, styles, name)
     return Path(path)
 
 
@@ -55,7 +66,12 @@ def write_step(shape: Any, path: str | Path) -> Path:
     return Path(path)
 
 
-def _step(shape: Any, tmp: Path, path: str | Path) -> None:
+def _step(
+    shape: Any, tmp: Path, path: str | Path, styles: Sequence[FaceStyle] = (), name: str = ""
+) -> None:
+    if styles:
+        write_styled_step(shape, tmp, styles, name, path)
+        return
     writer = STEPControl_Writer()
     if writer.Transfer(shape, STEPControl_AsIs) != IFSelect_RetDone:
         raise CadError(f"{path}: the shape could not be transferred to STEP")
@@ -63,7 +79,7 @@ def _step(shape: Any, tmp: Path, path: str | Path) -> None:
         raise CadError(f"{path}: writing the STEP file failed")
 
 
-def _iges(shape: Any, tmp: Path, path: str | Path) -> None:
+def _iges(shape: Any, tmp: Path, path: str | Path, *_: Any) -> None:
     writer = IGESControl_Writer("MM", 1)  # mode 1: faces as B-rep entities (type 186)
     if not writer.AddShape(shape):
         raise CadError(f"{path}: the shape could not be transferred to IGES")
@@ -72,12 +88,13 @@ def _iges(shape: Any, tmp: Path, path: str | Path) -> None:
         raise CadError(f"{path}: writing the IGES file failed")
 
 
-def _brep(shape: Any, tmp: Path, path: str | Path) -> None:
+def _brep(shape: Any, tmp: Path, path: str | Path, *_: Any) -> None:
     if not BRepTools.Write_s(shape, str(tmp)):
         raise CadError(f"{path}: writing the BRep file failed")
 
 
-_WRITERS: dict[str, Callable[[Any, Path, str | Path], None]] = {
+#: format -> writer(shape, temporary, name in messages, face styles, product name)
+_WRITERS: dict[str, Callable[[Any, Path, str | Path, Sequence[FaceStyle], str], None]] = {
     "step": _step,
     "iges": _iges,
     "brep": _brep,
