@@ -417,6 +417,53 @@ def _scaled(c: BSpline, scale: FloatArray) -> Curve:
     return BSpline(ctrl, c.degree, c.knots, c.weights)
 
 
+#: Corners of pcurve sides are closed only where their ends are this close in the
+#: parameter plane, relative to the sides' extent (a seam's period apart is no gap).
+CORNER_SNAP_UV = 1e-3
+
+
+def _vertex_tolerance(face: Any) -> float:
+    """The largest tolerance (length unit) of ``face``'s vertices."""
+    from OCP.TopAbs import TopAbs_VERTEX
+
+    tol, exp = 0.0, TopExp_Explorer(face, TopAbs_VERTEX)
+    while exp.More():
+        tol = max(tol, BRep_Tool.Tolerance_s(TopoDS.Vertex(exp.Current())))
+        exp.Next()
+    return tol
+
+
+def closed_corners(sides: list[BSpline], surface: Any, tol: float) -> list[BSpline]:
+    """Pcurve sides (clamped B-splines in the face's parameters, in order round the face)
+    whose consecutive ends lie apart, but within ``tol`` (length unit: the face's vertex
+    tolerance) in space on ``surface`` (``evaluate((n, 2)) -> (n, 3)``), made to meet at
+    the mean of the two ends. A loose input's pcurves may miss each other by up to its own
+    tolerance (seen: 2e-7 - 1.2e-5 mm on imported parts), which the region's corner check
+    would refuse; the move is the gap's half at most, within the input's tolerance."""
+    out = list(sides)
+    ends = np.vstack([c.control_points[[0, -1]] for c in out])
+    extent = float(np.ptp(ends, axis=0).max())
+    for k in range(len(out)):
+        a, b = out[k], out[(k + 1) % len(out)]
+        pa, pb = a.control_points[-1], b.control_points[0]
+        if np.array_equal(pa, pb) or np.linalg.norm(pa - pb) > CORNER_SNAP_UV * extent:
+            continue
+        gap = float(np.linalg.norm(np.diff(surface.evaluate(np.vstack([pa, pb])), axis=0)))
+        if gap > tol:
+            continue
+        mid = 0.5 * (pa + pb)
+        out[k] = _with_end(a, -1, mid)
+        out[(k + 1) % len(out)] = _with_end(out[(k + 1) % len(out)], 0, mid)
+    return out
+
+
+def _with_end(c: BSpline, i: int, point: FloatArray) -> BSpline:
+    """``c`` with its first (``i`` 0) or last (-1) control point, its end, at ``point``."""
+    ctrl = c.control_points.copy()
+    ctrl[i] = point
+    return BSpline(ctrl, c.degree, c.knots, c.weights)
+
+
 def side_region(face: Any, sides: list[list[Any]], name: str) -> tuple[Region, list[list[Any]]]:
     """The Region of ``face`` with the given four sides (oriented edges in wire order):
     pcurve sides, the face's surface as embedding, the exact 3-D edge curves as space
@@ -426,6 +473,7 @@ def side_region(face: Any, sides: list[list[Any]], name: str) -> tuple[Region, l
         sides2d = [_to_bspline(_chain([_pcurve(e, face) for e in s], True), 2) for s in sides]
         sides3d = [_to_bspline(_chain([_curve3d(e) for e in s], False), 3) for s in sides]
         emb = exact_embedding(face)  # (the pcurves are in OCCT's parameters)
+        sides2d = closed_corners(sides2d, emb, _vertex_tolerance(face))
     except CadError as err:
         raise CadError(f"{name}: {err}") from err
     except Exception as err:
