@@ -1,8 +1,9 @@
 """Read STEP / IGES / OCCT BRep files into healed solids.
 
 Every OCCT failure is caught here and re-raised as a one-line
-[CadError][medax.errors.CadError] naming the file. Healing: ``ShapeFix_Shape``, then ``ShapeUpgrade_UnifySameDomain`` merges faces (and
-edges) lying on the same surface so split faces do not inflate counts. STEP and IGES shapes
+[CadError][medax.errors.CadError] naming the file. Healing: ``ShapeFix_Shape``, then
+``ShapeUpgrade_UnifySameDomain`` merges faces (and edges) lying on the same surface so split
+faces do not inflate counts. STEP and IGES shapes
 are converted by OCCT to millimetres; ``Part.file_unit`` is the unit named in the file.
 """
 
