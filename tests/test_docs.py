@@ -91,8 +91,9 @@ def reference_directives() -> list[tuple[str, list[str] | None]]:
     out = []
     for page in sorted((ROOT / "docs" / "reference").glob("*.md")):
         for name, options in DIRECTIVE.findall(page.read_text(encoding="utf-8")):
-            members = re.search(r"members:\s*\[([^\]]*)\]", options)
-            out.append((name, [m.strip() for m in members.group(1).split(",")] if members else None))
+            found = re.search(r"members:\s*\[([^\]]*)\]", options)
+            members = [m.strip() for m in found.group(1).split(",")] if found else None
+            out.append((name, members))
     return out
 
 
