@@ -118,6 +118,11 @@ def read_region(path: str | Path, name: str) -> Region:
 def read_regions(path: str | Path) -> dict[str, Region]:
     """Read all regions of a regions file.
 
+    Parameters
+    ----------
+    path : str or Path
+        The regions file.
+
     Returns
     -------
     dict of str to Region
