@@ -141,3 +141,34 @@ def test_reference_docstrings_have_no_sphinx_roles(name, members):
 def test_sphinx_role_pattern():
     assert SPHINX_ROLE.search("see :func:`~medax.trace_axis` and") is not None
     assert SPHINX_ROLE.search("see [trace_axis][medax.trace_axis] and `a:b`") is None
+
+
+def docs_command() -> list[str]:
+    """The command of ``make docs``, without the venv's bin folder."""
+    recipe = re.search(r"^docs:.*\n\t(.*)$", (ROOT / "Makefile").read_text(), flags=re.M)
+    assert recipe is not None, "Makefile: no docs target"
+    return recipe.group(1).replace("$(BIN)/", "").split()
+
+
+def test_docs_build_fails_on_a_broken_reference(tmp_path):
+    """``make docs`` fails on a cross-reference that resolves nowhere, naming it (``--quiet``
+    would hide the warning from ``--strict``); ``make docs`` itself builds the tree as it is."""
+    pytest.importorskip("mkdocstrings")
+    import shutil
+    import subprocess
+    import sys
+
+    command = docs_command()
+    assert command[:3] == ["mkdocs", "build", "--strict"] and "--quiet" not in command
+    shutil.copytree(ROOT / "src", tmp_path / "src", ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copy(ROOT / "mkdocs.yml", tmp_path)
+    (tmp_path / "docs").symlink_to(ROOT / "docs")
+    errors = tmp_path / "src" / "medax" / "errors.py"
+    good = errors.read_text(encoding="utf-8")
+    assert '"""Root of all medax errors."""' in good
+    bad = good.replace("Root of all medax errors.", "Root of all [errors][medax.no_such_name].")
+    errors.write_text(bad, encoding="utf-8")
+    run = [sys.executable, "-m", *command, "--site-dir", str(tmp_path / "site")]
+    out = subprocess.run(run, cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert out.returncode != 0
+    assert "Could not find cross-reference target 'medax.no_such_name'" in out.stderr
