@@ -7,7 +7,7 @@ Triangles come from ``BRepMesh_IncrementalMesh`` with a coarse deflection
 [VIEW_ANGLE][medax.cad.view_data.VIEW_ANGLE] rad): the view is for
 looking, and the file stays small (corpus parts: 6 kB for 7 faces, 0.26 MB for 122, 1.5 -
 1.9 MB for 1036 and 555 faces). Straight edges are drawn with 2 points, circles with one
-per ``ARC_STEP`` (0.2) rad, other curves with ``EDGE_POINTS`` (17). Arrays are
+per ``ARC_STEP`` rad, other curves with ``EDGE_POINTS``. Arrays are
 little-endian float32 / uint32, base64-encoded:
 
 - ``positions``: (n, 3) vertices, each face's vertices contiguous (``faces[i].vertices`` =

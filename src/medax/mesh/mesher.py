@@ -115,11 +115,11 @@ def mesh_region(
         (kept for comparison). ``"paper"``: the paper's recursion along medial axes.
     tol : float, optional
         Node error of the crossings, relative to the diagonal. For ``"ratio"`` and ``"angle"``
-        (default ``NODE_TOL`` = 1e-6) interior nodes of regions with free-form sides are
-        interpolated from the coarser level where its error estimate allows, and solved
-        elsewhere (``0``: every node solved; boundary nodes, regions of lines and arcs and
-        regions on curved faces are always solved). For ``"paper"`` (default ``PAPER_TOL`` =
-        1e-9) it is the traced splines' error.
+        (default [CURVE_TOL][medax.tolerances.CURVE_TOL]) interior nodes of regions with
+        free-form sides are interpolated from the coarser level where its error estimate
+        allows, and solved elsewhere (``0``: every node solved; boundary nodes, regions of
+        lines and arcs and regions on curved faces are always solved). For ``"paper"``
+        (default ``PAPER_TOL`` = 1e-9) it is the traced splines' error.
     boundary : str
         ``"ratio"`` and ``"angle"`` methods: boundary nodes at equal arc length
         (``"arclength"``, default) or at the ends of the curves of constant ratio
