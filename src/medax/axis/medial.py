@@ -26,7 +26,7 @@ METHODS = ("frame", "paper")
 #: Stalled refinements that end near the tolerance (the paper mesher's sub-traces, ~1e-7)
 #: only warn.
 LOST_FACTOR = 1e4
-#: chords of the batch start (:mod:`medax.axis.chords`) at ``tol = 1e-6``; the cubic fit's
+#: chords of the batch start (``medax.axis.chords``) at ``tol = 1e-6``; the cubic fit's
 #: error falls like ``h^4``, so the count grows like ``tol^(-1/4)``
 CHORDS = 16
 

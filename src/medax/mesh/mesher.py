@@ -2,12 +2,12 @@
 
 Two methods build the same kind of grid: ``n1`` strips across the pair ``(S1, S3)`` and
 ``n2`` across ``(S0, S2)``, node ``(i, j)`` the crossing of curve ``i`` of one family with
-curve ``j`` of the other (numbering in :mod:`medax.mesh.grid`).
+curve ``j`` of the other (numbering in [medax.mesh.grid][medax.mesh.grid]).
 
 - ``"ratio"`` (default): the distance ratio ``d_a / (d_a + d_b)`` of each pair (the
   tracer's ``ratio`` curves; ``1/2`` is the medial axis), node ``(i, j)`` solved directly
   where both ratios take the blend of their values at the boundary nodes, which divide the
-  sides into equal arc lengths (:mod:`medax.mesh.ratio_grid`; ``boundary="ratio"``: the
+  sides into equal arc lengths (``medax.mesh.ratio_grid``; ``boundary="ratio"``: the
   boundary nodes at the ends of the curves of constant ratio ``k / n``, the nodes their
   crossings). Any division counts. A pair of lines whose opposite sides
   are arcs centred where the lines meet (an annulus sector) takes rays of equal angle
@@ -16,9 +16,9 @@ curve ``j`` of the other (numbering in :mod:`medax.mesh.grid`).
   where that measures better (``info["interior"] = "transfinite"``).
 - ``"angle"``: angle-weighted ratio curves on every pair of lines and arcs (rays of equal
   angle between lines that meet), the distance ratio elsewhere; kept for comparison.
-- ``"paper"``: the paper's recursion (:mod:`medax.mesh.split`): split along the medial axis,
+- ``"paper"``: the paper's recursion (``medax.mesh.split``): split along the medial axis,
   recurse on both halves; the families' traced splines are then crossed
-  (:mod:`medax.mesh.crossings`). Division counts that are not powers of two split unequally
+  (``medax.mesh.crossings``). Division counts that are not powers of two split unequally
   (curve ``floor(n/2)/n``); with ``size`` the paper's stopping rule applies.
 
 ``size`` sets the counts: ``n = ceil(longest of the two sides a family divides / size)``.
@@ -72,7 +72,7 @@ def divisions_for_size(region: Region, size: float) -> tuple[int, int]:
 
 
 #: Default node tolerance (x diagonal) of the ratio and angle methods: that of the tracer's
-#: splines (:data:`medax.tolerances.CURVE_TOL`).
+#: splines (``medax.tolerances.CURVE_TOL``).
 NODE_TOL = tolerances.CURVE_TOL
 #: Default tolerance (x diagonal) of the paper's traced splines.
 PAPER_TOL = 1e-9
@@ -236,7 +236,7 @@ def mesh_region(
 def _refuse_stuck_corner(
     region: Region, params: FloatArray, n1: int, n2: int, sides: Sequence[Curve], slide: bool
 ) -> None:
-    """:class:`MeshError` before any untangling when a corner's quad cannot be convex (its
+    """``MeshError`` before any untangling when a corner's quad cannot be convex (its
     angle 180 degrees or more wherever the first boundary nodes slide; with ``slide``
     False where they are)."""
     if slide:
