@@ -282,27 +282,70 @@ class Classification:
 
     # ---- access to OCCT shapes ------------------------------------------------------------
     def face(self, i: int) -> Any:
-        """The ``TopoDS_Face`` of face ``i`` (0-based)."""
+        """Give the OCCT face of a face index.
+
+        Parameters
+        ----------
+        i : int
+            The face index (0-based).
+
+        Returns
+        -------
+        TopoDS_Face
+            The face, from the face map.
+        """
         from OCP.TopoDS import TopoDS
 
         return TopoDS.Face(self.face_map.FindKey(i + 1))
 
     def edge(self, j: int) -> Any:
-        """The ``TopoDS_Edge`` of edge ``j`` (0-based)."""
+        """Give the OCCT edge of an edge index.
+
+        Parameters
+        ----------
+        j : int
+            The edge index (0-based).
+
+        Returns
+        -------
+        TopoDS_Edge
+            The edge, from the edge map.
+        """
         from OCP.TopoDS import TopoDS
 
         return TopoDS.Edge(self.edge_map.FindKey(j + 1))
 
     def vertex(self, k: int) -> Any:
-        """The ``TopoDS_Vertex`` of vertex ``k`` (0-based)."""
+        """Give the OCCT vertex of a vertex index.
+
+        Parameters
+        ----------
+        k : int
+            The vertex index (0-based).
+
+        Returns
+        -------
+        TopoDS_Vertex
+            The vertex, from the vertex map.
+        """
         from OCP.TopoDS import TopoDS
 
         return TopoDS.Vertex(self.vertex_map.FindKey(k + 1))
 
     # ---- queries --------------------------------------------------------------------------
     def indices(self, cls: FaceClass | str) -> tuple[int, ...]:
-        """Indices of the faces of class ``cls`` (a [FaceClass][medax.cad.model.FaceClass] or
-        its value)."""
+        """List the faces of one class.
+
+        Parameters
+        ----------
+        cls : FaceClass or str
+            A [FaceClass][medax.cad.model.FaceClass] or its value.
+
+        Returns
+        -------
+        tuple of int
+            The face indices, in order.
+        """
         c = FaceClass(cls)
         return tuple(f.index for f in self.faces if f.cls is c)
 
@@ -312,14 +355,36 @@ class Classification:
         return tuple(f.index for f in self.faces if f.cls in BLEND_CLASSES)
 
     def fillet_of(self, face: int) -> FilletRecord | None:
-        """The [FilletRecord][medax.cad.model.FilletRecord] of face ``face``, or None."""
+        """Find the fillet record of a face.
+
+        Parameters
+        ----------
+        face : int
+            The face index.
+
+        Returns
+        -------
+        FilletRecord or None
+            Its [FilletRecord][medax.cad.model.FilletRecord], None when it is no fillet.
+        """
         for rec in self.fillets:
             if rec.face == face:
                 return rec
         return None
 
     def edge_classes(self, face: int) -> dict[int, EdgeClass]:
-        """Class of each edge of ``face`` (paper, step 2, for supporting faces)."""
+        """Give the class of each edge of a face (paper, step 2, for supporting faces).
+
+        Parameters
+        ----------
+        face : int
+            The face index.
+
+        Returns
+        -------
+        dict of int to EdgeClass
+            Edge index -> class.
+        """
         return {j: self.edges[j].cls for j in self.faces[face].edges}
 
     def counts(self) -> dict[str, int]:

@@ -156,7 +156,18 @@ class Region:
         return np.array([s.start for s in self.sides])
 
     def space_curve(self, k: int) -> Curve:
-        """Side ``k`` (0..3) as a curve in space, where distances are measured."""
+        """Give a side as a curve in space, where distances are measured.
+
+        Parameters
+        ----------
+        k : int
+            The side, 0..3.
+
+        Returns
+        -------
+        Curve
+            The exact space side if given, else the side mapped by the embedding.
+        """
         if self.space_sides is not None:
             return self.space_sides[k]
         if self.embedding.is_identity:

@@ -71,14 +71,33 @@ def load_region_file(path: str | Path) -> dict[str, Any]:
 
 
 def region_names(data: dict[str, Any]) -> list[str]:
-    """List the region names of a loaded file (metadata keys starting with ``_`` skipped)."""
+    """List the region names of a loaded regions file.
+
+    Parameters
+    ----------
+    data : dict
+        The mapping from [load_region_file][medax.geometry.region_io.load_region_file].
+
+    Returns
+    -------
+    list of str
+        The names in file order, metadata keys starting with ``_`` skipped.
+    """
     return [k for k in data if not k.startswith("_")]
 
 
 def length_unit(data: dict[str, Any]) -> str:
     """Give the length unit a loaded regions file names in ``_units``.
 
-    Returns ``"unspecified"`` when it names none.
+    Parameters
+    ----------
+    data : dict
+        The mapping from [load_region_file][medax.geometry.region_io.load_region_file].
+
+    Returns
+    -------
+    str
+        The unit, ``"unspecified"`` when it names none.
     """
     unit = data.get("_units")
     return unit if isinstance(unit, str) and unit.strip() else "unspecified"

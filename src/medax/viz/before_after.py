@@ -33,10 +33,18 @@ PANEL = (660, 600)
 
 
 def group_colour(key: int) -> tuple[float, float, float]:
-    """Give the colour of a face's key, RGB 0-1.
+    """Give the colour of a face's key.
 
-    Keys are those of [plot_before_after][medax.viz.before_after.plot_before_after]: ``-1``
-    grey, ``-2`` red, ``-3`` black, ``k >= 0`` the ``k``-th colour of ``tab20`` (cyclic).
+    Parameters
+    ----------
+    key : int
+        A key of [plot_before_after][medax.viz.before_after.plot_before_after]: ``-1`` grey,
+        ``-2`` red, ``-3`` black, ``k >= 0`` the ``k``-th colour of ``tab20`` (cyclic).
+
+    Returns
+    -------
+    tuple of float
+        The colour, RGB 0-1.
     """
     from matplotlib import colormaps
 
