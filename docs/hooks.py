@@ -1,11 +1,13 @@
 """MkDocs hooks: the README becomes the home page, CHANGELOG.md and LICENSE pages too; the
-docstrings' Sphinx roles render as plain code.
+Sphinx roles left in docstrings render as plain code.
 
-The root files live where GitHub and PyPI show them, outside ``docs/``; :func:`on_files` adds
-them to the build and :func:`on_page_markdown` rewrites the README's links, written relative
-to the root, to the site's pages. Nothing is copied into ``docs/``. The docstrings cite names
-with Sphinx roles (``:func:`~medax.x.f```), which Markdown renders as ``:func:`` followed by
-code; :func:`on_page_content` drops the role and, after ``~``, the module path.
+The root files live where GitHub and PyPI show them, outside ``docs/``; ``on_files`` adds them
+to the build and ``on_page_markdown`` rewrites the links between them and ``docs/``, written
+for GitHub, to the site's pages. Nothing is copied into ``docs/``. Docstrings cite names with
+mkdocstrings cross-references (``[f][medax.x.f]``, checked by the strict build); the modules
+not converted yet (``medax.cad.simplify``) still use Sphinx roles (``:func:`~medax.x.f```),
+which Markdown renders as ``:func:`` followed by code: ``on_page_content`` drops the role and,
+after ``~``, the module path.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ PAGES = {
     "CHANGELOG.md": ("changelog.md", "{}"),
     "LICENSE": ("licence.md", "# Licence\n\n```text\n{}```\n"),
 }
-#: README links relative to the root -> relative to the site's pages
+#: links of the root files (README, CHANGELOG) relative to the root -> to the site's pages
 LINKS = [
     (re.compile(r"\]\(docs/algorithms/\)"), "](algorithms/axis.md)"),
     (re.compile(r"\]\(docs/"), "]("),
@@ -52,7 +54,13 @@ def on_page_content(html: str, page: Any, config: Any, files: Files) -> str:
 
 
 def on_page_markdown(markdown: str, page: Any, config: Any, files: Files) -> str:
-    if page.file.src_uri == "index.md":
+    uri = page.file.src_uri
+    if uri in ("index.md", "changelog.md"):
         for pattern, repl in LINKS:
             markdown = pattern.sub(repl, markdown)
+        return markdown
+    # a page of docs/ linking to a root file: ../README.md from docs/x.md -> index.md
+    up = "../" * (uri.count("/") + 1)
+    for name, (target, _) in PAGES.items():
+        markdown = markdown.replace(f"]({up}{name}", f"]({up[3:]}{target}")
     return markdown

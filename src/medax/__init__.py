@@ -3,9 +3,10 @@
 The numpy core (``medax.geometry``, ``medax.axis``, ``medax.mesh``) never imports
 OpenCASCADE; ``medax.cad`` is the only adapter to it.
 
-Facade, imported on first use: :func:`trace_axis` and :func:`mesh_region` (numpy core);
-:func:`read_part`, :func:`classify`, :func:`simplify`, :func:`write_step` and
-:func:`mesh_part` (OCP).
+Facade, imported on first use: [trace_axis][medax.trace_axis] and
+[mesh_region][medax.mesh_region] (numpy core); [read_part][medax.read_part],
+[classify][medax.classify], [simplify][medax.simplify], [write_step][medax.write_step] and
+[mesh_part][medax.mesh_part] (OCP).
 """
 
 from __future__ import annotations

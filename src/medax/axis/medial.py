@@ -26,7 +26,7 @@ METHODS = ("frame", "paper")
 #: Stalled refinements that end near the tolerance (the paper mesher's sub-traces, ~1e-7)
 #: only warn.
 LOST_FACTOR = 1e4
-#: chords of the batch start (:mod:`medax.axis.chords`) at ``tol = 1e-6``; the cubic fit's
+#: chords of the batch start (``medax.axis.chords``) at ``tol = 1e-6``; the cubic fit's
 #: error falls like ``h^4``, so the count grows like ``tol^(-1/4)``
 CHORDS = 16
 
@@ -41,24 +41,55 @@ def trace_axis(
     closed_form: bool = True,
     batch: bool = True,
 ) -> MedialAxis:
-    """Trace the curve ``d1 / (d1 + d2) = ratio`` (the medial axis for ``ratio = 1/2``)
-    between constraints ``A1 = S[pair[0]]`` and ``A2 = S[pair[1]]``, from B1 to B2.
+    """Trace the medial axis of a 4-sided region between one pair of opposite sides.
 
-    ``tol`` bounds the fitted B-spline's equidistance error and ``point_tol`` that of every
-    point, both relative to the region's diagonal. ``method="paper"`` reproduces the paper
-    (direction ``e1 + e2``, step = shortest side / 5, the ``|d1 - d2| / 2n`` correction to
-    ``0.99 < d1/d2 < 1.01``, a B-spline through the points without refinement).
-
-    With ``closed_form`` (default), ``method="frame"`` and ``ratio = 1/2``, two line-segment
-    constraints of a planar region get the exact axis instead (lines and parabolas, an exact
-    quadratic B-spline: :mod:`medax.axis.segments`); ``closed_form=False`` always traces.
-
-    With ``batch`` (default) a planar region's first points come in one batch (the roots of
-    the field along B1, B2 and chords across the region, :mod:`medax.axis.chords`) instead
-    of the step-by-step trace, where that applies (else the trace).
-
+    The axis is the curve ``d1 / (d1 + d2) = ratio`` (the medial axis for ``ratio = 1/2``)
+    between the constraints ``A1 = S[pair[0]]`` and ``A2 = S[pair[1]]``, from B1 to B2.
     Planar regions are traced in normalised coordinates (centred, unit diagonal) so that
     regions far from the origin or in small units keep their relative accuracy.
+
+    ``method="paper"`` reproduces the paper: direction ``e1 + e2``, step = shortest side / 5,
+    the ``|d1 - d2| / 2n`` correction to ``0.99 < d1/d2 < 1.01``, a B-spline through the
+    points without refinement.
+
+    Parameters
+    ----------
+    region : Region
+        The region ([Region][medax.geometry.region.Region]), planar or on a surface.
+    pair : tuple of int
+        The constraint sides, ``(0, 2)`` or ``(1, 3)``.
+    tol : float
+        Bound on the fitted B-spline's equidistance error, relative to the region's diagonal.
+    method : str
+        ``"frame"`` (default) or ``"paper"``.
+    ratio : float
+        Distance ratio ``d1 / (d1 + d2)`` of the traced curve, in (0, 1).
+    point_tol : float
+        Bound on every traced point's equidistance error, relative to the diagonal.
+    closed_form : bool
+        With ``method="frame"`` and ``ratio = 1/2``, two line-segment constraints of a planar
+        region get the exact axis instead (lines and parabolas, an exact quadratic B-spline:
+        ``medax.axis.segments``); ``False`` always traces.
+    batch : bool
+        A planar region's first points come in one batch (the roots of the field along B1,
+        B2 and chords across the region, ``medax.axis.chords``) instead of the step-by-step
+        trace, where that applies (else the trace).
+
+    Returns
+    -------
+    MedialAxis
+        The axis points from B1 to B2, their distances and the fitted spline
+        ([MedialAxis][medax.axis.result.MedialAxis]).
+
+    Raises
+    ------
+    InputError
+        Unknown ``method``, ``ratio`` outside (0, 1) or a tolerance that is not positive.
+    RegionError
+        ``pair`` is neither ``(0, 2)`` nor ``(1, 3)``.
+    TraceError
+        The trace could not follow the axis (points off it by more than ``1e4 x point_tol``,
+        for a region too thin or bent at a reflex corner).
     """
     if method not in METHODS:
         raise InputError(f"unknown method '{method}' (known: {', '.join(METHODS)})")

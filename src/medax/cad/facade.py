@@ -19,9 +19,30 @@ from medax.cad.simplify.specs import BlendInput, specs_from_classification
 def classify(
     part: str | Path | Part | Any, angle_tol: float = tolerances.TANGENT_ANGLE
 ) -> list[Classification]:
-    """Classify the faces and edges of each solid of ``part``: a file path (STEP, IGES,
-    BRep), a :class:`~medax.cad.reader.Part` or one ``TopoDS_Solid``. ``angle_tol`` is the
-    tangency tolerance (radians). One :class:`Classification` per solid, in file order."""
+    """Classify the faces and edges of each solid of a part.
+
+    Fillets, chamfers and the faces they join are recognised per solid; lengths stay in the
+    part's unit (mm for STEP and IGES).
+
+    Parameters
+    ----------
+    part : str, Path, Part or TopoDS_Solid
+        A file path (STEP, IGES, BRep), a [Part][medax.cad.reader.Part] or one solid.
+    angle_tol : float
+        Tangency tolerance (radians): two faces are tangent along an edge when their
+        normals differ by less.
+
+    Returns
+    -------
+    list of Classification
+        One [Classification][medax.cad.model.Classification] per solid, in file order.
+
+    Raises
+    ------
+    CadError
+        The file cannot be read (see [read_part][medax.cad.reader.read_part]) or a solid
+        cannot be classified.
+    """
     if isinstance(part, str | Path):
         return classify_file(str(part), angle_tol)
     if isinstance(part, Part):
@@ -39,10 +60,37 @@ def simplify(
     progress: Callable[[str], None] | None = None,
     time_budget: float = pipeline.ISOLATION_BUDGET,
 ) -> pipeline.SimplifyResult:
-    """Remove the fillets of ``part``: a :class:`Classification` (its blends are used), or a
-    ``TopoDS_Solid`` with ``blends`` (classified here when None). ``tol``: boundary deviation
-    bound relative to the diagonal; ``time_budget`` (s) bounds the search for failing
-    fillets. See :func:`medax.cad.simplify.simplify`."""
+    """Remove the fillets of a classified part.
+
+    Calls [medax.cad.simplify.pipeline.simplify][medax.cad.simplify.pipeline.simplify].
+    Fillets that cannot be removed within the tolerances are kept, with the reason, in the
+    result's report; the input solid is not modified.
+
+    Parameters
+    ----------
+    part : Classification or TopoDS_Solid
+        A [Classification][medax.cad.model.Classification] (its blends are used), or a solid
+        with ``blends``.
+    blends : BlendInput, optional
+        The fillets to remove; classified here when None.
+    tol : float
+        Bound on the boundary deviation, relative to the part's diagonal.
+    progress : callable, optional
+        Called with one message per stage.
+    time_budget : float
+        Bound (s) on the search for the fillets that fail.
+
+    Returns
+    -------
+    SimplifyResult
+        The simplified solid and its report
+        ([SimplifyResult][medax.cad.simplify.pipeline.SimplifyResult]).
+
+    Raises
+    ------
+    CadError
+        A solid given without ``blends`` cannot be classified.
+    """
     if isinstance(part, Classification):
         shape, found = part.shape, part
     else:

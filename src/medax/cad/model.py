@@ -3,17 +3,17 @@
 Everything here is a frozen value. Faces, edges and vertices are named by stable 0-based
 integer indices: index ``i`` is entry ``i + 1`` of the ``TopTools_IndexedMapOfShape`` (OCP 8:
 ``OCP.collections.IndexedMap_TopoDS_Shape_TopTools_ShapeMapHasher``) built
-with ``TopExp.MapShapes_s`` on the classified solid (:attr:`Classification.face_map`,
-:attr:`Classification.edge_map`, :attr:`Classification.vertex_map`), so
+with ``TopExp.MapShapes_s`` on the classified solid (``Classification.face_map``,
+``edge_map``, ``vertex_map`` of [Classification][medax.cad.model.Classification]), so
 ``classification.face(i)`` returns the ``TopoDS_Face`` of face ``i`` and the indices stay
-valid as long as the solid (:attr:`Classification.shape`) is not modified.
+valid as long as the solid (``Classification.shape``) is not modified.
 
 Face classes (paper, step 1):
 
 - ``fillet``: an edge blend, a 4-sided rolling-ball face between two supporting faces
-  (constant or variable radius), see :class:`FilletRecord`;
+  (constant or variable radius), see [FilletRecord][medax.cad.model.FilletRecord];
 - ``corner_blend``: a blend where three or more fillets meet (the paper's point-transition
-  fillet), see :class:`CornerRecord`;
+  fillet), see [CornerRecord][medax.cad.model.CornerRecord];
 - ``supporting``: a non-blend face joined to a blend by a smooth (tangent) edge;
 - ``protection``: every other face.
 
@@ -23,7 +23,7 @@ Edge classes (paper, step 2; meaningful on the edges of supporting faces, comput
 - ``semi_smooth``: not smooth, but one of its vertices lies on a smooth edge;
 - ``non_smooth``: the rest.
 
-Lengths are in the file's length unit (:attr:`Classification.unit`), angles in radians.
+Lengths are in the file's length unit (``Classification.unit``), angles in radians.
 """
 
 from __future__ import annotations
@@ -52,17 +52,33 @@ class EdgeClass(StrEnum):
 
 
 BLEND_CLASSES = (FaceClass.FILLET, FaceClass.CORNER_BLEND)
+"""The face classes that are blends."""
 
 
 @dataclass(frozen=True)
 class FaceInfo:
-    """One face of the solid.
+    """One face of the solid, with its class.
 
-    ``surface`` is the OCCT surface type in lower case (``plane``, ``cylinder``, ``cone``,
-    ``sphere``, ``torus``, ``bspline``, ``bezier``, ``revolution``, ``extrusion``, ``offset``,
-    ``other``). ``radius`` is the blend radius where constant (fillets and corner blends
-    only), else None. ``edges`` are the face's edge indices (each once, seams included),
-    ``neighbours`` the other faces sharing an edge with it (sorted).
+    Attributes
+    ----------
+    index : int
+        The face's index (entry ``index + 1`` of the face map).
+    cls : FaceClass
+        Its class.
+    surface : str
+        The OCCT surface type in lower case (``plane``, ``cylinder``, ``cone``, ``sphere``,
+        ``torus``, ``bspline``, ``bezier``, ``revolution``, ``extrusion``, ``offset``,
+        ``other``).
+    area : float
+        Area, in the unit squared.
+    centroid : tuple of float
+        Centre of mass of the face ``(x, y, z)``.
+    edges : tuple of int
+        The face's edge indices (each once, seams included).
+    neighbours : tuple of int
+        The other faces sharing an edge with it (sorted).
+    radius : float or None
+        The blend radius where constant (fillets and corner blends only), else None.
     """
 
     index: int
@@ -77,14 +93,33 @@ class FaceInfo:
 
 @dataclass(frozen=True)
 class EdgeInfo:
-    """One edge of the solid.
+    """One edge of the solid, with its class and tangency.
 
-    ``faces``: the faces containing it (two for a manifold edge; one face for a seam, which
-    bounds the same face twice, or for a free edge). ``vertices``: its vertex indices (one
-    for a closed edge). ``tangent`` is the numerical tangency test: the largest angle
-    between the two faces' normals over samples along the edge, ``max_angle``, is below
-    the tangency tolerance (a seam is tangent; a free edge is not). ``length`` in the unit
-    of the file.
+    Attributes
+    ----------
+    index : int
+        The edge's index (entry ``index + 1`` of the edge map).
+    cls : EdgeClass
+        Its class.
+    faces : tuple of int
+        The faces containing it: two for a manifold edge; one for a seam, which bounds the
+        same face twice, or for a free edge.
+    vertices : tuple of int
+        Its vertex indices (one for a closed edge).
+    tangent : bool
+        The numerical tangency test: ``max_angle`` is below the tangency tolerance (a seam
+        is tangent; a free edge is not).
+    max_angle : float
+        The largest angle (radians) between the two faces' normals over samples along the
+        edge.
+    length : float
+        Length, in the unit of the file.
+    curve : str
+        The OCCT curve type in lower case (``line``, ``circle``, ``ellipse``, ``hyperbola``,
+        ``parabola``, ``bezier``, ``bspline``, ``offset``, ``other``; ``degenerate`` for a
+        degenerate edge).
+    is_free : bool
+        The edge bounds only one face and is not a seam.
     """
 
     index: int
@@ -105,16 +140,29 @@ class EdgeInfo:
 
 @dataclass(frozen=True)
 class FilletRecord:
-    """An edge fillet: a 4-sided blend face.
+    """An edge fillet: a 4-sided blend face between two supporting faces.
 
-    ``smooth_edges[k]`` is the chain of edges (usually one) of constraint side ``k`` in the
-    face's wire order; these are tangent to ``supporting[k]`` (the supporting faces across
-    the constraint sides; the two may be the same face, e.g. a fillet inside a slot, and
-    one may itself be a blend when a fillet was rolled over an earlier fillet).
-    ``cross_edges`` are the start and end sides (each one edge index; for a fillet closed
-    around an axis, e.g. a torus around a boss, both are the seam edge and ``closed`` is
-    True). Following the face's outer wire: smooth side 0, cross edge 0, smooth side 1,
-    cross edge 1. ``radius`` is the rolling-ball radius where constant, else None.
+    Following the face's outer wire: smooth side 0, cross edge 0, smooth side 1, cross
+    edge 1.
+
+    Attributes
+    ----------
+    face : int
+        The fillet's face index.
+    smooth_edges : tuple of two tuples of int
+        ``smooth_edges[k]`` is the chain of edges (usually one) of constraint side ``k`` in
+        the face's wire order; these are tangent to ``supporting[k]``.
+    cross_edges : tuple of int
+        The start and end sides, one edge index each (for a fillet closed around an axis,
+        e.g. a torus around a boss, both are the seam edge).
+    supporting : tuple of int
+        The supporting faces across the constraint sides; the two may be the same face (a
+        fillet inside a slot), and one may itself be a blend when a fillet was rolled over
+        an earlier fillet.
+    radius : float or None
+        The rolling-ball radius where constant, else None.
+    closed : bool
+        The fillet closes around an axis (both cross edges are its seam).
     """
 
     face: int
@@ -126,7 +174,13 @@ class FilletRecord:
 
     @property
     def constraint_edges(self) -> tuple[int, int]:
-        """The two smooth edges when each side is one edge; raises ValueError otherwise."""
+        """The two smooth edges, when each constraint side is one edge.
+
+        Raises
+        ------
+        ValueError
+            A constraint side has several edges.
+        """
         a, b = self.smooth_edges
         if len(a) != 1 or len(b) != 1:
             raise ValueError(f"fillet face {self.face}: a constraint side has several edges")
@@ -137,9 +191,18 @@ class FilletRecord:
 class CornerRecord:
     """A corner blend (point-transition fillet) where three or more fillets meet.
 
-    ``fillets`` are the blend faces (fillets or other corner blends) joined to it;
-    ``supporting`` the non-blend faces it touches by a tangent edge; ``edges`` all its
-    edges. ``radius`` is the sphere's radius for a spherical corner, else None.
+    Attributes
+    ----------
+    face : int
+        The corner blend's face index.
+    fillets : tuple of int
+        The blend faces (fillets or other corner blends) joined to it.
+    supporting : tuple of int
+        The non-blend faces it touches by a tangent edge.
+    edges : tuple of int
+        All its edges.
+    radius : float or None
+        The sphere's radius for a spherical corner, else None.
     """
 
     face: int
@@ -151,7 +214,15 @@ class CornerRecord:
 
 @dataclass(frozen=True)
 class Doubt:
-    """A face the classifier was not sure about, with the reason (one line)."""
+    """A face the classifier was not sure about.
+
+    Attributes
+    ----------
+    face : int
+        The face index.
+    reason : str
+        Why, in one line.
+    """
 
     face: int
     reason: str
@@ -161,11 +232,30 @@ class Doubt:
 class Classification:
     """Faces, edges and blend records of one solid.
 
-    ``faces[i].index == i`` and ``edges[j].index == j``. ``shape`` is the classified
-    (healed) solid; ``face_map``/``edge_map``/``vertex_map`` the OCCT indexed maps the
-    indices refer to (index ``i`` is map entry ``i + 1``). ``unit`` is the length unit
-    (e.g. ``"mm"``); ``source`` the file (or a label) and ``solid`` which solid of the file.
-    ``tangent_angle`` is the tolerance used by the tangency test (radians).
+    Attributes
+    ----------
+    faces : tuple of FaceInfo
+        Every face, ``faces[i].index == i``.
+    edges : tuple of EdgeInfo
+        Every edge, ``edges[j].index == j``.
+    fillets : tuple of FilletRecord
+        The edge fillets.
+    corners : tuple of CornerRecord
+        The corner blends.
+    shape : TopoDS_Solid
+        The classified (healed) solid.
+    face_map, edge_map, vertex_map : TopTools_IndexedMapOfShape
+        The OCCT indexed maps the indices refer to (index ``i`` is map entry ``i + 1``).
+    unit : str
+        The length unit (e.g. ``"mm"``).
+    source : str
+        The file (or a label).
+    solid : int
+        Which solid of the file (0-based).
+    tangent_angle : float
+        The tolerance used by the tangency test (radians).
+    doubts : tuple of Doubt
+        The faces the classifier was not sure about.
     """
 
     faces: tuple[FaceInfo, ...]
@@ -192,26 +282,70 @@ class Classification:
 
     # ---- access to OCCT shapes ------------------------------------------------------------
     def face(self, i: int) -> Any:
-        """The ``TopoDS_Face`` of face ``i``."""
+        """Give the OCCT face of a face index.
+
+        Parameters
+        ----------
+        i : int
+            The face index (0-based).
+
+        Returns
+        -------
+        TopoDS_Face
+            The face, from the face map.
+        """
         from OCP.TopoDS import TopoDS
 
         return TopoDS.Face(self.face_map.FindKey(i + 1))
 
     def edge(self, j: int) -> Any:
-        """The ``TopoDS_Edge`` of edge ``j``."""
+        """Give the OCCT edge of an edge index.
+
+        Parameters
+        ----------
+        j : int
+            The edge index (0-based).
+
+        Returns
+        -------
+        TopoDS_Edge
+            The edge, from the edge map.
+        """
         from OCP.TopoDS import TopoDS
 
         return TopoDS.Edge(self.edge_map.FindKey(j + 1))
 
     def vertex(self, k: int) -> Any:
-        """The ``TopoDS_Vertex`` of vertex ``k``."""
+        """Give the OCCT vertex of a vertex index.
+
+        Parameters
+        ----------
+        k : int
+            The vertex index (0-based).
+
+        Returns
+        -------
+        TopoDS_Vertex
+            The vertex, from the vertex map.
+        """
         from OCP.TopoDS import TopoDS
 
         return TopoDS.Vertex(self.vertex_map.FindKey(k + 1))
 
     # ---- queries --------------------------------------------------------------------------
     def indices(self, cls: FaceClass | str) -> tuple[int, ...]:
-        """Indices of the faces of class ``cls``."""
+        """List the faces of one class.
+
+        Parameters
+        ----------
+        cls : FaceClass or str
+            A [FaceClass][medax.cad.model.FaceClass] or its value.
+
+        Returns
+        -------
+        tuple of int
+            The face indices, in order.
+        """
         c = FaceClass(cls)
         return tuple(f.index for f in self.faces if f.cls is c)
 
@@ -221,18 +355,40 @@ class Classification:
         return tuple(f.index for f in self.faces if f.cls in BLEND_CLASSES)
 
     def fillet_of(self, face: int) -> FilletRecord | None:
-        """The fillet record of face ``face``, or None."""
+        """Find the fillet record of a face.
+
+        Parameters
+        ----------
+        face : int
+            The face index.
+
+        Returns
+        -------
+        FilletRecord or None
+            Its [FilletRecord][medax.cad.model.FilletRecord], None when it is no fillet.
+        """
         for rec in self.fillets:
             if rec.face == face:
                 return rec
         return None
 
     def edge_classes(self, face: int) -> dict[int, EdgeClass]:
-        """Class of each edge of ``face`` (paper, step 2, for supporting faces)."""
+        """Give the class of each edge of a face (paper, step 2, for supporting faces).
+
+        Parameters
+        ----------
+        face : int
+            The face index.
+
+        Returns
+        -------
+        dict of int to EdgeClass
+            Edge index -> class.
+        """
         return {j: self.edges[j].cls for j in self.faces[face].edges}
 
     def counts(self) -> dict[str, int]:
-        """Number of faces per class (all four classes present), and ``faces``/``edges``."""
+        """Number of faces per class value (all four present), and ``faces``, ``edges``."""
         c = Counter(f.cls.value for f in self.faces)
         out = {k.value: int(c.get(k.value, 0)) for k in FaceClass}
         out["faces"] = len(self.faces)

@@ -1,34 +1,34 @@
 """One conforming quad surface mesh of a CAD solid: the medial grid on its 4-sided faces,
 gmsh's quads on the others, the part's edge nodes shared by both.
 
-Steps (:func:`mesh_part`):
+Steps ([mesh_part][medax.cad.part_mesh.mesh_part]):
 
-1. Each face is 4-sided or not (:func:`~medax.cad.face_region.face_sides`; the wire's two
+1. Each face is 4-sided or not (``medax.cad.face_region.face_sides``; the wire's two
    runs along a seam count as two sides); 4-sided ones become Regions on their surfaces
-   (:func:`~medax.cad.face_region.side_region`), those with a seam planar Regions of their
+   (``medax.cad.face_region.side_region``), those with a seam planar Regions of their
    pcurves scaled to lengths, mapped onto the surface after meshing
-   (:func:`~medax.cad.face_region.seam_region`: in space the seam's two sides are one curve,
+   (``medax.cad.face_region.seam_region``: in space the seam's two sides are one curve,
    so distances to them cannot tell them apart).
 2. Division counts per edge from the size, equal on opposite sides of every structured face
-   across the part (:mod:`medax.cad.edge_counts`); faces where they conflict are meshed by
+   across the part (``medax.cad.edge_counts``); faces where they conflict are meshed by
    gmsh instead.
 3. Nodes of every edge at equal arc length on its exact curve, one node per vertex
-   (:mod:`medax.cad.edge_nodes`; :class:`~medax.cad.shared_nodes.SharedNodes`): the only
+   (``medax.cad.edge_nodes``; ``medax.cad.shared_nodes.SharedNodes``): the only
    nodes any face puts on an edge.
-4. Structured faces: :func:`~medax.mesh.mesher.mesh_region` with those counts (and, on sides
-   made of several edges, boundary fractions that put nodes on the vertices inside them);
+4. Structured faces: [mesh_region][medax.mesh_region] with those counts (and, on sides made
+   of several edges, boundary fractions that put nodes on the vertices inside them);
    its boundary nodes are replaced by the edge nodes (they agree to the mesher's tolerance,
    checked). A face the medial grid cannot mesh is handed to gmsh, with the reason kept.
-5. Other faces: gmsh, on the same edge nodes (:mod:`medax.cad.gmsh_faces`).
+5. Other faces: gmsh, on the same edge nodes (``medax.cad.gmsh_faces``).
 6. Every face's quads are turned to the outward normal of the face and checked corner by
-   corner against it (:mod:`medax.cad.quad_orientation`).
+   corner against it (``medax.cad.quad_orientation``).
 7. A face nothing meshes (e.g. its fixed boundary nodes too coarse for a narrow gap between
    two of its edges) has its edges' counts doubled, as lower bounds propagated like the
    others, and the part is meshed again; faces whose edges keep their counts keep their
-   meshes. After :data:`REFINE_ROUNDS` such rounds the run fails with the face's index.
+   meshes. After ``REFINE_ROUNDS`` such rounds the run fails with the face's index.
 
 The result holds the quads with their CAD face, and each edge's nodes as line elements
-with their CAD edge, for the named groups of the writers (:mod:`medax.mesh.grouped_export`).
+with their CAD edge, for the named groups of the writers (``medax.mesh.grouped_export``).
 """
 
 from __future__ import annotations
@@ -89,9 +89,23 @@ _FaceRegion = tuple[Region, list[list[Any]], Development | None]
 
 @dataclass(frozen=True)
 class FaceMeshInfo:
-    """How face ``face`` was meshed: ``kind`` ``"structured"`` (``divisions`` = (n1, n2))
-    or ``"gmsh"`` (``why``: the reason it is not structured), its quads' index range
-    ``[start, stop)`` in the part mesh and the time in seconds."""
+    """How one face of the part was meshed.
+
+    Attributes
+    ----------
+    face : int
+        The CAD face index (OCCT's face map order, 0-based).
+    kind : str
+        ``"structured"`` (the medial grid) or ``"gmsh"``.
+    start, stop : int
+        The face's quads are ``quads[start:stop]`` of the part mesh.
+    time_s : float
+        Time spent on the face (s).
+    divisions : tuple of int or None
+        ``(n1, n2)`` of a structured face, else None.
+    why : str
+        For a gmsh face, the reason it is not structured.
+    """
 
     face: int
     kind: str
@@ -106,11 +120,30 @@ class FaceMeshInfo:
 class PartMesh:
     """A conforming quad mesh of a part's faces.
 
-    ``points`` (n, 3); ``quads`` (m, 4) node indices, counter-clockwise about the outward
-    normal; ``quad_face`` (m,) the CAD face of each quad; ``lines`` (k, 2) the edge
-    segments and ``line_edge`` (k,) their CAD edge; ``edge_counts`` per CAD edge (0: not
-    meshed); ``faces`` how each face was meshed; ``diagonal`` the part's bounding-box
-    diagonal; ``conflicts`` face -> why its counts did not allow the structured grid.
+    Faces share the nodes of their common edges. Lengths are in the part's unit.
+
+    Attributes
+    ----------
+    points : ndarray
+        Nodes (n, 3).
+    quads : ndarray
+        Node indices (m, 4), counter-clockwise about the outward normal.
+    quad_face : ndarray
+        The CAD face of each quad (m,).
+    lines : ndarray
+        The edge segments (k, 2), node indices.
+    line_edge : ndarray
+        The CAD edge of each segment (k,).
+    edge_counts : ndarray
+        Divisions per CAD edge (0: not meshed).
+    faces : tuple of FaceMeshInfo
+        How each face was meshed ([FaceMeshInfo][medax.cad.part_mesh.FaceMeshInfo]).
+    diagonal : float
+        The part's bounding-box diagonal.
+    conflicts : dict of int to str
+        Face -> why its counts did not allow the structured grid.
+    time_s : float
+        Wall time of the meshing (s).
     """
 
     points: FloatArray
@@ -126,10 +159,12 @@ class PartMesh:
 
     @property
     def structured_faces(self) -> tuple[int, ...]:
+        """The faces meshed by the medial grid."""
         return tuple(f.face for f in self.faces if f.kind == "structured")
 
     @property
     def gmsh_faces(self) -> tuple[int, ...]:
+        """The faces meshed by gmsh."""
         return tuple(f.face for f in self.faces if f.kind == "gmsh")
 
     def __repr__(self) -> str:
@@ -185,10 +220,36 @@ def mesh_part(
     structured: bool = True,
     progress: Callable[[str], None] | None = None,
 ) -> PartMesh:
-    """Mesh the faces of ``shape`` (all, or the indices ``faces`` in OCCT's face map order)
-    with quads of edge about ``size`` (model units). ``structured=False`` meshes every face
-    with gmsh (for comparison). Raises :class:`MeshError` naming the face that cannot be
-    meshed; never returns a partial mesh."""
+    """Mesh the faces of a solid with conforming quads.
+
+    The medial grid meshes the 4-sided faces, gmsh the others, on shared edge nodes (the
+    steps are in [medax.cad.part_mesh][medax.cad.part_mesh]). Never returns a partial mesh.
+
+    Parameters
+    ----------
+    shape : TopoDS_Shape
+        The solid (not modified).
+    size : float
+        Target quad edge length (model units), at least 1e-6 x the part's diagonal.
+    faces : sequence of int, optional
+        The face indices to mesh, in OCCT's face map order (default: all).
+    structured : bool
+        ``False`` meshes every face with gmsh (for comparison).
+    progress : callable, optional
+        Called with one message per stage.
+
+    Returns
+    -------
+    PartMesh
+        The mesh ([PartMesh][medax.cad.part_mesh.PartMesh]).
+
+    Raises
+    ------
+    InputError
+        ``size`` not positive or too small, or a face index that does not exist.
+    MeshError
+        A face cannot be meshed (named), even with its edges divided finer.
+    """
     t0 = time.perf_counter()
     say = progress or (lambda msg: log.info(msg))
     topo = build_topology(shape)
@@ -284,7 +345,7 @@ class _FaceResult:
 
 @dataclass
 class _Part:
-    """What stays the same across the rounds of :func:`mesh_part`."""
+    """What stays the same across the rounds of [mesh_part][medax.cad.part_mesh.mesh_part]."""
 
     topo: Any
     sel: list[int]
@@ -304,7 +365,7 @@ class _Part:
         t0: float,
     ) -> PartMesh:
         """One round: counts with lower bounds ``floor``, edge nodes, faces (from ``cache``
-        where their edges' counts are the same); :class:`_FaceFailed` for a face nothing
+        where their edges' counts are the same); ``_FaceFailed`` for a face nothing
         meshes."""
         topo, sel, curves, diag, say = self.topo, self.sel, self.curves, self.diag, self.say
         # 2. counts
@@ -437,7 +498,7 @@ class _Part:
         by_gmsh: GmshFaces,
     ) -> _FaceResult:
         """Face ``i`` meshed: the medial grid if it is 4-sided (gmsh if that fails), else
-        gmsh; :class:`_FaceFailed` when nothing meshes it."""
+        gmsh; ``_FaceFailed`` when nothing meshes it."""
         topo, diag = self.topo, self.diag
         tf = time.perf_counter()
         f = topo.face(i)

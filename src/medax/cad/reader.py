@@ -1,8 +1,9 @@
 """Read STEP / IGES / OCCT BRep files into healed solids.
 
-Every OCCT failure is caught here and re-raised as a one-line :class:`CadError` naming the
-file. Healing: ``ShapeFix_Shape``, then ``ShapeUpgrade_UnifySameDomain`` merges faces (and
-edges) lying on the same surface so split faces do not inflate counts. STEP and IGES shapes
+Every OCCT failure is caught here and re-raised as a one-line
+[CadError][medax.errors.CadError] naming the file. Healing: ``ShapeFix_Shape``, then
+``ShapeUpgrade_UnifySameDomain`` merges faces (and edges) lying on the same surface so split
+faces do not inflate counts. STEP and IGES shapes
 are converted by OCCT to millimetres; ``Part.file_unit`` is the unit named in the file.
 """
 
@@ -31,7 +32,6 @@ from medax.errors import CadError
 
 log = logging.getLogger(__name__)
 
-#: extensions understood, by format
 EXTENSIONS = {
     ".step": "step",
     ".stp": "step",
@@ -40,15 +40,28 @@ EXTENSIONS = {
     ".brep": "brep",
     ".brp": "brep",
 }
+"""The file extensions understood (lower case), by format."""
 
 
 @dataclass(frozen=True)
 class Part:
-    """The solids of one file, healed, in ``unit``: ``"mm"`` for STEP/IGES (OCCT converts),
-    ``"model"`` for BRep (which stores no unit).
+    """The healed solids of one CAD file.
 
-    ``solids`` are ``TopoDS_Solid`` objects; ``file_unit`` is the length unit the file
-    declares (``""`` when it declares none, e.g. BRep); ``notes`` say what healing did.
+    Lengths are in ``unit``: ``"mm"`` for STEP and IGES (OCCT converts), ``"model"`` for
+    BRep (which stores no unit).
+
+    Attributes
+    ----------
+    source : str
+        The file read.
+    solids : tuple
+        ``TopoDS_Solid`` objects, in file order.
+    unit : str
+        Length unit of the solids: ``"mm"`` or ``"model"``.
+    file_unit : str
+        The length unit the file declares (``""`` when it declares none, e.g. BRep).
+    notes : tuple of str
+        What healing did (shells made solids, loose faces sewn).
     """
 
     source: str
@@ -63,11 +76,29 @@ class Part:
 
 
 def read_part(path: str | Path, unify: bool = True) -> Part:
-    """Read ``path`` (STEP, IGES or BRep by extension) into healed solids.
+    """Read a STEP, IGES or BRep file into healed solids.
 
-    Raises :class:`CadError` (one line naming the file) for a missing, empty, unreadable,
-    truncated or appended-to file, content of another format than the extension, an unknown
-    extension, a file with no solid, or a shell that is not closed.
+    The format comes from the extension (``EXTENSIONS``). Closed shells are made solids,
+    loose faces are sewn; each solid is healed by [heal][medax.cad.reader.heal].
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    unify : bool
+        Merge faces and edges lying on the same surface (``ShapeUpgrade_UnifySameDomain``).
+
+    Returns
+    -------
+    Part
+        The solids, in mm for STEP and IGES ([Part][medax.cad.reader.Part]).
+
+    Raises
+    ------
+    CadError
+        One line naming the file: a missing, empty, unreadable, truncated or appended-to
+        file, content of another format than the extension, an unknown extension, a file
+        with no solid, or a shell that is not closed.
     """
     p = Path(path)
     fmt = EXTENSIONS.get(p.suffix.lower())
@@ -103,7 +134,11 @@ def read_part(path: str | Path, unify: bool = True) -> Part:
 
 @contextmanager
 def quiet_occt() -> Iterator[None]:
-    """Detach OCCT's default message printers (its parsers print to stdout) meanwhile."""
+    """Silence OCCT's messages within the block.
+
+    OCCT's parsers print to stdout; its default message printers are detached meanwhile and
+    restored on exit.
+    """
     from OCP.Message import Message
 
     messenger = Message.DefaultMessenger_s()
@@ -118,7 +153,27 @@ def quiet_occt() -> Iterator[None]:
 
 
 def heal(solid: Any, where: str | Path = "shape", unify: bool = True) -> Any:
-    """``ShapeFix_Shape`` then (``unify``) ``ShapeUpgrade_UnifySameDomain``; returns the solid."""
+    """Heal a solid with ``ShapeFix_Shape``, then merge same-surface faces.
+
+    Parameters
+    ----------
+    solid : TopoDS_Solid
+        The solid (not modified).
+    where : str or Path
+        Names the source in error messages.
+    unify : bool
+        Then run ``ShapeUpgrade_UnifySameDomain`` (faces and edges on the same surface).
+
+    Returns
+    -------
+    TopoDS_Solid
+        The healed solid.
+
+    Raises
+    ------
+    CadError
+        Healing failed or lost the solid.
+    """
     try:
         fix = ShapeFix_Shape(solid)
         fix.Perform()
@@ -136,7 +191,20 @@ def heal(solid: Any, where: str | Path = "shape", unify: bool = True) -> Any:
 
 
 def count(shape: Any, kind: Any) -> int:
-    """Number of distinct sub-shapes of ``kind`` (e.g. ``TopAbs_FACE``) in ``shape``."""
+    """Count the distinct sub-shapes of one kind.
+
+    Parameters
+    ----------
+    shape : TopoDS_Shape
+        The shape.
+    kind : TopAbs_ShapeEnum
+        The kind, e.g. ``TopAbs_FACE``.
+
+    Returns
+    -------
+    int
+        Number of distinct sub-shapes of ``kind`` in ``shape``.
+    """
     from OCP.collections import IndexedMap_TopoDS_Shape_TopTools_ShapeMapHasher as IMap
 
     m = IMap()

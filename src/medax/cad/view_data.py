@@ -1,11 +1,13 @@
-"""The data of the interactive 3D view (``view3d`` JSON, drawn by :mod:`medax.viz.webview`):
+"""The data of the interactive 3D view (``view3d`` JSON, drawn by
+[medax.viz.webview][medax.viz.webview]):
 a part's faces tessellated coarsely, with what each face is, its edges and fillet axes.
 
 Triangles come from ``BRepMesh_IncrementalMesh`` with a coarse deflection
-(:data:`VIEW_DEFLECTION` x the part's diagonal, :data:`VIEW_ANGLE` rad): the view is for
+([VIEW_DEFLECTION][medax.cad.view_data.VIEW_DEFLECTION] x the part's diagonal,
+[VIEW_ANGLE][medax.cad.view_data.VIEW_ANGLE] rad): the view is for
 looking, and the file stays small (corpus parts: 6 kB for 7 faces, 0.26 MB for 122, 1.5 -
 1.9 MB for 1036 and 555 faces). Straight edges are drawn with 2 points, circles with one
-per :data:`ARC_STEP` rad, other curves with :data:`EDGE_POINTS`. Arrays are
+per ``ARC_STEP`` rad, other curves with ``EDGE_POINTS``. Arrays are
 little-endian float32 / uint32, base64-encoded:
 
 - ``positions``: (n, 3) vertices, each face's vertices contiguous (``faces[i].vertices`` =
@@ -42,10 +44,10 @@ from medax.cad.xcaf import FaceStyle, class_styles, group_styles
 from medax.errors import CadError
 from medax.geometry._types import FloatArray
 
-#: linear deflection of the view's tessellation, relative to the part's diagonal
 VIEW_DEFLECTION = 4e-3
-#: its angular deflection (radians)
+"""Linear deflection of the view's tessellation, relative to the part's diagonal."""
 VIEW_ANGLE = 0.35
+"""Angular deflection of the view's tessellation (radians)."""
 #: points per edge polyline (ends included): a line gets 2, a circle one per ARC_STEP rad
 EDGE_POINTS = 17
 ARC_STEP = 0.2
@@ -211,8 +213,22 @@ def view_model(
 def write_view(
     model: dict[str, Any], path: str | Path, unit: str, tolerances: dict[str, float]
 ) -> None:
-    """Write ``model`` to ``path`` (a staged temporary): ``view3d`` JSON with the header
-    when ``path`` ends in ``.json``, else a self-contained HTML page with the viewer."""
+    """Write a view as ``view3d`` JSON or as a self-contained HTML page.
+
+    Parameters
+    ----------
+    model : dict
+        The view's data, from [classified_view][medax.cad.view_data.classified_view] or
+        [simplified_view][medax.cad.view_data.simplified_view].
+    path : str or Path
+        The output (the callers pass a staged temporary): ``view3d`` JSON with the header
+        (``medax_version``, ``schema_version``, units, tolerances) when it ends in
+        ``.json``, else an HTML page with the viewer.
+    unit : str
+        The length unit of the positions, for the header.
+    tolerances : dict of str to float
+        The tolerances used, for the header.
+    """
     from medax.io_utils import write_json
     from medax.schemas import stamp
     from medax.viz.webview import view_page
@@ -226,8 +242,26 @@ def write_view(
 
 
 def classified_view(solids: Sequence[Any], source: str = "") -> dict[str, Any]:
-    """The view of classified solids (:class:`~medax.cad.report.ClassifiedSolid`): faces
-    coloured by class, with their fillets' axes."""
+    """Build the 3D view of classified solids: faces coloured by class, with fillet axes.
+
+    Parameters
+    ----------
+    solids : sequence of ClassifiedSolid
+        The classified solids (``medax.cad.report.ClassifiedSolid``: a classification and
+        its fillets' axes).
+    source : str
+        The file, shown in the view.
+
+    Returns
+    -------
+    dict
+        The view's data without header (see the module's description).
+
+    Raises
+    ------
+    CadError
+        Tessellating a solid fails.
+    """
     items = []
     axes: list[FloatArray] = []
     for cs in solids:
@@ -244,8 +278,31 @@ def classified_view(solids: Sequence[Any], source: str = "") -> dict[str, Any]:
 def simplified_view(
     shapes: Sequence[Any], reports: Sequence[dict[str, Any]], source: str = ""
 ) -> dict[str, Any]:
-    """The view of simplified solids (with their simplify reports): merged faces in their
-    group's colour, kept blends black, untouched faces grey."""
+    """Build the 3D view of simplified solids, faces coloured by what simplify made of them.
+
+    Merged faces are in their group's colour, kept blends black, untouched faces grey.
+
+    Parameters
+    ----------
+    shapes : sequence of TopoDS_Shape
+        The simplified solids.
+    reports : sequence of dict
+        Their simplify reports, in the same order.
+    source : str
+        The file, shown in the view.
+
+    Returns
+    -------
+    dict
+        The view's data without header (see the module's description).
+
+    Raises
+    ------
+    ValueError
+        A report's face groups are not one per face, in order.
+    CadError
+        Tessellating a solid fails.
+    """
     items = []
     for shape, rep in zip(shapes, reports, strict=True):
         groups = rep["face_groups"]

@@ -47,7 +47,17 @@ _READ_NAMES = "read.stepcaf.subshapes.name"
 
 @dataclass(frozen=True)
 class FaceStyle:
-    """A face of the shape to write (``TopoDS_Face``), its colour (RGB, 0-1) and name."""
+    """A face of the shape to write, with its colour and name.
+
+    Attributes
+    ----------
+    face : TopoDS_Face
+        The face.
+    rgb : tuple of float
+        Its colour, sRGB components in 0-1.
+    name : str
+        Its name in the STEP file.
+    """
 
     face: Any
     rgb: RGB
@@ -56,7 +66,17 @@ class FaceStyle:
 
 @dataclass(frozen=True)
 class StyledFace:
-    """A face read from a STEP file with its colour (None: none) and name (None: none)."""
+    """A face read from a STEP file, with its colour and name.
+
+    Attributes
+    ----------
+    face : TopoDS_Face
+        The face.
+    rgb : tuple of float or None
+        Its colour, sRGB components in 0-1 (None: none).
+    name : str or None
+        Its name (None: none).
+    """
 
     face: Any
     rgb: RGB | None
@@ -83,14 +103,32 @@ def _static(name: str, value: int) -> Iterator[None]:
 def write_styled_step(
     shape: Any, path: str | Path, styles: Sequence[FaceStyle], name: str = "", label: Any = None
 ) -> None:
-    """Write ``shape`` as STEP (AP214) to ``path`` with each face of ``styles`` coloured and
-    named. ``name``: the product's name; ``label``: the file's name in messages (default
-    ``path``). Faces not in ``styles`` get no colour. CadError when OCCT fails.
+    """Write a shape as STEP (AP214) with a colour and a name per face.
 
-    A shape placed by locations (a located solid, as readers return some parts, or a
-    compound of them) is written as an assembly: each placed piece once, unplaced, as a part
-    whose faces carry the styles, and placed by its component's location. (Styled directly,
-    OCCT's writer loses the names of most located faces.)"""
+    Faces not in ``styles`` get no colour. A shape placed by locations (a located solid, as
+    readers return some parts, or a compound of them) is written as an assembly: each placed
+    piece once, unplaced, as a part whose faces carry the styles, and placed by its
+    component's location (styled directly, OCCT's writer loses the names of most located
+    faces).
+
+    Parameters
+    ----------
+    shape : TopoDS_Shape
+        The shape to write.
+    path : str or Path
+        The STEP file.
+    styles : sequence of FaceStyle
+        The faces' colours and names ([FaceStyle][medax.cad.xcaf.FaceStyle]).
+    name : str
+        The product's name.
+    label : str, optional
+        The file's name in messages (default ``path``).
+
+    Raises
+    ------
+    CadError
+        OCCT fails to transfer or write the shape.
+    """
     where = path if label is None else label
     doc = _new_document()
     shapes = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
@@ -160,9 +198,29 @@ def _placed_pieces(shape: Any) -> list[tuple[Any, Any]] | None:
 
 
 def read_styled_step(path: str | Path) -> tuple[Any, list[StyledFace]]:
-    """The first shape of the STEP file ``path`` and its faces (explorer order) with their
-    colours and names, as OCCT's XCAF reader finds them (on the face, or on the face of
-    the part an assembly places). CadError when it cannot be read."""
+    """Read a STEP file's first shape with its faces' colours and names.
+
+    Colours and names are those OCCT's XCAF reader finds: on the face, or on the face of
+    the part an assembly places.
+
+    Parameters
+    ----------
+    path : str or Path
+        The STEP file.
+
+    Returns
+    -------
+    shape : TopoDS_Shape
+        The first shape of the file.
+    faces : list of StyledFace
+        Its faces in explorer order, with colours and names
+        ([StyledFace][medax.cad.xcaf.StyledFace]).
+
+    Raises
+    ------
+    CadError
+        The file cannot be read.
+    """
     reader = STEPCAFControl_Reader()
     reader.SetColorMode(True)
     reader.SetNameMode(True)
@@ -236,9 +294,19 @@ def _solid_prefix(k: int, n: int) -> str:
 
 
 def class_styles(classifications: Sequence[Any]) -> list[FaceStyle]:
-    """A style per face of classified solids (:class:`~medax.cad.model.Classification`):
-    the class's colour of the pictures and a name such as ``fillet 12 r=2.5`` (``solid k``
-    in front when there are several solids)."""
+    """Give each face of classified solids its class's colour and a name.
+
+    Parameters
+    ----------
+    classifications : sequence of Classification
+        The solids' classifications ([Classification][medax.cad.model.Classification]).
+
+    Returns
+    -------
+    list of FaceStyle
+        Per face: the class's colour of the pictures and a name such as ``fillet 12 r=2.5``
+        (``solid k`` in front when there are several solids).
+    """
     from medax.viz.view3d import CLASS_COLOURS
 
     out = []
@@ -253,10 +321,23 @@ def class_styles(classifications: Sequence[Any]) -> list[FaceStyle]:
 
 
 def group_styles(shapes: Sequence[Any], reports: Sequence[dict[str, Any]]) -> list[FaceStyle]:
-    """A style per face of simplified solids (``shapes``, with their simplify reports):
-    a merged face in its group's colour of the before/after picture, named ``merged from
-    faces 3,7,9 (fillet halves 7,9)``; a kept blend black, named ``kept blend 12 r=2.5:
-    REASON``; an untouched face grey, named ``face 5`` (its index in the input)."""
+    """Give each face of simplified solids its merged group's colour and a name.
+
+    Parameters
+    ----------
+    shapes : sequence of TopoDS_Shape
+        The simplified solids.
+    reports : sequence of dict
+        Their simplify reports (``face_groups``, ``blends_kept``), in the same order.
+
+    Returns
+    -------
+    list of FaceStyle
+        Per face: a merged face in its group's colour of the before/after picture, named
+        ``merged from faces 3,7,9 (fillet halves 7,9)``; a kept blend black, named
+        ``kept blend 12 r=2.5: REASON``; an untouched face grey, named ``face 5`` (its
+        index in the input).
+    """
     from OCP.TopoDS import TopoDS
 
     from medax.cad.simplify.occ import shape_map

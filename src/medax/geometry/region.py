@@ -16,8 +16,8 @@ from medax.geometry.embedded_curve import EmbeddedCurve
 from medax.geometry.embedding import Embedding, PlaneEmbedding
 from medax.geometry.simple_boundary import check_simple
 
-#: the two opposite pairs: (0, 2) and (1, 3)
 PAIRS: tuple[tuple[int, int], ...] = ((0, 2), (1, 3))
+"""The two pairs of opposite sides."""
 _SAMPLES = 200  # samples per side for orientation and crossing checks
 
 
@@ -25,8 +25,14 @@ _SAMPLES = 200  # samples per side for orientation and crossing checks
 class PairRoles:
     """Which sides play which role for one choice of constraint pair.
 
-    ``a1 = S_k``, ``a2 = S_{k+2}`` are the constraints; ``b1 = S_{k-1}`` (where ``a1``
-    starts) is the start side and ``b2 = S_{k+1}`` the end side.
+    Attributes
+    ----------
+    a1, a2 : int
+        The constraints ``S_k`` and ``S_{k+2}``.
+    b1 : int
+        The start side ``S_{k-1}`` (where ``a1`` starts).
+    b2 : int
+        The end side ``S_{k+1}``.
     """
 
     a1: int
@@ -36,7 +42,24 @@ class PairRoles:
 
 
 def pair_roles(pair: tuple[int, int]) -> PairRoles:
-    """Roles of the sides for ``pair`` = (0, 2) or (1, 3)."""
+    """Give the roles of the sides for one pair of constraint sides.
+
+    Parameters
+    ----------
+    pair : tuple of int
+        The constraints, ``(0, 2)`` or ``(1, 3)``.
+
+    Returns
+    -------
+    PairRoles
+        Constraints ``a1 = pair[0]``, ``a2 = pair[1]``, start and end sides
+        ([PairRoles][medax.geometry.region.PairRoles]).
+
+    Raises
+    ------
+    RegionError
+        ``pair`` is neither ``(0, 2)`` nor ``(1, 3)``.
+    """
     if tuple(pair) not in PAIRS:
         raise RegionError(f"pair must be (0, 2) or (1, 3), got {tuple(pair)}")
     k = pair[0]
@@ -45,11 +68,24 @@ def pair_roles(pair: tuple[int, int]) -> PairRoles:
 
 @dataclass(frozen=True)
 class Region:
-    """Four side curves ``S0..S3`` in the parameter plane, CCW, side k from corner k to k+1.
+    """A 4-sided region: four side curves in the parameter plane and an embedding.
 
-    ``embedding`` maps the parameter plane to space (identity for a planar region);
-    ``space_sides`` optionally gives the sides in space exactly (else ``E(S_k)``).
-    Build with :meth:`Region.build`, which checks and orients.
+    The sides ``S0..S3`` run counter-clockwise, side k from corner k to k+1. Build with
+    [Region.build][medax.geometry.region.Region.build], which checks and orients. Lengths
+    are in the region's unit; distances are measured in space.
+
+    Attributes
+    ----------
+    sides : tuple of 4 Curve
+        The side curves in the parameter plane.
+    embedding : Embedding
+        Maps the parameter plane to space (identity for a planar region).
+    name : str
+        Names the region in messages.
+    reoriented : bool
+        The input was clockwise and was reversed (sides 1 and 3 swapped).
+    space_sides : tuple of 4 Curve or None
+        The sides in space exactly, if given (else ``E(S_k)``).
     """
 
     sides: tuple[Curve, Curve, Curve, Curve]
@@ -67,12 +103,35 @@ class Region:
         space_sides: Sequence[Curve] | None = None,
         check: bool = True,
     ) -> Region:
-        """Check the sides (closed corners, no zero-length side, no crossings) and orient
-        them counter-clockwise in the parameter plane.
+        """Build a region from four sides, checked and oriented counter-clockwise.
 
         Clockwise input is reversed: sides 0 and 2 keep their numbers, sides 1 and 3 swap,
         so pairs (0, 2) and (1, 3) still mean the same two sides; ``reoriented`` says so
         (``medax.axis.export`` reports sides in the input's numbering).
+
+        Parameters
+        ----------
+        sides : sequence of 4 Curve
+            The side curves in the parameter plane, side k from corner k to k+1.
+        name : str
+            Names the region in messages.
+        embedding : Embedding, optional
+            Maps the parameter plane to space (default: the plane itself).
+        space_sides : sequence of 4 Curve, optional
+            The sides in space exactly.
+        check : bool
+            Check closed corners, no zero-length side and no crossings
+            ([check][medax.geometry.region.Region.check]).
+
+        Returns
+        -------
+        Region
+            The region, counter-clockwise in the parameter plane.
+
+        Raises
+        ------
+        RegionError
+            Not 4 sides, or a check fails (the message names the side or corner).
         """
         if len(sides) != 4:
             raise RegionError(f"region '{name}' needs 4 sides, got {len(sides)}")
@@ -97,7 +156,18 @@ class Region:
         return np.array([s.start for s in self.sides])
 
     def space_curve(self, k: int) -> Curve:
-        """Side ``k`` as a curve in space (where distances are measured)."""
+        """Give a side as a curve in space, where distances are measured.
+
+        Parameters
+        ----------
+        k : int
+            The side, 0..3.
+
+        Returns
+        -------
+        Curve
+            The exact space side if given, else the side mapped by the embedding.
+        """
         if self.space_sides is not None:
             return self.space_sides[k]
         if self.embedding.is_identity:
@@ -124,8 +194,10 @@ class Region:
         return float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
 
     def signed_area(self) -> float:
-        """Signed area in the parameter plane (> 0 for counter-clockwise), summed relative to
-        the first corner so that it does not cancel far from the origin."""
+        """Signed area in the parameter plane (> 0 for counter-clockwise).
+
+        Summed relative to the first corner so that it does not cancel far from the origin.
+        """
         b = self.boundary - self.boundary[0]
         x, y = b[:, 0], b[:, 1]
         return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
@@ -135,8 +207,20 @@ class Region:
         return np.array([self.space_curve(k).length() for k in range(4)])
 
     def contains(self, p: FloatArray) -> np.ndarray:
-        """Whether parameter points ``p`` (n, 2) are inside: even-odd crossing count against
-        the sampled boundary, all points and edges at once."""
+        """Test whether parameter points are inside the region.
+
+        Even-odd crossing count against the sampled boundary, all points and edges at once.
+
+        Parameters
+        ----------
+        p : ndarray
+            Points (n, 2) or (2,) in the parameter plane.
+
+        Returns
+        -------
+        ndarray
+            Booleans (n,).
+        """
         q = np.atleast_2d(np.asarray(p, dtype=np.float64))
         a = self.boundary
         b = np.roll(a, -1, axis=0)
@@ -151,7 +235,16 @@ class Region:
 
     # ---- checks ---------------------------------------------------------------------------
     def check(self) -> None:
-        """Raise :class:`RegionError` naming the side or corner that is wrong."""
+        """Check the sides: closed corners, no zero-length side, no crossings.
+
+        Corners must meet within ``CORNER_TOL`` x diagonal and sides be longer than
+        ``MIN_SIDE`` x diagonal ([medax.tolerances][medax.tolerances]).
+
+        Raises
+        ------
+        RegionError
+            Naming the side or corner that is wrong.
+        """
         pts = np.concatenate([s.sample(_SAMPLES) for s in self.sides])
         with np.errstate(over="ignore", invalid="ignore"):
             diag = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
@@ -256,9 +349,25 @@ def _self_crossing(p: FloatArray, eps: float) -> bool:
 
 
 def normalised_region(region: Region) -> tuple[Region, FloatArray, float]:
-    """A planar region moved to the origin and scaled to unit diagonal, with the offset and
-    scale that map it back (``x = x' * scale + offset``); surface regions unchanged. Work
-    done there keeps its relative accuracy far from the origin and in any unit."""
+    """Move a planar region to the origin and scale it to unit diagonal.
+
+    Work done there keeps its relative accuracy far from the origin and in any unit. Regions
+    on surfaces are returned unchanged (offset 0, scale 1).
+
+    Parameters
+    ----------
+    region : Region
+        The region (not modified).
+
+    Returns
+    -------
+    work : Region
+        The normalised region.
+    offset : ndarray
+        Shape (2,); with ``scale`` maps it back: ``x = x' * scale + offset``.
+    scale : float
+        The region's diagonal.
+    """
     if not region.embedding.is_identity:
         return region, np.zeros(2), 1.0
     pts = region.boundary

@@ -26,15 +26,32 @@ from medax.geometry.polyline import Polyline
 from medax.geometry.region import Region
 
 SIDE_KINDS = ("line", "arc", "bspline", "polyline")
+"""The side kinds of the format."""
 
 
 def sample_regions_path() -> Path:
-    """Path of the sample ``regions.json`` shipped inside the package."""
+    """Give the path of the sample ``regions.json`` shipped inside the package."""
     return Path(str(resources.files("medax") / "data" / "regions.json"))
 
 
 def load_region_file(path: str | Path) -> dict[str, Any]:
-    """The raw JSON mapping of a regions file, with clear errors for a missing or bad file."""
+    """Load the raw JSON mapping of a regions file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The regions file.
+
+    Returns
+    -------
+    dict
+        Region names (and ``_`` metadata keys) to their JSON objects, unchecked.
+
+    Raises
+    ------
+    InputError
+        A missing file, not text, malformed JSON or not a JSON object.
+    """
     p = Path(path)
     if not p.is_file():
         raise InputError(f"{p}: no such file")
@@ -54,18 +71,62 @@ def load_region_file(path: str | Path) -> dict[str, Any]:
 
 
 def region_names(data: dict[str, Any]) -> list[str]:
-    """Region names in a loaded file (metadata keys starting with ``_`` skipped)."""
+    """List the region names of a loaded regions file.
+
+    Parameters
+    ----------
+    data : dict
+        The mapping from [load_region_file][medax.geometry.region_io.load_region_file].
+
+    Returns
+    -------
+    list of str
+        The names in file order, metadata keys starting with ``_`` skipped.
+    """
     return [k for k in data if not k.startswith("_")]
 
 
 def length_unit(data: dict[str, Any]) -> str:
-    """The length unit a loaded regions file names in ``_units`` (``"unspecified"``)."""
+    """Give the length unit a loaded regions file names in ``_units``.
+
+    Parameters
+    ----------
+    data : dict
+        The mapping from [load_region_file][medax.geometry.region_io.load_region_file].
+
+    Returns
+    -------
+    str
+        The unit, ``"unspecified"`` when it names none.
+    """
     unit = data.get("_units")
     return unit if isinstance(unit, str) and unit.strip() else "unspecified"
 
 
 def read_region(path: str | Path, name: str) -> Region:
-    """Read region ``name`` from the regions file ``path``."""
+    """Read one region of a regions file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The regions file.
+    name : str
+        The region's name.
+
+    Returns
+    -------
+    Region
+        The region, checked and counter-clockwise ([Region][medax.geometry.region.Region]).
+
+    Raises
+    ------
+    InputError
+        The file cannot be loaded or holds no region ``name`` (the message lists them).
+    RegionError
+        The region is not valid (open corner, zero-length or crossing sides).
+    CurveError
+        A side definition is not valid.
+    """
     data = load_region_file(path)
     if name not in region_names(data):
         known = ", ".join(region_names(data)) or "none"
@@ -74,13 +135,50 @@ def read_region(path: str | Path, name: str) -> Region:
 
 
 def read_regions(path: str | Path) -> dict[str, Region]:
-    """All regions of a file, by name."""
+    """Read all regions of a regions file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The regions file.
+
+    Returns
+    -------
+    dict of str to Region
+        The regions by name, in file order.
+
+    Raises
+    ------
+    InputError
+        As [read_region][medax.geometry.region_io.read_region] (including its subclasses
+        ``RegionError`` and ``CurveError``).
+    """
     data = load_region_file(path)
     return {n: region_from_dict(data[n], n) for n in region_names(data)}
 
 
 def region_from_dict(spec: Any, name: str) -> Region:
-    """A checked, counter-clockwise :class:`Region` from one JSON region object."""
+    """Build a region from one JSON region object.
+
+    Parameters
+    ----------
+    spec : dict
+        ``{"corners": [[x, y] x 4], "sides": [side x 4]}`` (see the module's description).
+    name : str
+        Names the region in messages.
+
+    Returns
+    -------
+    Region
+        The region, checked and counter-clockwise ([Region][medax.geometry.region.Region]).
+
+    Raises
+    ------
+    RegionError
+        Corners or sides missing or malformed, or the region is not valid.
+    CurveError
+        A side definition is not valid.
+    """
     if not isinstance(spec, dict) or "corners" not in spec or "sides" not in spec:
         raise RegionError(f"region '{name}': needs 'corners' and 'sides'")
     corners = _points(spec["corners"], f"region '{name}': corners", RegionError)

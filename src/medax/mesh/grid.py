@@ -20,14 +20,37 @@ from medax.mesh.quality import QuadQuality, quad_quality
 
 
 def structured_quads(n1: int, n2: int) -> IntArray:
-    """Quads (n1 * n2, 4) of an ``(n1 + 1) x (n2 + 1)`` node grid, row by row."""
+    """Build the quads of an ``(n1 + 1) x (n2 + 1)`` node grid, row by row.
+
+    Parameters
+    ----------
+    n1, n2 : int
+        Divisions along S0 and along S1.
+
+    Returns
+    -------
+    ndarray
+        Node indices (n1 * n2, 4), counter-clockwise for a counter-clockwise region.
+    """
     i, j = np.meshgrid(np.arange(n1, dtype=np.int64), np.arange(n2, dtype=np.int64))
     a = (j * (n1 + 1) + i).ravel()
     return np.column_stack((a, a + 1, a + n1 + 2, a + n1 + 1))
 
 
 def boundary_indices(n1: int, n2: int) -> tuple[IntArray, IntArray, IntArray, IntArray]:
-    """Node indices on S0, S1, S2, S3, each in the side's own direction (corner k first)."""
+    """Give the node indices on the four sides of an ``(n1 + 1) x (n2 + 1)`` node grid.
+
+    Parameters
+    ----------
+    n1, n2 : int
+        Divisions along S0 and along S1.
+
+    Returns
+    -------
+    tuple of 4 ndarray
+        Node indices on S0, S1, S2, S3 ((n1 + 1,) or (n2 + 1,)), each in the side's own
+        direction (corner k first).
+    """
     row = n1 + 1
     s0 = np.arange(row, dtype=np.int64)
     s1 = n1 + row * np.arange(n2 + 1, dtype=np.int64)
@@ -37,9 +60,24 @@ def boundary_indices(n1: int, n2: int) -> tuple[IntArray, IntArray, IntArray, In
 
 
 def transfinite_grid(params: FloatArray, n1: int, n2: int) -> FloatArray:
-    """The transfinite (Coons) patch ((n1 + 1) * (n2 + 1), 2) of a grid's boundary nodes
-    (node ``(i, j)`` at row ``j * (n1 + 1) + i``), blended linearly in ``i / n1`` and
-    ``j / n2`` (the boundary nodes divide their sides into equal arc lengths)."""
+    """Fill a grid's interior with the transfinite (Coons) patch of its boundary nodes.
+
+    The patch blends linearly in ``i / n1`` and ``j / n2`` (the boundary nodes divide their
+    sides into equal arc lengths); boundary nodes are kept exactly.
+
+    Parameters
+    ----------
+    params : ndarray
+        Nodes ((n1 + 1) * (n2 + 1), 2), node ``(i, j)`` at row ``j * (n1 + 1) + i``; only
+        the boundary nodes are read.
+    n1, n2 : int
+        Divisions along S0 and along S1.
+
+    Returns
+    -------
+    ndarray
+        The patch, same shape as ``params`` (a new array).
+    """
     g = params.reshape(n2 + 1, n1 + 1, -1)
     u = (np.arange(n1 + 1) / n1)[None, :, None]
     v = (np.arange(n2 + 1) / n2)[:, None, None]
@@ -52,12 +90,24 @@ def transfinite_grid(params: FloatArray, n1: int, n2: int) -> FloatArray:
 
 @dataclass(frozen=True)
 class QuadMesh:
-    """A structured quad mesh of ``region``.
+    """A structured quad mesh of a 4-sided region.
 
-    ``params`` (n, 2) nodes in the parameter plane, ``points`` (n, dim) nodes in space
-    (equal to ``params`` for a planar region), ``quads`` (n1 * n2, 4) node indices, CCW.
-    ``n1``/``n2`` are the divisions along S0 and along S1; ``method`` how it was built;
-    ``info`` holds counts and timings (JSON-ready).
+    Node numbering and quads as in [medax.mesh.grid][medax.mesh.grid].
+
+    Attributes
+    ----------
+    region : Region
+        The region meshed ([Region][medax.geometry.region.Region]).
+    params : ndarray
+        Nodes (n, 2) in the parameter plane.
+    points : ndarray
+        Nodes (n, dim) in space (equal to ``params`` for a planar region).
+    n1, n2 : int
+        Divisions along S0 and along S1.
+    method : str
+        How it was built (``"ratio"``, ``"angle"``, ``"paper"``).
+    info : dict
+        Counts and timings (JSON-ready).
     """
 
     region: Region
@@ -70,14 +120,17 @@ class QuadMesh:
 
     @property
     def quads(self) -> IntArray:
+        """Node indices (n1 * n2, 4), counter-clockwise."""
         return structured_quads(self.n1, self.n2)
 
     @property
     def n_nodes(self) -> int:
+        """Number of nodes, ``(n1 + 1) * (n2 + 1)``."""
         return int(self.points.shape[0])
 
     @property
     def n_quads(self) -> int:
+        """Number of quads, ``n1 * n2``."""
         return self.n1 * self.n2
 
     def __repr__(self) -> str:
@@ -91,5 +144,6 @@ class QuadMesh:
         return self.points.reshape(self.n2 + 1, self.n1 + 1, -1)
 
     def quality(self) -> QuadQuality:
-        """Verdict metrics of the quads, measured in space."""
+        """Verdict metrics of the quads, measured in space
+        ([QuadQuality][medax.mesh.quality.QuadQuality])."""
         return quad_quality(self.points, self.quads)

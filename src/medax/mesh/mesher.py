@@ -2,12 +2,12 @@
 
 Two methods build the same kind of grid: ``n1`` strips across the pair ``(S1, S3)`` and
 ``n2`` across ``(S0, S2)``, node ``(i, j)`` the crossing of curve ``i`` of one family with
-curve ``j`` of the other (numbering in :mod:`medax.mesh.grid`).
+curve ``j`` of the other (numbering in [medax.mesh.grid][medax.mesh.grid]).
 
 - ``"ratio"`` (default): the distance ratio ``d_a / (d_a + d_b)`` of each pair (the
   tracer's ``ratio`` curves; ``1/2`` is the medial axis), node ``(i, j)`` solved directly
   where both ratios take the blend of their values at the boundary nodes, which divide the
-  sides into equal arc lengths (:mod:`medax.mesh.ratio_grid`; ``boundary="ratio"``: the
+  sides into equal arc lengths (``medax.mesh.ratio_grid``; ``boundary="ratio"``: the
   boundary nodes at the ends of the curves of constant ratio ``k / n``, the nodes their
   crossings). Any division counts. A pair of lines whose opposite sides
   are arcs centred where the lines meet (an annulus sector) takes rays of equal angle
@@ -16,9 +16,9 @@ curve ``j`` of the other (numbering in :mod:`medax.mesh.grid`).
   where that measures better (``info["interior"] = "transfinite"``).
 - ``"angle"``: angle-weighted ratio curves on every pair of lines and arcs (rays of equal
   angle between lines that meet), the distance ratio elsewhere; kept for comparison.
-- ``"paper"``: the paper's recursion (:mod:`medax.mesh.split`): split along the medial axis,
+- ``"paper"``: the paper's recursion (``medax.mesh.split``): split along the medial axis,
   recurse on both halves; the families' traced splines are then crossed
-  (:mod:`medax.mesh.crossings`). Division counts that are not powers of two split unequally
+  (``medax.mesh.crossings``). Division counts that are not powers of two split unequally
   (curve ``floor(n/2)/n``); with ``size`` the paper's stopping rule applies.
 
 ``size`` sets the counts: ``n = ceil(longest of the two sides a family divides / size)``.
@@ -72,7 +72,7 @@ def divisions_for_size(region: Region, size: float) -> tuple[int, int]:
 
 
 #: Default node tolerance (x diagonal) of the ratio and angle methods: that of the tracer's
-#: splines (:data:`medax.tolerances.CURVE_TOL`).
+#: splines (``medax.tolerances.CURVE_TOL``).
 NODE_TOL = tolerances.CURVE_TOL
 #: Default tolerance (x diagonal) of the paper's traced splines.
 PAPER_TOL = 1e-9
@@ -89,29 +89,69 @@ def mesh_region(
     allow_inverted: bool = False,
     smooth: bool = False,
 ) -> QuadMesh:
-    """A structured quad mesh of ``region`` with ``divisions = (n1, n2)`` (along S0, along S1)
-    or edges of about ``size`` (region units). ``tol`` (relative to the diagonal) bounds the
-    node error of the crossings: for ``"ratio"`` and ``"angle"`` (default
-    :data:`NODE_TOL`) interior nodes of regions with free-form sides are interpolated from
-    the coarser level where its error estimate allows, and solved elsewhere (``0``: every
-    node solved; boundary nodes, regions of lines and arcs and regions on curved faces are
-    always solved); for
-    ``"paper"`` (default :data:`PAPER_TOL`) it is the traced splines' error. ``boundary``
-    (``"ratio"`` and ``"angle"`` methods): boundary nodes at equal arc length
-    (``"arclength"``) or at the ends of the curves of constant ratio (``"ratio"``), see
-    :mod:`medax.mesh.boundary_nodes`. ``fractions`` (``"ratio"`` and ``"angle"``, rule
-    ``"arclength"``, with ``divisions``): per side the arc-length fractions (n + 1,) of its
-    boundary nodes, from 0 to 1 in the side's direction (default ``k / n``), e.g. to put
-    nodes on the vertices inside a side made of several CAD edges.
+    """Build a structured quad mesh of a 4-sided region from its medial axes.
 
-    Planar grids with inverted or near-degenerate quads then go through the untangling
-    stage (:mod:`medax.mesh.untangle`; boundary nodes slide along their sides unless
-    ``fractions`` fix them); where the ratio grid cannot be solved, the stage starts from
-    the transfinite patch of the boundary nodes (``info["interior"] = "untangled"``). A grid
-    still inverted raises :class:`MeshError` naming the obstacle (a corner, a side), unless
-    ``allow_inverted``. ``smooth`` (planar regions): the quality pass
-    :func:`~medax.mesh.untangle.smooth_grid` (Winslow on the interior nodes, kept only where
-    it raises the 5th-percentile scaled Jacobian; ``info["smooth"]``)."""
+    Node ``(i, j)`` is the crossing of curve ``i`` of the family across ``(S1, S3)`` with
+    curve ``j`` of the family across ``(S0, S2)`` (numbering in
+    [medax.mesh.grid][medax.mesh.grid]). Planar grids with inverted or near-degenerate quads
+    then go through the untangling stage (``medax.mesh.untangle``; boundary nodes slide along
+    their sides unless ``fractions`` fix them); where the ratio grid cannot be solved, the
+    stage starts from the transfinite patch of the boundary nodes
+    (``info["interior"] = "untangled"``).
+
+    Parameters
+    ----------
+    region : Region
+        The region ([Region][medax.geometry.region.Region]), planar or on a surface.
+    divisions : tuple of int, optional
+        ``(n1, n2)``: the divisions along S0 and along S1, each in 1..4096. Give exactly one
+        of ``divisions`` and ``size``.
+    size : float, optional
+        Target edge length (region units):
+        ``n = ceil(longest of the two sides a family divides / size)``.
+    method : str
+        ``"ratio"`` (default): curves of constant distance ratio ``d_a / (d_a + d_b)``, node
+        ``(i, j)`` solved directly. ``"angle"``: angle-weighted ratio curves on lines and arcs
+        (kept for comparison). ``"paper"``: the paper's recursion along medial axes.
+    tol : float, optional
+        Node error of the crossings, relative to the diagonal. For ``"ratio"`` and ``"angle"``
+        (default [CURVE_TOL][medax.tolerances.CURVE_TOL]) interior nodes of regions with
+        free-form sides are interpolated from the coarser level where its error estimate
+        allows, and solved elsewhere (``0``: every node solved; boundary nodes, regions of
+        lines and arcs and regions on curved faces are always solved). For ``"paper"``
+        (default ``PAPER_TOL`` = 1e-9) it is the traced splines' error.
+    boundary : str
+        ``"ratio"`` and ``"angle"`` methods: boundary nodes at equal arc length
+        (``"arclength"``, default) or at the ends of the curves of constant ratio
+        (``"ratio"``, see ``medax.mesh.boundary_nodes``).
+    fractions : sequence of ndarray, optional
+        ``"ratio"`` and ``"angle"``, rule ``"arclength"``, with ``divisions``: per side the
+        arc-length fractions (n + 1,) of its boundary nodes, from 0 to 1 in the side's
+        direction (default ``k / n``), e.g. to put nodes on the vertices inside a side made
+        of several CAD edges.
+    allow_inverted : bool
+        Return a grid that is still inverted (with a warning) instead of raising.
+    smooth : bool
+        Planar regions: the quality pass ``medax.mesh.untangle.smooth_grid`` (Winslow on the
+        interior nodes, kept only where it raises the 5th-percentile scaled Jacobian;
+        ``info["smooth"]``).
+
+    Returns
+    -------
+    QuadMesh
+        The mesh ([QuadMesh][medax.mesh.grid.QuadMesh]); ``info`` holds counts, the
+        tolerance and ``time_s``.
+
+    Raises
+    ------
+    InputError
+        Unknown ``method`` or ``boundary``, both or neither of ``divisions`` and ``size``,
+        ``fractions`` without divisions or with another rule, divisions out of range, or a
+        negative ``tol`` (zero for ``"paper"``).
+    MeshError
+        The grid is still inverted and not ``allow_inverted``: the message names the
+        obstacle (a corner, a side).
+    """
     if method not in METHODS:
         raise InputError(f"unknown mesh method '{method}' (known: {', '.join(METHODS)})")
     if boundary not in BOUNDARY_RULES:
@@ -196,7 +236,7 @@ def mesh_region(
 def _refuse_stuck_corner(
     region: Region, params: FloatArray, n1: int, n2: int, sides: Sequence[Curve], slide: bool
 ) -> None:
-    """:class:`MeshError` before any untangling when a corner's quad cannot be convex (its
+    """``MeshError`` before any untangling when a corner's quad cannot be convex (its
     angle 180 degrees or more wherever the first boundary nodes slide; with ``slide``
     False where they are)."""
     if slide:

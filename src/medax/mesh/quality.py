@@ -26,15 +26,28 @@ import numpy as np
 from medax.errors import MeshError
 from medax.geometry._types import FloatArray, IntArray
 
-#: the metrics computed, in the order of :class:`QuadQuality`'s fields
 METRICS = ("scaled_jacobian", "aspect_ratio", "skew", "min_angle", "max_angle")
-#: a quad with scaled Jacobian below this counts as poor in the summary
+"""The metrics computed, in the order of [QuadQuality][medax.mesh.quality.QuadQuality]'s
+fields."""
 POOR_SCALED_JACOBIAN = 0.5
+"""A quad with scaled Jacobian below this counts as poor in the summary."""
 
 
 @dataclass(frozen=True)
 class QuadQuality:
-    """Per-quad metrics, each of shape ``(m,)`` (angles in degrees)."""
+    """Verdict metrics per quad, each of shape ``(m,)``.
+
+    Attributes
+    ----------
+    scaled_jacobian : ndarray
+        In [-1, 1]: 1 for a rectangle, < 0 inverted.
+    aspect_ratio : ndarray
+        In [1, inf).
+    skew : ndarray
+        In [0, 1].
+    min_angle, max_angle : ndarray
+        Interior angles (degrees).
+    """
 
     scaled_jacobian: FloatArray
     aspect_ratio: FloatArray
@@ -47,7 +60,7 @@ class QuadQuality:
         return {name: getattr(self, name) for name in METRICS}
 
     def summary(self) -> dict[str, Any]:
-        """Summary statistics, see :func:`summarize`."""
+        """Summary statistics, see [summarize][medax.mesh.quality.summarize]."""
         return summarize(self)
 
 
@@ -71,7 +84,25 @@ def _corners(points: FloatArray, quads: IntArray) -> FloatArray:
 
 
 def quad_quality(points: FloatArray, quads: IntArray) -> QuadQuality:
-    """Verdict metrics of ``quads`` (m, 4) node indices into ``points`` (n, 2|3)."""
+    """Measure the Verdict quality metrics of quads, all at once.
+
+    Parameters
+    ----------
+    points : ndarray
+        Nodes (n, 2) or (n, 3).
+    quads : ndarray
+        Node indices (m, 4) into ``points``.
+
+    Returns
+    -------
+    QuadQuality
+        The metrics per quad ([QuadQuality][medax.mesh.quality.QuadQuality]).
+
+    Raises
+    ------
+    MeshError
+        Arrays of the wrong shape, or a node index out of range.
+    """
     p = _corners(points, quads)
     edges = np.roll(p, -1, axis=1) - p  # L_k = P_{k+1} - P_k, (m, 4, dim)
     prev = np.roll(edges, 1, axis=1)  # L_{k-1}
@@ -109,11 +140,21 @@ def quad_quality(points: FloatArray, quads: IntArray) -> QuadQuality:
 
 
 def summarize(q: QuadQuality) -> dict[str, Any]:
-    """Summary of per-quad metrics.
+    """Summarise per-quad metrics over the finite values.
 
-    For each metric: ``min``, ``p5`` (5th percentile), ``mean``, ``p95``, ``max``; plus
-    ``n_quads``, ``n_inverted`` (scaled Jacobian <= 0) and ``n_sj_below_0_5`` (scaled
-    Jacobian < :data:`POOR_SCALED_JACOBIAN`). Plain Python floats and ints (JSON-ready).
+    Parameters
+    ----------
+    q : QuadQuality
+        The metrics per quad.
+
+    Returns
+    -------
+    dict
+        For each metric: ``min``, ``p5`` (5th percentile), ``mean``, ``p95``, ``max`` (NaN
+        when no value is finite); plus ``n_quads``, ``n_inverted`` (scaled Jacobian <= 0)
+        and ``n_sj_below_0_5`` (scaled Jacobian <
+        [POOR_SCALED_JACOBIAN][medax.mesh.quality.POOR_SCALED_JACOBIAN]). Plain Python floats
+        and ints (JSON-ready).
     """
     out: dict[str, Any] = {"n_quads": int(q.scaled_jacobian.size)}
     for name, values in q.as_dict().items():

@@ -27,10 +27,29 @@ def plot_axes(
     circles: int = 5,
     ax: Axes | None = None,
 ) -> Figure:
-    """Draw ``region`` (sides labelled S0..S3), each axis as its fitted B-spline with its
-    points, and ``circles`` equal-distance circles per axis (centre on the axis, radius
-    ``d1 = d2``, touching both constraints) into ``ax`` (a new figure when None); returns
-    the figure, written to ``path`` (PNG, SVG or PDF by the extension) when given."""
+    """Plot a region with its medial axes and equal-distance circles.
+
+    The sides are labelled S0..S3, each axis drawn as its fitted B-spline with its points;
+    each circle has its centre on the axis and radius ``d1 = d2``, touching both constraints.
+
+    Parameters
+    ----------
+    region : Region
+        The region ([Region][medax.geometry.region.Region]), drawn in the parameter plane.
+    axes : sequence of MedialAxis
+        Its axes ([MedialAxis][medax.axis.result.MedialAxis]).
+    path : str or Path, optional
+        Write the figure there (PNG, SVG or PDF by the extension).
+    circles : int
+        Equal-distance circles per axis.
+    ax : matplotlib Axes, optional
+        Draw into it (default: a new figure).
+
+    Returns
+    -------
+    Figure
+        The figure drawn into.
+    """
     from matplotlib.patches import Circle
 
     if ax is None:

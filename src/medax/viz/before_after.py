@@ -4,7 +4,8 @@ Faces come as triangle arrays ``(m, 3, 3)`` per face (``medax.cad.simplify.tesse
 Before: fillets removed in red, blends kept in black, the faces that absorb fillet halves each
 in its own colour, the rest grey. After: each merged face in the colour of its supporting
 face, the kept blends black, the rest grey, so both the merged faces and what stayed are
-visible. Face boundaries are outlined. Rendered by :func:`medax.viz.view3d.render_faces`.
+visible. Face boundaries are outlined. Rendered by
+[render_faces][medax.viz.view3d.render_faces].
 """
 
 from __future__ import annotations
@@ -22,14 +23,29 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 GREY = (0.78, 0.78, 0.8)
+"""Colour of untouched faces (key -1), RGB 0-1."""
 FILLET = (0.85, 0.2, 0.2)
+"""Colour of removed fillets (key -2), RGB 0-1."""
 KEPT = (0.12, 0.12, 0.12)
-#: pixels of each of the two views
+"""Colour of kept blends (key -3), RGB 0-1."""
 PANEL = (660, 600)
+"""Pixels of each of the two views."""
 
 
 def group_colour(key: int) -> tuple[float, float, float]:
-    """The colour of key ``key`` (see :func:`plot_before_after`), RGB 0-1."""
+    """Give the colour of a face's key.
+
+    Parameters
+    ----------
+    key : int
+        A key of [plot_before_after][medax.viz.before_after.plot_before_after]: ``-1`` grey,
+        ``-2`` red, ``-3`` black, ``k >= 0`` the ``k``-th colour of ``tab20`` (cyclic).
+
+    Returns
+    -------
+    tuple of float
+        The colour, RGB 0-1.
+    """
     from matplotlib import colormaps
 
     fixed = {-1: GREY, -2: FILLET, -3: KEPT}
@@ -48,13 +64,29 @@ def plot_before_after(
     title: str = "",
     fig: Figure | None = None,
 ) -> Figure:
-    """Draw both views into ``fig`` (a new figure when None) and return it; written to
-    ``path`` (PNG, SVG or PDF by extension) when given.
+    """Draw the before and after views of a simplification side by side.
 
-    ``before``/``after``: per face its triangles (m, 3, 3). ``before_colour[i]`` /
-    ``after_colour[j]``: colour key of each face, ``-1`` grey, ``-2`` fillet removed (red),
-    ``-3`` blend kept (black), ``k >= 0`` the ``k``-th colour of the qualitative map (same
-    key = same new face).
+    Both views share one camera frame (the bounding box of all faces).
+
+    Parameters
+    ----------
+    before, after : sequence of ndarray
+        Per face its triangles (m, 3, 3).
+    before_colour, after_colour : sequence of int
+        Colour key of each face: ``-1`` grey, ``-2`` fillet removed (red), ``-3`` blend kept
+        (black), ``k >= 0`` the ``k``-th colour of the qualitative map (same key = same new
+        face).
+    path : str or Path, optional
+        Write the figure there (PNG, SVG or PDF by the extension).
+    title : str
+        The figure's title.
+    fig : matplotlib Figure, optional
+        Draw into it (default: a new figure).
+
+    Returns
+    -------
+    Figure
+        The figure drawn into.
     """
     dpi = 110
     if fig is None:

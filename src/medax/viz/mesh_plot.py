@@ -21,10 +21,27 @@ def plot_mesh(
     title: str | None = None,
     ax: Axes | None = None,
 ) -> Figure:
-    """Draw the quads of ``mesh`` (in the parameter plane for a surface region, else in the
-    plane) filled by scaled Jacobian (0..1, colour bar), edges in black and the region's sides
-    on top, into ``ax`` (a new figure when None); returns the figure, written to ``path``
-    (PNG, SVG or PDF by the extension) when given."""
+    """Plot a structured quad mesh, quads filled by their scaled Jacobian.
+
+    Quads are drawn in the parameter plane (the plane itself for a planar region), filled by
+    scaled Jacobian (0..1, colour bar), edges in black, the region's sides on top.
+
+    Parameters
+    ----------
+    mesh : QuadMesh
+        The mesh ([QuadMesh][medax.mesh.grid.QuadMesh]).
+    path : str or Path, optional
+        Write the figure there (PNG, SVG or PDF by the extension).
+    title : str, optional
+        The title (default: the region, divisions, method and scaled Jacobian min and p5).
+    ax : matplotlib Axes, optional
+        Draw into it (default: a new figure).
+
+    Returns
+    -------
+    Figure
+        The figure drawn into.
+    """
     from matplotlib.collections import PolyCollection
 
     quality = mesh.quality()

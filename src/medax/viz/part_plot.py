@@ -23,10 +23,31 @@ def plot_part_mesh(
     title: str = "",
     ax: Axes | None = None,
 ) -> Figure:
-    """Draw ``quads`` (m, 4) over ``points`` (n, 3) in an axonometric view, opaque, filled by
-    ``values`` (m,) (the scaled Jacobian, 0..1, colour bar), quads outlined, into ``ax`` (a
-    new figure when None); returns the figure, written to ``path`` (PNG, SVG or PDF by the
-    extension) when given."""
+    """Plot a part's quad mesh in an axonometric view, quads filled by a value.
+
+    The view is opaque (one renderer, [render_faces][medax.viz.view3d.render_faces]), quads
+    outlined, with a colour bar.
+
+    Parameters
+    ----------
+    points : ndarray
+        Nodes (n, 3).
+    quads : ndarray
+        Node indices (m, 4).
+    values : ndarray
+        Value per quad (m,): the scaled Jacobian, coloured over 0..1.
+    path : str or Path, optional
+        Write the figure there (PNG, SVG or PDF by the extension).
+    title : str
+        The title.
+    ax : matplotlib Axes, optional
+        Draw into it (default: a new figure).
+
+    Returns
+    -------
+    Figure
+        The figure drawn into.
+    """
     from matplotlib import colormaps
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Normalize

@@ -1,13 +1,15 @@
 """The one 3D renderer of medax: opaque shaded faces, off-screen, into a matplotlib Axes.
 
-Inputs are plain arrays (no OCP here): :class:`Faces` (points, triangles, colours), polylines
+Inputs are plain arrays (no OCP here): [Faces][medax.viz.view3d.Faces] (points, triangles,
+colours), polylines
 for edges and axes. Triangles are shaded by a fixed light (Lambert) and hidden surfaces and
 lines removed with a small numpy z-buffer (an orthographic view), so the picture is opaque
 and correct where matplotlib's painter's algorithm would sort badly; lines are drawn only
 where they are visible. Cell outlines (quads of a mesh, faces of a part) are drawn where the
-visible cell changes from one pixel to the next. :func:`render_faces` is used by the
-classified part's view (:func:`render_part`), the before/after view and the part mesh plot.
-No backend is selected: figures are :class:`matplotlib.figure.Figure` objects, not pyplot's.
+visible cell changes from one pixel to the next. [render_faces][medax.viz.view3d.render_faces]
+is used by the classified part's view ([render_part][medax.viz.view3d.render_part]), the
+before/after view and the part mesh plot. No backend is selected: figures are
+``matplotlib.figure.Figure`` objects, not pyplot's.
 """
 
 from __future__ import annotations
@@ -36,9 +38,20 @@ EDGE_COLOUR = (0.1, 0.1, 0.1)
 
 
 class Faces(NamedTuple):
-    """Triangles to render: ``points`` (n, 3), ``triangles`` (m, 3) int, ``colour`` RGB 0-1
-    (3,) or one per triangle (m, 3); ``cells`` (m,) int: outlines are drawn between triangles
-    of different cells (None: one cell, outlined only against other :class:`Faces`)."""
+    """Triangles to render, with their colours and cells.
+
+    Attributes
+    ----------
+    points : ndarray
+        Vertices (n, 3).
+    triangles : ndarray
+        Vertex indices (m, 3), int.
+    colour : array_like
+        RGB 0-1: one (3,) or one per triangle (m, 3).
+    cells : ndarray or None
+        Cell of each triangle (m,), int: outlines are drawn between triangles of different
+        cells (None: one cell, outlined only against other ``Faces``).
+    """
 
     points: FloatArray
     triangles: IntArray
@@ -57,12 +70,31 @@ def render_faces(
     dpi: int = 120,
     light: float = 0.7,
 ) -> Figure:
-    """Render ``faces`` opaquely into ``ax`` (a new figure of ``size`` pixels when None) and
-    return its figure.
+    """Render triangles opaquely, with hidden surfaces and lines removed.
 
-    ``lines``: groups ``(polylines (k, 3), RGB, width)`` drawn where visible; ``outline``:
-    dark pixels where the visible cell changes; ``view`` = (elevation, azimuth) in degrees;
-    ``light``: share of the colour that depends on the light (0: flat colours).
+    Parameters
+    ----------
+    faces : sequence of Faces
+        The triangles to render ([Faces][medax.viz.view3d.Faces]).
+    ax : matplotlib Axes, optional
+        Draw into it (default: a new figure of ``size`` pixels).
+    lines : sequence of tuple
+        Groups ``(polylines (k, 3), RGB, width)``, drawn where visible.
+    outline : bool
+        Darken the pixels where the visible cell changes.
+    view : tuple of float
+        ``(elevation, azimuth)`` of the orthographic camera, in degrees.
+    size : tuple of int
+        Image size in pixels ``(width, height)``.
+    dpi : int
+        Dots per inch of a new figure.
+    light : float
+        Share of the colour that depends on the light (0: flat colours).
+
+    Returns
+    -------
+    Figure
+        The figure drawn into.
     """
     from matplotlib.collections import LineCollection
 
@@ -93,13 +125,35 @@ def render_part(
     dpi: int = 120,
     ax: Axes | None = None,
 ) -> Figure:
-    """View of a classified part: faces coloured by class, visible edges, fillet axes, a
-    legend with the count per class. Returns the figure; written to ``path`` (PNG, SVG or
-    PDF by extension) when given.
+    """Render a classified part: faces coloured by class, visible edges and fillet axes.
 
-    ``faces``: ``(class name, points (n, 3), triangles (m, 3) int)`` per face; ``edges``
-    and ``axes``: polylines (k, 3). ``view`` = (elevation, azimuth) in degrees; ``size``
-    in pixels.
+    A legend gives the count per class.
+
+    Parameters
+    ----------
+    faces : sequence of tuple
+        Per face ``(class name, points (n, 3), triangles (m, 3) int)``.
+    path : str or Path, optional
+        Write the figure there (PNG, SVG or PDF by the extension).
+    edges, axes : sequence of ndarray
+        Polylines (k, 3) of the edges and of the fillets' medial axes.
+    title : str
+        The title.
+    counts : dict of str to int, optional
+        Faces per class, for the legend.
+    view : tuple of float
+        ``(elevation, azimuth)`` in degrees.
+    size : tuple of int
+        Image size in pixels ``(width, height)``.
+    dpi : int
+        Dots per inch of a new figure.
+    ax : matplotlib Axes, optional
+        Draw into it (default: a new figure).
+
+    Returns
+    -------
+    Figure
+        The figure drawn into.
     """
     from matplotlib.patches import Patch
 
@@ -122,15 +176,40 @@ def render_part(
 
 
 def save(fig: Figure, path: str | Path | None, **kwargs: Any) -> None:
-    """Write ``fig`` to ``path`` (format by extension, PNG when none) unless it is None."""
+    """Write a figure when given a path (format by extension, PNG when none).
+
+    Parameters
+    ----------
+    fig : Figure
+        The figure.
+    path : str or Path or None
+        Where to write it; None writes nothing.
+    **kwargs
+        Passed to ``Figure.savefig``.
+    """
     if path is not None:
         out = Path(path)
         fig.savefig(out, format=out.suffix.lstrip(".").lower() or "png", **kwargs)
 
 
 def new_figure(figsize: tuple[float, float], dpi: int = 100) -> Figure:
-    """A figure not registered with pyplot: no backend is selected or switched, nothing
-    needs closing, and a notebook displays it when it is returned."""
+    """Create a figure not registered with pyplot.
+
+    No backend is selected or switched, nothing needs closing, and a notebook displays it
+    when it is returned.
+
+    Parameters
+    ----------
+    figsize : tuple of float
+        ``(width, height)`` in inches.
+    dpi : int
+        Dots per inch.
+
+    Returns
+    -------
+    Figure
+        The new figure.
+    """
     from matplotlib.figure import Figure
 
     return Figure(figsize=figsize, dpi=dpi)

@@ -1,10 +1,11 @@
 """The interactive 3D view in HTML: a viewer element holding models (``view3d`` data of
-:mod:`medax.cad.view_data`) and the WebGL script (``webview.js``, shipped with medax) that
-draws them. Everything is inlined: the page loads nothing from the network.
+[medax.cad.view_data][medax.cad.view_data]) and the WebGL script (``webview.js``, shipped with
+medax) that draws them. Everything is inlined: the page loads nothing from the network.
 
-:func:`viewer_html` gives the element (one viewer per page; a selector switches between its
-models); :func:`page` a whole page; :data:`ERRORS_HTML` the element and handler that record
-script errors in the page, for headless tests.
+[viewer_html][medax.viz.webview.viewer_html] gives the element (one viewer per page; a
+selector switches between its models); [page][medax.viz.webview.page] a whole page;
+[ERRORS_HTML][medax.viz.webview.ERRORS_HTML] the element and handler that record script
+errors in the page, for headless tests.
 """
 
 from __future__ import annotations
@@ -27,18 +28,19 @@ STYLE = """
 .mx-info{font-size:13px;min-height:1.4em;font-family:ui-monospace,monospace}
 #medax-errors{color:#b00;white-space:pre-wrap}
 """
-#: first thing in <body>: records script errors into the page (read by the headless test)
 ERRORS_HTML = (
     '<pre id="medax-errors" hidden></pre><script>window.addEventListener("error",function(e){'
     'var b=document.getElementById("medax-errors");b.hidden=false;b.appendChild('
     'document.createTextNode((e.message||"error")+" ("+(e.filename||"")+":"+(e.lineno||0)+")\\n"'
     "))});</script>"
 )
+"""First thing in ``<body>``: records script errors into the page (read by the headless
+test)."""
 
 
 @cache
 def viewer_script() -> str:
-    """The viewer's JavaScript (``medax/viz/webview.js``)."""
+    """Read the viewer's JavaScript (``medax/viz/webview.js``, cached)."""
     return (resources.files("medax.viz") / "webview.js").read_text(encoding="utf-8")
 
 
@@ -48,8 +50,20 @@ def _json_in_script(data: Mapping[str, Any]) -> str:
 
 
 def viewer_html(models: Sequence[tuple[str, Mapping[str, Any]]], element_id: str = "view") -> str:
-    """The viewer element with ``models`` (label, view data) and its script; empty text
-    when there is no model."""
+    """Build the viewer element with its models and script.
+
+    Parameters
+    ----------
+    models : sequence of tuple
+        ``(label, view data)`` per model; a selector switches between several.
+    element_id : str
+        The element's HTML id (one viewer per page).
+
+    Returns
+    -------
+    str
+        The HTML; empty text when there is no model.
+    """
     if not models:
         return ""
     e = html.escape
@@ -72,7 +86,22 @@ def viewer_html(models: Sequence[tuple[str, Mapping[str, Any]]], element_id: str
 
 
 def page(title: str, body: str, style: str = "") -> str:
-    """A whole HTML page with the viewer's style and the error recorder."""
+    """Wrap a body into a whole HTML page with the viewer's style and the error recorder.
+
+    Parameters
+    ----------
+    title : str
+        The page title (escaped).
+    body : str
+        HTML of the body.
+    style : str
+        CSS added to the viewer's.
+
+    Returns
+    -------
+    str
+        The page.
+    """
     return (
         '<!DOCTYPE html><html lang="en"><head><meta charset="utf-8">'
         f"<title>{html.escape(title)}</title><style>{STYLE}{style}</style></head>"
@@ -81,6 +110,19 @@ def page(title: str, body: str, style: str = "") -> str:
 
 
 def view_page(models: Sequence[tuple[str, Mapping[str, Any]]], title: str) -> str:
-    """A page with only the viewer (``medax classify/simplify --view3d FILE.html``)."""
+    """Build a page with only the viewer (``medax classify/simplify --view3d FILE.html``).
+
+    Parameters
+    ----------
+    models : sequence of tuple
+        ``(label, view data)`` per model.
+    title : str
+        The page title and heading.
+
+    Returns
+    -------
+    str
+        The page.
+    """
     body = f"<h2>{html.escape(title)}</h2>{viewer_html(models)}"
     return page(title, body, "body{font:14px system-ui,sans-serif;margin:1em}")
