@@ -1,12 +1,13 @@
 """Fillet simplification of a solid (the paper's section 3, steps 3 to 5).
 
-:func:`simplify` splits every fillet it can handle along its medial curve, merges each half
-into its supporting face on one exact surface, rebuilds the solid on shared edges and
-validates it against the original. Fillets it cannot handle are kept, each with its reason;
-when the rebuilt solid fails validation the failing fillets themselves are found by
-bisection (halves of the fillets added to what already rebuilds) and kept, their neighbours
-still simplified. The input solid is never modified and an invalid solid is
-never returned: at worst the result is the input itself with every fillet kept.
+[simplify][medax.cad.simplify.pipeline.simplify] splits every fillet it can handle along
+its medial curve, merges each half into its supporting face on one surface (exact where
+the geometry allows, fitted otherwise), rebuilds the solid on shared edges and validates it
+against the original. Fillets it cannot handle are kept, each with its reason; when the
+rebuilt solid fails validation the failing fillets themselves are found (the failure
+blamed on their faces, else by bisection) and kept, their neighbours still simplified. The
+input solid is never modified and an invalid solid is never returned: at worst the result
+is the input itself with every fillet kept.
 """
 
 from __future__ import annotations
@@ -90,9 +91,19 @@ FITTED = "fitted"
 
 @dataclass(frozen=True)
 class FaceGroup:
-    """A face of the result and what it came from: original faces used ``whole`` and the
-    fillet faces of which one ``half`` was absorbed; ``surface`` is ``extrusion``,
-    ``revolution`` (new exact surfaces) or ``original``."""
+    """A face of the result and what it came from.
+
+    Attributes
+    ----------
+    new_face : int
+        Index (0-based) of the face in the result.
+    whole : tuple of int
+        Original faces it contains whole.
+    halves : tuple of int
+        Fillet faces of which it absorbed a half.
+    surface : str
+        ``extrusion``, ``revolution`` (new exact surfaces), ``fitted`` or ``original``.
+    """
 
     new_face: int
     whole: tuple[int, ...]
@@ -102,11 +113,31 @@ class FaceGroup:
 
 @dataclass
 class SimplifyResult:
-    """Outcome of :func:`simplify` (see :meth:`report` for the JSON form).
+    """Outcome of [simplify][medax.cad.simplify.pipeline.simplify]; its JSON form is
+    [report][medax.cad.simplify.pipeline.SimplifyResult.report].
 
-    ``volume_before``/``volume_after``: by :func:`.validate.volume`; when no rebuild was
-    measured (nothing removed, every attempt refused before its checks) both are OCCT's
-    default integrator's, and equal.
+    Attributes
+    ----------
+    shape : TopoDS_Shape
+        The simplified solid (the input itself when nothing was removed).
+    faces_before, faces_after : int
+        Face counts of the input and the result.
+    blends_removed : list of int
+        Original indices of the fillets and corner blends removed.
+    blends_kept : list of (int, str)
+        Original index and reason of every blend kept.
+    valid : bool
+        ``BRepCheck_Analyzer`` validity of the result.
+    volume_before, volume_after : float
+        Volumes (length unit cubed) by two integrators that agree; when no rebuild was
+        measured both are OCCT's default integrator's, and equal.
+    max_deviation, diagonal : float
+        Largest two-sided distance between old and new faces, and the part's diagonal
+        (length unit).
+    face_groups : list of FaceGroup
+        What each face of the result came from.
+    time_s : float
+        Wall time of the run, s.
     """
 
     shape: Any
@@ -143,7 +174,15 @@ class SimplifyResult:
         )
 
     def report(self) -> dict[str, Any]:
-        """The JSON-ready report (keys of the issue)."""
+        """The JSON-ready report.
+
+        Returns
+        -------
+        dict
+            Face and blend counts, kept blends with radius and reason, the reasons grouped,
+            validity, volume, area, deviation and fit measures, face groups and time (the
+            ``simplify-report`` schema's body).
+        """
         return {
             "faces_before": self.faces_before,
             "faces_after": self.faces_after,
@@ -265,10 +304,25 @@ def simplify(
 ) -> SimplifyResult:
     """Simplify the fillets of ``shape`` described by ``blends``.
 
-    ``tol``: deviation tolerance relative to the diagonal. ``progress`` receives one-line
-    messages (the CLI prints them on stderr). ``time_budget`` (s) bounds the search for the
-    failing fillets when the rebuild with all of them fails; fillets not tried by then are
-    kept, with that reason.
+    Parameters
+    ----------
+    shape : TopoDS_Shape
+        One solid; it is not modified.
+    blends : BlendInput
+        The fillets and corner blends to remove, with their supporting faces (from a
+        classification: ``specs_from_classification``).
+    tol : float
+        Deviation tolerance relative to the part's diagonal.
+    progress : callable, optional
+        Receives one-line messages (the CLI prints them on stderr); default: logging.
+    time_budget : float
+        Seconds the search for the failing fillets may take when the rebuild with all of
+        them fails; fillets not tried by then are kept, with that reason.
+
+    Returns
+    -------
+    SimplifyResult
+        The validated solid and what was removed and kept.
     """
     t0 = time.perf_counter()
     say = progress or (lambda msg: log.info(msg))

@@ -1,8 +1,8 @@
 """Write a shape as STEP (AP214), IGES (5.3, B-rep faces) or OCCT BRep, atomically.
 
-The format comes from the extension (:data:`SHAPE_SUFFIXES`); each writer writes to a
-temporary file beside the target (:func:`medax.io_utils.atomic_path`), then renames it.
-STEP faces can carry colours and names (:mod:`medax.cad.xcaf`).
+The format comes from the extension (``SHAPE_SUFFIXES``); each writer writes to a
+temporary file beside the target (``medax.io_utils.atomic_path``), then renames it.
+STEP faces can carry colours and names ([medax.cad.xcaf][medax.cad.xcaf]).
 """
 
 from __future__ import annotations
@@ -58,7 +58,25 @@ def write_shape(
 
 
 def write_step(shape: Any, path: str | Path) -> Path:
-    """Write ``shape`` to ``path`` as STEP, whatever its extension."""
+    """Write ``shape`` to ``path`` as STEP (AP214), whatever its extension, atomically.
+
+    Parameters
+    ----------
+    shape : TopoDS_Shape
+        The shape to write.
+    path : str or Path
+        The target; written through a temporary file beside it, then renamed.
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    CadError
+        OCCT failed to write (the target is then untouched).
+    """
     from medax.cad.reader import quiet_occt
 
     with atomic_path(path) as tmp, quiet_occt():
