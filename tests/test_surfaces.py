@@ -195,3 +195,31 @@ def test_nurbs_evaluation_in_chunks_is_the_same(monkeypatch):
     monkeypatch.setattr(surfaces, "PARTS_CHUNK", 64)
     for a, b in zip(whole, surf.jet(p), strict=True):
         assert np.array_equal(a, b)
+
+
+@pytest.mark.parametrize("degree", [1, 2, 3, 5, 9, 13])
+def test_basis_and_derivative_equal_scipy(degree):
+    """The compiled Cox-de Boor values and first derivatives equal scipy's B-spline basis
+    (each function evaluated as a B-spline with one unit coefficient), double knots and the
+    knots themselves included."""
+    from scipy.interpolate import BSpline as SciBSpline
+
+    rng = np.random.default_rng(degree)
+    inner = np.sort(rng.uniform(0.0, 1.0, 6))
+    if degree > 1:  # a double knot (scipy has no derivative of a C-1 linear spline)
+        inner[2] = inner[1]
+    kn = np.concatenate([np.zeros(degree + 1), inner, np.ones(degree + 1)]) * 3.0 - 1.0
+    t = np.concatenate([rng.uniform(-1.0, 2.0, 200), kn])
+    span, vals, ders = basis_and_derivative(kn, degree, t)
+    n_ctrl = kn.size - degree - 1
+    for r in range(degree + 1):
+        k = span - degree + r  # the index of the r-th non-zero function at each point
+        for i in np.unique(k):
+            c = np.zeros(n_ctrl)
+            c[i] = 1.0
+            f = SciBSpline(kn, c, degree)
+            at = k == i
+            x = t[at]
+            assert np.max(np.abs(vals[at, r] - f(x))) < 1e-12
+            scale = max(1.0, float(np.max(np.abs(f.derivative()(x)))))
+            assert np.max(np.abs(ders[at, r] - f.derivative()(x))) < 1e-11 * scale

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from medax.errors import InputError
+from medax.geometry import kernels
 from medax.geometry._types import FloatArray
 from medax.geometry.bspline import POWER_BASIS_MAX_DEGREE, BSpline
 
@@ -299,7 +300,8 @@ def basis_and_derivative(
 
     ``knots`` is the full (clamped or not) knot vector with repeated entries. Returns the
     span index (n,) ``i`` (functions ``N_{i-p..i}`` are non-zero), values (n, p+1) and
-    derivatives (n, p+1). Vectorised Cox-de Boor (The NURBS Book, A2.2 and A2.3). Outside
+    derivatives (n, p+1). Cox-de Boor (The NURBS Book, A2.2 and A2.3), compiled
+    ([basis_rows][medax.geometry.kernels.basis_rows]). Outside
     the domain ``t`` is clamped to it, or with ``extrapolate`` the end spans' polynomials
     are continued.
     """
@@ -313,41 +315,8 @@ def basis_and_derivative(
         t = np.clip(t, lo, hi)
     span = np.searchsorted(kn, t, side="right") - 1
     span = np.clip(span, p, n_ctrl - 1)
-    nn = t.size
-    # the tables with the points last: every step below is on contiguous rows (with the
-    # points first, a degree-13 blend's recursion was strided and 3x slower)
-    left = np.zeros((p + 1, nn))
-    right = np.zeros((p + 1, nn))
-    # ndu[j, r]: table of the NURBS Book; basis values of degree j in row j
-    ndu = np.zeros((p + 1, p + 1, nn))
-    ndu[0, 0] = 1.0
-    with np.errstate(invalid="ignore", divide="ignore"):
-        for j in range(1, p + 1):
-            left[j] = t - kn[span + 1 - j]
-            right[j] = kn[span + j] - t
-            saved = np.zeros(nn)
-            for r in range(j):
-                ndu[j, r] = right[r + 1] + left[j - r]  # knot differences
-                denom = ndu[j, r]
-                temp = np.where(denom != 0.0, ndu[r, j - 1] / denom, 0.0)
-                ndu[r, j] = saved + right[r + 1] * temp
-                saved = left[j - r] * temp
-            ndu[j, j] = saved
-        values = ndu[:, p].T.copy()  # N_{i-p+r, p} for r = 0..p
-        ders = np.zeros((nn, p + 1))
-        if p > 0:
-            # N'_{k,p} = p (N_{k,p-1} / (u_{k+p} - u_k) - N_{k+1,p-1} / (u_{k+p+1} - u_{k+1}))
-            lower = ndu[:p, p - 1]  # N_{i-p+1+r, p-1} for r = 0..p-1
-            for r in range(p + 1):
-                k = span - p + r
-                acc = np.zeros(nn)
-                if r >= 1:
-                    d = kn[k + p] - kn[k]
-                    acc += np.where(d != 0.0, lower[r - 1] / d, 0.0)
-                if r <= p - 1:
-                    d = kn[k + p + 1] - kn[k + 1]
-                    acc -= np.where(d != 0.0, lower[r] / d, 0.0)
-                ders[:, r] = p * acc
+    kernels.announce_compile()
+    values, ders = kernels.basis_rows(kn, p, t.ravel(), span.ravel().astype(np.int64))
     return span, values, ders
 
 
