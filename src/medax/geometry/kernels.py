@@ -270,6 +270,23 @@ def _corner(
 
 
 @njit(cache=True, error_model="numpy")
+def _table_d2(ct: FloatArray, pp: FloatArray, x: FloatArray, i: int, d2: FloatArray) -> None:
+    """Into ``d2`` (m,): ``|x_i - p_j|^2 - |x_i|^2`` for the table's samples ``p_j``
+    (``ct`` (dim, m) their coordinates, ``pp`` (m,) their squared norms; the per-point
+    constant does not move the minima), a loop over contiguous rows per coordinate."""
+    m, dim = ct.shape[1], ct.shape[0]
+    x0 = x[i, 0]
+    for j in range(m):
+        d2[j] = ct[0, j] * x0
+    for d in range(1, dim):
+        xd = x[i, d]
+        for j in range(m):
+            d2[j] += ct[d, j] * xd
+    for j in range(m):
+        d2[j] = pp[j] - 2.0 * d2[j]
+
+
+@njit(cache=True, error_model="numpy")
 def candidates(ct: FloatArray, pp: FloatArray, bounds: np.ndarray, x: FloatArray, k: int):  # type: ignore[no-untyped-def]
     """Indices (n, curves, k) of the ``k`` nearest local minima of the sampled distance of
     each point ``x`` (n, dim; centred as the samples) on each curve; samples ``ct``
@@ -283,17 +300,7 @@ def candidates(ct: FloatArray, pp: FloatArray, bounds: np.ndarray, x: FloatArray
     d2 = np.empty(m)
     best_v = np.empty(k)
     for i in range(n):
-        # |x - p|^2 - |x|^2 (the per-point constant does not move the minima), a loop over
-        # contiguous rows per coordinate (vectorised)
-        x0 = x[i, 0]
-        for j in range(m):
-            d2[j] = ct[0, j] * x0
-        for d in range(1, dim):
-            xd = x[i, d]
-            for j in range(m):
-                d2[j] += ct[d, j] * xd
-        for j in range(m):
-            d2[j] = pp[j] - 2.0 * d2[j]
+        _table_d2(ct, pp, x, i, d2)
         for c in range(nc):
             lo, hi = bounds[c], bounds[c + 1]
             cnt = 0
@@ -569,15 +576,7 @@ def certify_rows(  # type: ignore[no-untyped-def]
         xx = 0.0
         for d in range(dim):
             xx += x[i, d] * x[i, d]
-        x0 = x[i, 0]
-        for j in range(m):
-            d2[j] = ct[0, j] * x0
-        for d in range(1, dim):
-            xd = x[i, d]
-            for j in range(m):
-                d2[j] += ct[d, j] * xd
-        for j in range(m):
-            d2[j] = pp[j] - 2.0 * d2[j]
+        _table_d2(ct, pp, x, i, d2)
         f = int(np.floor(t[i] / dt))
         other = np.inf
         for j in range(m):
