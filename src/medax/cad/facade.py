@@ -84,7 +84,7 @@ def simplify(
     -------
     SimplifyResult
         The simplified solid and its report
-        ([SimplifyResult][medax.cad.simplify.pipeline.SimplifyResult]).
+        ([SimplifyResult][medax.cad.simplify.result.SimplifyResult]).
 
     Raises
     ------

@@ -13,8 +13,8 @@ same algorithms as compiled loops over the points, one call per query:
   :func:`medax.geometry.curve.closest_near` on such tables;
 * :func:`candidates` and :func:`newton_rows` - the candidate search and one safeguarded
   Newton step for the curves without a polynomial table (their jets come from Python);
-* :func:`basis_rows` - B-spline basis values and derivatives by Cox-de Boor (high-degree
-  surfaces, whose power basis would lose digits).
+* ``basis_rows`` (:mod:`medax.geometry.basis_kernel`, announced and warmed up here with
+  the others) - B-spline basis values and derivatives by Cox-de Boor.
 
 Compiled with ``cache=True``: the first run after an install compiles (a few seconds, logged
 at INFO) and stores the machine code in ``__pycache__`` next to this file, or, where that is
@@ -33,6 +33,7 @@ import numpy as np
 from numba import njit
 
 from medax.geometry._types import FloatArray
+from medax.geometry.basis_kernel import basis_rows
 
 log = logging.getLogger(__name__)
 
@@ -698,49 +699,6 @@ def track_step_rows(  # type: ignore[no-untyped-def]
         tl = tol[i] if tol.size > 1 else tol[0]
         new[i], kap[i], done[i] = _track1(w, xs, i, t[i], tl, last, foot)
     return new, foot, kap, done
-
-
-# ---- B-spline basis ------------------------------------------------------------------------
-@njit(cache=True, error_model="numpy")
-def basis_rows(kn: FloatArray, p: int, t: FloatArray, span: np.ndarray):  # type: ignore[no-untyped-def]
-    """Values and first derivatives (n, p+1) of the non-zero basis functions
-    ``N_{s-p..s}`` at ``t`` (n,) in spans ``span`` (n,) of the full knot vector ``kn``:
-    the Cox-de Boor recursion (The NURBS Book, A2.2 and A2.3) point by point, in the order
-    of operations of the vectorised recursion it replaces (its results to the last bit)."""
-    n = t.size
-    values = np.empty((n, p + 1))
-    ders = np.zeros((n, p + 1))
-    left = np.zeros(p + 1)
-    right = np.zeros(p + 1)
-    ndu = np.zeros((p + 1, p + 1))
-    for i in range(n):
-        s, u = span[i], t[i]
-        ndu[0, 0] = 1.0
-        for j in range(1, p + 1):
-            left[j] = u - kn[s + 1 - j]
-            right[j] = kn[s + j] - u
-            saved = 0.0
-            for r in range(j):
-                ndu[j, r] = right[r + 1] + left[j - r]  # knot differences
-                denom = ndu[j, r]
-                temp = ndu[r, j - 1] / denom if denom != 0.0 else 0.0
-                ndu[r, j] = saved + right[r + 1] * temp
-                saved = left[j - r] * temp
-            ndu[j, j] = saved
-        for r in range(p + 1):
-            values[i, r] = ndu[r, p]
-        if p > 0:  # N'_{k,p} = p (N_{k,p-1} / (u_{k+p} - u_k) - N_{k+1,p-1} / (...))
-            for r in range(p + 1):
-                k = s - p + r
-                acc = 0.0
-                if r >= 1:
-                    d = kn[k + p] - kn[k]
-                    acc += ndu[r - 1, p - 1] / d if d != 0.0 else 0.0
-                if r <= p - 1:
-                    d = kn[k + p + 1] - kn[k + 1]
-                    acc -= ndu[r, p - 1] / d if d != 0.0 else 0.0
-                ders[i, r] = p * acc
-    return values, ders
 
 
 # ---- the first-run compile message --------------------------------------------------------

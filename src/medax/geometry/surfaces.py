@@ -26,6 +26,7 @@ import numpy as np
 from medax.errors import InputError
 from medax.geometry import kernels
 from medax.geometry._types import FloatArray
+from medax.geometry.basis_kernel import basis_rows
 from medax.geometry.bspline import POWER_BASIS_MAX_DEGREE, BSpline
 
 
@@ -301,7 +302,7 @@ def basis_and_derivative(
     ``knots`` is the full (clamped or not) knot vector with repeated entries. Returns the
     span index (n,) ``i`` (functions ``N_{i-p..i}`` are non-zero), values (n, p+1) and
     derivatives (n, p+1). Cox-de Boor (The NURBS Book, A2.2 and A2.3), compiled
-    ([basis_rows][medax.geometry.kernels.basis_rows]). Outside
+    (``medax.geometry.basis_kernel.basis_rows``). Outside
     the domain ``t`` is clamped to it, or with ``extrapolate`` the end spans' polynomials
     are continued.
     """
@@ -316,7 +317,7 @@ def basis_and_derivative(
     span = np.searchsorted(kn, t, side="right") - 1
     span = np.clip(span, p, n_ctrl - 1)
     kernels.announce_compile()
-    values, ders = kernels.basis_rows(kn, p, t.ravel(), span.ravel().astype(np.int64))
+    values, ders = basis_rows(kn, p, t.ravel(), span.ravel().astype(np.int64))
     return span, values, ders
 
 

@@ -13,7 +13,6 @@ is the input itself with every fillet kept.
 from __future__ import annotations
 
 import logging
-import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -41,8 +40,8 @@ from medax.cad.simplify.local_measure import (
 from medax.cad.simplify.medial import TRACED, Medial, medial_curve
 from medax.cad.simplify.mitre import mitre_keeps, mitre_pairs
 from medax.cad.simplify.occ import count, diagonal, shape_map
-from medax.cad.simplify.reasons import reason_counts
 from medax.cad.simplify.rebuild import build_solid
+from medax.cad.simplify.result import DEVIATION_SAMPLES, FaceGroup, SimplifyResult
 from medax.cad.simplify.ring import NOT_A_RING, ring_surface
 from medax.cad.simplify.search import Failure, halves_of, isolate, riders, volume_blame
 from medax.cad.simplify.specs import BlendInput, CornerSpec, FilletSpec
@@ -71,8 +70,6 @@ VOLUME_TOL = 1e-6
 #: and below the 1.8e-5 more area of a merged face with a 0.35 mm bump in one pcurve, which
 #: the analyzer and the sampled deviations passed.
 AREA_TOL = 5e-6
-#: The deviation check samples an n x n UV grid on every old and new face (kept inside).
-DEVIATION_SAMPLES = 8
 #: Geometric tolerance of the construction, relative to the diagonal.
 BUILD_TOL = tolerances.BUILD_TOL
 #: A fitted surface is fitted to this share of the deviation tolerance (measured), and
@@ -87,146 +84,6 @@ FITTED_DEVIATION_SAMPLES = 12
 ISOLATION_BUDGET = 300.0
 #: Marker in the surface table: this supporting plane gets a fitted surface per attempt.
 FITTED = "fitted"
-
-
-@dataclass(frozen=True)
-class FaceGroup:
-    """A face of the result and what it came from.
-
-    Attributes
-    ----------
-    new_face : int
-        Index (0-based) of the face in the result.
-    whole : tuple of int
-        Original faces it contains whole.
-    halves : tuple of int
-        Fillet faces of which it absorbed a half.
-    surface : str
-        ``extrusion``, ``revolution`` (new exact surfaces), ``fitted`` or ``original``.
-    """
-
-    new_face: int
-    whole: tuple[int, ...]
-    halves: tuple[int, ...]
-    surface: str
-
-
-@dataclass
-class SimplifyResult:
-    """Outcome of [simplify][medax.cad.simplify.pipeline.simplify]; its JSON form is
-    [report][medax.cad.simplify.pipeline.SimplifyResult.report].
-
-    Attributes
-    ----------
-    shape : TopoDS_Shape
-        The simplified solid (the input itself when nothing was removed).
-    faces_before, faces_after : int
-        Face counts of the input and the result.
-    blends_removed : list of int
-        Original indices of the fillets and corner blends removed.
-    blends_kept : list of (int, str)
-        Original index and reason of every blend kept.
-    valid : bool
-        ``BRepCheck_Analyzer`` validity of the result.
-    volume_before, volume_after : float
-        Volumes (length unit cubed) by two integrators that agree; when no rebuild was
-        measured both are OCCT's default integrator's, and equal.
-    max_deviation, diagonal : float
-        Largest two-sided distance between old and new faces, and the part's diagonal
-        (length unit).
-    face_groups : list of FaceGroup
-        What each face of the result came from.
-    time_s : float
-        Wall time of the run, s.
-    """
-
-    shape: Any
-    faces_before: int
-    faces_after: int
-    blends_removed: list[int]
-    blends_kept: list[tuple[int, str]]
-    valid: bool
-    volume_before: float
-    volume_after: float
-    max_deviation: float
-    diagonal: float
-    face_groups: list[FaceGroup]
-    time_s: float
-    medial_error: float = 0.0
-    fit_error: float = 0.0
-    fit_volume_rel_change: float = 0.0
-    area_rel_change: float = 0.0
-    default_volume_rel_change: float = 0.0
-    notes: list[str] = field(default_factory=list)
-    radii: dict[int, float | None] = field(default_factory=dict)
-
-    @property
-    def volume_rel_change(self) -> float:
-        """(after - before) / before."""
-        return (self.volume_after - self.volume_before) / self.volume_before
-
-    def __repr__(self) -> str:
-        return (
-            f"SimplifyResult(faces {self.faces_before} -> {self.faces_after}, "
-            f"{len(self.blends_removed)} blends removed, {len(self.blends_kept)} kept, "
-            f"valid {self.valid}, volume change {self.volume_rel_change:.1e}, "
-            f"deviation {self.max_deviation / self.diagonal:.1e} x diagonal, {self.time_s:.2f} s)"
-        )
-
-    def report(self) -> dict[str, Any]:
-        """The JSON-ready report.
-
-        Returns
-        -------
-        dict
-            Face and blend counts, kept blends with radius and reason, the reasons grouped,
-            validity, volume, area, deviation and fit measures, face groups and time (the
-            ``simplify-report`` schema's body).
-        """
-        return {
-            "faces_before": self.faces_before,
-            "faces_after": self.faces_after,
-            "blends_removed": sorted(self.blends_removed),
-            "blends_found": len(self.blends_removed) + len(self.blends_kept),
-            "blends_kept": [
-                {"face": f, "radius": self.radii.get(f), "reason": r}
-                for f, r in sorted(self.blends_kept)
-            ],
-            "kept_reasons": reason_counts(r for _, r in self.blends_kept),
-            "valid": self.valid,
-            "volume_before": self.volume_before,
-            "volume_after": self.volume_after,
-            "volume_rel_change": self.volume_rel_change,
-            "area_rel_change": self.area_rel_change,
-            # what FreeCAD and CadQuery would report: OCCT's default (fixed-order) integrator
-            "default_integrator_volume_rel_change": self.default_volume_rel_change,
-            "max_deviation": {
-                "absolute": self.max_deviation,
-                "relative_to_diagonal": self.max_deviation / self.diagonal,
-            },
-            "diagonal": self.diagonal,
-            "medial_equidistance_error": self.medial_error,
-            # null where a fitted face's side of the solid could not be told (no estimate)
-            "fit_volume_rel_change": (
-                self.fit_volume_rel_change if math.isfinite(self.fit_volume_rel_change) else None
-            ),
-            "max_fit_error": {
-                "absolute": self.fit_error,
-                "relative_to_diagonal": self.fit_error / self.diagonal,
-            },
-            "deviation_samples_per_face": DEVIATION_SAMPLES**2,
-            "face_groups": [
-                {
-                    "new_face": g.new_face,
-                    "original_faces": list(g.whole),
-                    "fillet_halves": list(g.halves),
-                    "surface": g.surface,
-                }
-                for g in self.face_groups
-            ],
-            "notes": self.notes,
-            "time_s": self.time_s,
-        }
 
 
 @dataclass
