@@ -17,7 +17,7 @@ points sit at the Greville abscissae (so ``x`` and ``y`` are reproduced exactly)
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -37,6 +37,7 @@ from OCP.GeomAbs import (
 from OCP.TopAbs import TopAbs_REVERSED, TopAbs_WIRE
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS
+from scipy.spatial import cKDTree
 
 from medax.cad.face_region import bspline_embedding, surface_embedding
 from medax.cad.simplify.occ import (
@@ -51,10 +52,19 @@ from medax.cad.simplify.occ import (
 from medax.geometry.polygon_grid import inside_grid
 from medax.geometry.surface_heights import graph_heights
 from medax.geometry.surfaces import NurbsSurface
-from medax.geometry.tensor_fit import MAX_COEFFICIENTS, HeightFitter, TensorFit, greville
+from medax.geometry.tensor_fit import (
+    CHECK_PER_SPAN,
+    MAX_COEFFICIENTS,
+    HeightFitter,
+    TensorFit,
+    _samples,
+    greville,
+)
 
 #: Samples per edge for the projected member boundaries.
 EDGE_SAMPLES = 48
+#: Most misfit points (the worst first) located on the members by :func:`_culprits`.
+CULPRIT_POINTS = 20_000
 #: Heights are taken where the member surface's normal is within this angle of the plane's
 #: (steeper points are dropped: the penalty continues the fit there).
 MAX_SLOPE_ANGLE = np.radians(70.0)
@@ -485,6 +495,19 @@ class GraphSetup:
     ey: Array
     n: Array
     fitter: HeightFitter
+    members: tuple[_Member, ...] = ()
+
+
+class Refusal(str):
+    """A fitted route's reason for refusing a merged face, with the members it is traced
+    to (``culprits``: indices into the members; empty when no member is to blame alone)."""
+
+    culprits: frozenset[int]
+
+    def __new__(cls, why: str, culprits: Iterable[int] = ()) -> Refusal:
+        obj = super().__new__(cls, why)
+        obj.culprits = frozenset(culprits)
+        return obj
 
 
 def graph_setup(plane_face: Any, members: Sequence[Any], geom_tol: float) -> GraphSetup | str:
@@ -531,7 +554,7 @@ def graph_setup(plane_face: Any, members: Sequence[Any], geom_tol: float) -> Gra
 
     xb, yb = _breaks(ms, geom_tol)
     fitter = HeightFitter((lo[0], hi[0]), (lo[1], hi[1]), xb, yb, h, rmin / 4)
-    return GraphSetup(o, ex, ey, n, fitter)
+    return GraphSetup(o, ex, ey, n, fitter, tuple(ms))
 
 
 def graph_surface(
@@ -558,18 +581,23 @@ def graph_surface(
     o, ex, ey, n = setup.o, setup.ex, setup.ey, setup.n
     fit = setup.fitter.fit(fit_tol, levels=1 if probe else 4)
     if fit is None:
-        return (
+        return Refusal(
             f"the fitted surface would need more than {MAX_COEFFICIENTS} coefficients "
-            "(curved pieces spread over the whole face, e.g. many filleted bosses)"
+            "(curved pieces spread over the whole face, e.g. many filleted bosses)",
+            _finest(setup.members),
         )
-    if not np.isfinite(fit.error):
-        return "the merged face is not a height field over its plane (steep or undefined)"
     limit = fit_tol if accept is None else max(accept, fit_tol)
+    if not np.isfinite(fit.error):
+        return Refusal(
+            "the merged face is not a height field over its plane (steep or undefined)",
+            _culprits(setup, fit, limit),
+        )
     if fit.error > limit and not probe:
-        return (
+        return Refusal(
             f"fitted surface error {fit.error:.2e} above {limit:.2e} (curvature jumps off the "
             "knot lines, e.g. along circles, a step at a cross edge, or a crease where two "
-            "fillets meet in a mitre)"
+            "fillets meet in a mitre)",
+            _culprits(setup, fit, limit),
         )
     outward = _outward_sign(plane_face, n)
     return FittedSurface(
@@ -578,6 +606,53 @@ def graph_surface(
         fit.spacing,
         outward * fit.volume if outward else float("nan"),
     )
+
+
+def _finest(members: Sequence[_Member]) -> frozenset[int]:
+    """The curved members of the smallest curvature radius (within 1 %): they set the fit's
+    knot spacing (a quarter of it). Empty when every curved member has it (keeping them all
+    is no partial answer)."""
+    curved = {i: m.radius for i, m in enumerate(members) if m.kind != "plane"}
+    if not curved:
+        return frozenset()
+    rmin = min(curved.values())
+    fine = frozenset(i for i, r in curved.items() if r <= 1.01 * rmin)
+    return fine if len(fine) < len(curved) else frozenset()
+
+
+def _culprits(setup: GraphSetup, fit: TensorFit, limit: float) -> frozenset[int]:
+    """The curved members the misfit of ``fit`` lies on: each check point inside the face
+    whose error is above ``limit`` (or whose height is undefined) goes to the nearest curved
+    member in the plane's projection (0 inside its boundary); a member is blamed when its
+    worst point is at least a quarter of the worst of all (a step or a crease dominates; a
+    member whose error only rides on it is tried again without it)."""
+    curved = [i for i, m in enumerate(setup.members) if m.kind != "plane"]
+    if not curved:
+        return frozenset()
+    xc, yc = _samples(fit.tx, CHECK_PER_SPAN), _samples(fit.ty, CHECK_PER_SPAN)
+    x, y = np.meshgrid(xc, yc, indexing="ij")
+    z, ok, inside = setup.fitter.h(x, y)
+    err = np.where(ok, np.abs(fit(xc, yc) - z), np.inf)
+    bad = inside & (err > limit)
+    if not bad.any():
+        return frozenset()
+    e = err[bad]
+    order = np.argsort(-e, kind="stable")[:CULPRIT_POINTS]
+    pts, e = np.column_stack([x[bad], y[bad]])[order], e[order]
+    dist = np.empty((len(curved), len(pts)))
+    for row, i in enumerate(curved):
+        m = setup.members[i]
+        d, _ = cKDTree(m.boundary).query(pts)
+        inner = m.outer.contains_points(pts)
+        for hole in m.inner:
+            inner &= ~hole.contains_points(pts)
+        dist[row] = np.where(inner, 0.0, d)
+    near = np.argmin(dist, axis=0)
+    worst = np.full(len(curved), -1.0)
+    np.maximum.at(worst, near, e)
+    top = worst.max()
+    blamed = worst >= (0.25 * top if np.isfinite(top) else np.inf)
+    return frozenset(curved[r] for r in np.flatnonzero(blamed))
 
 
 def _outward_sign(plane_face: Any, n: Array) -> float:

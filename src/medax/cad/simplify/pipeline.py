@@ -30,7 +30,13 @@ from medax import tolerances
 from medax._progress import log_progress
 from medax.cad.simplify.bridge import bridge_edge
 from medax.cad.simplify.corner import corner_arcs, plane_normal
-from medax.cad.simplify.fitted import FittedSurface, GraphSetup, graph_setup, graph_surface
+from medax.cad.simplify.fitted import (
+    FittedSurface,
+    GraphSetup,
+    Refusal,
+    graph_setup,
+    graph_surface,
+)
 from medax.cad.simplify.groups import Group, GroupError, build_groups
 from medax.cad.simplify.local_measure import (
     contributions,
@@ -491,7 +497,7 @@ def _fitted(job: _Job, split: Any, g: Group, probe: bool = False) -> FittedSurfa
                 setup = job.setups[skey]
                 flat = graph_surface(support, members, fit_tol, job.btol, probe, setup, accept)
                 if isinstance(flat, str) and _ring_applies(ring):
-                    flat = f"{flat}; ring route: {ring}"
+                    flat = Refusal(f"{flat}; ring route: {ring}", _culprits_of(flat))
                 job.cache[key] = flat
             else:
                 job.cache[key] = ring
@@ -550,9 +556,11 @@ def _fit_pass(job: _Job) -> None:
     """Check every fitted face on the full split, first cheaply (is it a height field at
     all?) until no face fails, then with the full fit; fillets of faces that fail are kept
     (with the reason) before the rebuild is tried, so bisection is not spent on them; so are
-    fillets that a group on the full split cannot be formed with (:class:`GroupError`)."""
+    fillets that a group on the full split cannot be formed with (:class:`GroupError`).
+    Where a face's misfit is traced to some of its blends, only those are kept and the face
+    is fitted again (each round keeps at least one blend, so the rounds end)."""
     for probe in (True, False):
-        for _ in range(len(job.surfaces) + 1):
+        for _ in range(len(job.specs) + len(job.corners) + 1):
             if not _fit_round(job, probe):
                 break
             _refresh_surfaces(job)
@@ -579,15 +587,23 @@ def _fit_round(job: _Job, probe: bool) -> bool:
     except CadError:
         return False  # the attempt will report it
     bad: dict[int, str] = {}
+    traced: dict[int, set[int]] = {}  # support -> the blends its misfit is traced to
     for g in groups:
         if g.support is not None and g.support in fitted:
             r = _fitted(job, split, g, probe)
             if isinstance(r, str):
                 bad[g.support] = r
+                traced[g.support] = {
+                    split.origin[g.members[i]] for i in _culprits_of(r) if i < len(g.members)
+                } & (set(job.specs) | set(job.corners))
     if not bad:
         return False
-    job.say(f"fitted surfaces failed on faces {sorted(bad)}: their fillets are kept")
+    job.say(f"fitted surfaces failed on faces {sorted(bad)}")
     for sup, why in bad.items():
+        culprits = traced[sup]
+        if culprits:  # the misfit lies on these blends' pieces: the others are tried again
+            _keep_culprits(job, sup, why, culprits)
+            continue
         for f, s in list(job.specs.items()):
             if sup in s.supporting:
                 job.specs.pop(f)
@@ -596,6 +612,27 @@ def _fit_round(job: _Job, probe: bool) -> bool:
                     job.no_surface[f] = sup
     _cascade(job.specs, job.corners, job.kept)
     return True
+
+
+def _culprits_of(why: str) -> frozenset[int]:
+    """The members a fitted route's refusal is traced to (none for a plain reason)."""
+    return why.culprits if isinstance(why, Refusal) else frozenset()
+
+
+def _keep_culprits(job: _Job, sup: int, why: str, culprits: set[int]) -> None:
+    """Keep the fillets and corner blends ``culprits`` whose pieces hold the misfit of
+    supporting face ``sup`` (reason ``why``); the other fillets of ``sup`` stay in."""
+    job.say(f"face {sup}: the misfit lies on blends {sorted(culprits)}; they are kept")
+    for f in sorted(culprits):
+        reason = f"supporting face {sup}: {why} (on this blend's piece)"
+        if f in job.corners:
+            job.corners.pop(f)
+            job.kept.setdefault(f, reason)
+        elif f in job.specs:
+            job.specs.pop(f)
+            if f not in job.kept:
+                job.kept[f] = reason
+                job.no_surface[f] = sup
 
 
 def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:

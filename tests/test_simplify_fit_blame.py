@@ -1,0 +1,63 @@
+"""A merged face whose fit fails is traced to the blend pieces that hold its misfit: those
+blends are kept and the others on the same face still go (truth: a part built with OCCT in
+which one fillet ends in a step that no smooth surface follows; OCCT's checks and
+BRepExtrema distances against the input)."""
+
+from __future__ import annotations
+
+import pytest
+from OCP.BRepAlgoAPI import BRepAlgoAPI_Fuse
+from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+from OCP.gp import gp_Pnt
+
+import medax.cad.parts as catalogue
+from medax.cad.classify import classify_solid
+from medax.cad.reader import heal
+from medax.cad.simplify import simplify, specs_from_classification
+from medax.cad.simplify.occ import faces_of
+from truth import assert_same_solid
+
+
+def _near(m, p) -> bool:  # type: ignore[no-untyped-def]
+    return bool(sum((a - b) ** 2 for a, b in zip(m, p, strict=True)) < 1e-12)
+
+
+@pytest.fixture(scope="module")
+def stepped():
+    """A box 10^3 on the corner of a box 10 x 10 x 10 below it (overlap 5 x 5): the concave
+    edge between the upper box's bottom and the lower box's side y = 5 ends at the upper
+    box's side x = 0, where the lower side continues past it (a step); the lower box's
+    vertical edge at x = -5, y = 5 lies on the same side face, far from the step. Both
+    filleted, r 1."""
+    upper = BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), 10.0, 10.0, 10.0).Shape()
+    lower = BRepPrimAPI_MakeBox(gp_Pnt(-5, -5, -10), 10.0, 10.0, 10.0).Shape()
+    fused = heal(BRepAlgoAPI_Fuse(upper, lower).Shape())
+    edges = catalogue._select(
+        fused, lambda m: _near(m, (2.5, 5.0, 0.0)) or _near(m, (-5.0, 5.0, -5.0))
+    )
+    assert len(edges) == 2
+    part = catalogue.fillet(fused, edges, 1.0, "stepped")
+    cls = classify_solid(heal(part.shape))
+    return part, cls, simplify(cls.shape, specs_from_classification(cls))
+
+
+@pytest.mark.slow
+def test_the_step_fillet_is_kept_and_its_neighbour_goes(stepped):
+    part, cls, r = stepped
+    specs = specs_from_classification(cls)
+    assert len(specs.fillets) == 2
+    faces = list(faces_of(cls.shape))
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+
+    axis = {
+        s.face: BRepAdaptor_Surface(faces[s.face]).Cylinder().Axis().Direction()
+        for s in specs.fillets
+    }
+    step = next(f for f, d in axis.items() if abs(d.X()) > 0.99)  # along x: the concave one
+    convex = next(f for f in axis if f != step)
+    assert r.blends_removed == [convex]
+    ((kept, why),) = r.blends_kept
+    assert kept == step
+    assert "on this blend's piece" in why and "fitted surface error" in why
+    assert r.valid and r.faces_after == r.faces_before - 1
+    assert_same_solid(part.shape, r, 6, 6)
