@@ -61,3 +61,23 @@ def test_the_step_fillet_is_kept_and_its_neighbour_goes(stepped):
     assert "on this blend's piece" in why and "fitted surface error" in why
     assert r.valid and r.faces_after == r.faces_before - 1
     assert_same_solid(part.shape, r, 6, 6)
+
+
+def test_a_fit_too_large_leaves_out_the_pieces_that_set_its_spacing():
+    """The knot spacing is a quarter of the smallest curvature radius: the pieces of that
+    radius are left out; when every curved piece has it, none is singled out."""
+    import numpy as np
+    from matplotlib.path import Path
+
+    from medax.cad.simplify.fitted import _finest, _Member
+
+    def member(kind: str, radius: float, x: float) -> _Member:
+        sq = np.array([[x - 1, -1], [x + 1, -1], [x + 1, 1], [x - 1, 1]], float)
+        return _Member(kind, np.zeros(3), np.zeros(3), radius, Path(sq), (), (sq,))
+
+    pieces = [member("plane", 0.0, 0.0)] + [member("cylinder", 2.0, x) for x in range(1, 5)]
+    assert _finest(pieces) == frozenset()
+    pieces[2] = member("torus", 0.5, 2.0)
+    pieces[4] = member("cylinder", 0.502, 4.0)  # within 1 %
+    assert _finest(pieces) == {2, 4}
+    assert _finest(pieces[:2]) == frozenset()  # one curved piece: nothing to single out
