@@ -79,6 +79,41 @@ def test_traced_medial_edge_equidistant_by_occt(slanted):
         assert np.linalg.norm([q.X() - p[0], q.Y() - p[1], q.Z() - p[2]]) < 1e-9 * m.radius
 
 
+def test_traced_medial_edge_taken_to_the_iso_line_tolerance(slanted, monkeypatch):
+    """A traced medial curve that misses ``rel_tol x radius`` with the most nodes is taken
+    when it is within ``accept`` (the tolerance an iso-line is accepted with: twice the
+    build tolerance or the input's own), and refused when it is not; its measured error
+    bounds OCCT's."""
+    import medax.cad.simplify.medial as medial
+    import medax.cad.simplify.traced as traced
+
+    _, _, face, edges, _ = slanted
+    monkeypatch.setattr(traced, "MAX_NODES", traced.NODES)  # one round: 24 nodes per span
+    calls = []
+
+    def spy(*args):  # type: ignore[no-untyped-def]
+        calls.append(args)
+        return traced.traced_medial_edge(*args)
+
+    monkeypatch.setattr(medial, "traced_medial_edge", spy)
+    m = medial_curve(face, *edges, rel_tol=1e-11)
+    (args,) = calls
+    accept = args[-1]
+    assert not isinstance(m, str), m
+    assert m.iso == TRACED and 1e-11 * m.radius < m.error <= accept
+    refused = traced.traced_medial_edge(*args[:-1], 0.5 * m.error)
+    assert isinstance(refused, str) and refused.startswith("traced medial curve error")
+    ad = BRepAdaptor_Curve(m.edge)
+    ts = np.linspace(ad.FirstParameter(), ad.LastParameter(), 41)
+    pts = [ad.Value(float(t)) for t in ts]
+    gap = [
+        abs(_occt_distance(np.array([p.X(), p.Y(), p.Z()]), edges[0])
+            - _occt_distance(np.array([p.X(), p.Y(), p.Z()]), edges[1]))
+        for p in pts
+    ]  # fmt: skip
+    assert max(gap) <= m.error * (1 + 1e-3) + 1e-13
+
+
 def test_traced_medial_edge_splits_the_fillet_in_two(slanted):
     cls, spec, _, _, m = slanted
     split = split_along(cls.shape, [m.edge])

@@ -191,8 +191,11 @@ def medial_curve(
                 "whose constraint side is a chain of edges (the traced route takes one edge)"
             )
         # a B-spline blend whose mid iso-line is off (a rolling ball between a plane and a
-        # slanted cylinder): the medial curve traced per cross-section, to rel_tol x radius
-        traced = traced_medial_edge(face, (edge1, edge2), k, cross, (lo, hi), rel_tol * radius)
+        # slanted cylinder): the medial curve traced per cross-section, to rel_tol x radius,
+        # or (with the most nodes) to the tolerance an iso-line is accepted with
+        traced = traced_medial_edge(
+            face, (edge1, edge2), k, cross, (lo, hi), rel_tol * radius, accept
+        )
         if isinstance(traced, str):
             return f"mid iso-line not equidistant ({err:.2e} > {rel_tol:g} x radius), {traced}"
         return Medial(traced[0], TRACED, float("nan"), traced[1], float(radius))

@@ -166,12 +166,14 @@ def traced_medial_edge(
     cross: tuple[float, float],
     along: tuple[float, float],
     tol: float,
+    accept: float = 0.0,
 ) -> tuple[Any, float] | str:
     """The traced medial edge of the B-spline blend ``face`` between smooth ``edges`` (on
     the iso-lines ``cross`` of parameter ``k``), over ``along`` = (lo, hi) of the other
     parameter: (edge with its 3-D curve and its pcurve on the face, measured error: the
     larger of the equidistance and the distance from the surface, length unit), or the
-    reason when the error stays above ``tol``."""
+    reason when the error stays above ``tol``, or above ``accept`` (length unit, when larger)
+    with the most nodes."""
     surf = BRep_Tool.Surface_s(face)
     curves = [edge_curve(e) for e in edges]
     if not isinstance(surf, Geom_BSplineSurface) or not all(
@@ -205,7 +207,7 @@ def traced_medial_edge(
         if err <= tol:
             break
         n *= 2
-    if err > tol:
+    if err > max(tol, accept):
         return f"traced medial curve error {err:.2e} above {tol:.2e} with {n // 2} nodes per span"
     curve3, curve2 = _geom_bspline(t3, c3), _geom_bspline(t2, c2)
     mk = BRepBuilderAPI_MakeEdge(curve3, lo, hi)
