@@ -258,6 +258,11 @@ class HeightFitter:
             )  # fmt: skip
         return self._fits[key]
 
+    def coarser(self, fit: TensorFit) -> TensorFit | None:
+        """The fit made with the most coefficients below ``fit``'s, None when there is none."""
+        made = [f for f in self._fits.values() if f is not None and f.coef.size < fit.coef.size]
+        return max(made, key=lambda f: f.coef.size, default=None)
+
     def fit(self, tol: float, levels: int = 5) -> TensorFit | None:
         """As :func:`fit_height` with this fitter's height and spacing."""
         return refine_both(self.fit_at, self.spacing, tol, levels)

@@ -63,6 +63,9 @@ from medax.geometry.tensor_fit import (
 
 #: Samples per edge for the projected member boundaries.
 EDGE_SAMPLES = 48
+#: A misfit point counts as stalled when the next finer fit left more than this share of
+#: its error (a cubic fit divides it by 4 - 16 per halving where the data are smooth).
+STALLED = 0.5
 #: Most misfit points (the worst first) located on the members by :func:`_culprits`.
 CULPRIT_POINTS = 20_000
 #: Heights are taken where the member surface's normal is within this angle of the plane's
@@ -625,7 +628,9 @@ def _culprits(setup: GraphSetup, fit: TensorFit, limit: float) -> frozenset[int]
     whose error is above ``limit`` (or whose height is undefined) goes to the nearest curved
     member in the plane's projection (0 inside its boundary); a member is blamed when its
     worst point is at least a quarter of the worst of all (a step or a crease dominates; a
-    member whose error only rides on it is tried again without it)."""
+    member whose error only rides on it is tried again without it). Where a coarser fit was
+    made, only the points whose error it did not halve count, when there are any: a step or
+    a crease stays, a curved piece not yet resolved by the knots converges."""
     curved = [i for i, m in enumerate(setup.members) if m.kind != "plane"]
     if not curved:
         return frozenset()
@@ -636,6 +641,10 @@ def _culprits(setup: GraphSetup, fit: TensorFit, limit: float) -> frozenset[int]
     bad = inside & (err > limit)
     if not bad.any():
         return frozenset()
+    prev = setup.fitter.coarser(fit)
+    if prev is not None:
+        stalled = bad & ~(err < STALLED * np.abs(prev(xc, yc) - z))
+        bad = stalled if stalled.any() else bad
     e = err[bad]
     order = np.argsort(-e, kind="stable")[:CULPRIT_POINTS]
     pts, e = np.column_stack([x[bad], y[bad]])[order], e[order]
