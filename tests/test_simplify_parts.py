@@ -348,23 +348,26 @@ def test_local_measures_match_whole_solids(box4):
     assert L.local_area_change(big, old, L._area(old, 1e-9), 5e-6) is None
 
 
-@pytest.mark.slow
-def test_box_far_from_the_origin():
-    """The 4-fillet box moved 1e9 mm away simplifies as at the origin, in seconds (it ran
-    past 300 s in validation): the checks work relative to the part, and the deviation is
-    what doubles hold there (1e9 carries about 1.2e-7 mm)."""
+def test_whole_solid_refusal_by_two_integrators(box4):
+    """A whole solid changed by more than the tolerance is refused with the change both
+    fast integrators find (a box 1.001x the size of a 40 x 30 x 20 one, and the scaled
+    simplified box, whose faces of extrusion take the slower route: 1.001^3 - 1 exactly
+    both), and a solid within it is accepted."""
     from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
-    from OCP.gp import gp_Trsf, gp_Vec
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.gp import gp_Pnt, gp_Trsf
 
-    part = P.box_vertical_fillets(40.0, 30.0, 20.0, 5.0)
+    from medax.cad.simplify.validate import volume_change, volumes
+
+    change = 1.001**3 - 1.0
+    dv, why = volume_change(BRepPrimAPI_MakeBox(40.04, 30.03, 20.02).Shape(), 24000.0, 1e-6)
+    assert why.startswith("volume changed by") and abs(dv - change) <= 1e-12
+    part, r = box4
+    v_old = volumes(part.shape)[0]
     t = gp_Trsf()
-    t.SetTranslation(gp_Vec(1e9, 1e9, 0.0))
-    far = BRepBuilderAPI_Transform(part.shape, t, True).Shape()
-    r = simplify(far, specs_from_blend_faces(far, part.blends))
-    assert (r.faces_before, r.faces_after) == (10, 6) and r.valid
-    assert abs(r.volume_rel_change) <= 1e-6
-    assert r.max_deviation <= 1e-5 * r.diagonal
-    c = check(r.shape)
-    assert c.valid and c.shells == 1 and c.closed
-    old_to_new, new_to_old = boundary_distances(far, r.shape, 5, 12)
-    assert max(old_to_new, new_to_old) <= 1e-5 * r.diagonal
+    t.SetScale(gp_Pnt(0.0, 0.0, 0.0), 1.001)
+    big = BRepBuilderAPI_Transform(r.shape, t, True).Shape()
+    dv, why = volume_change(big, v_old, 1e-6)
+    assert why.startswith("volume changed by") and abs(dv - change) <= 1e-9
+    dv, why = volume_change(r.shape, v_old, 1e-6)
+    assert why == "" and abs(dv) <= 1e-6
