@@ -81,3 +81,63 @@ def test_a_fit_too_large_leaves_out_the_pieces_that_set_its_spacing():
     pieces[4] = member("cylinder", 0.502, 4.0)  # within 1 %
     assert _finest(pieces) == {2, 4}
     assert _finest(pieces[:2]) == frozenset()  # one curved piece: nothing to single out
+
+
+@pytest.fixture(scope="module")
+def rib():
+    """A plate 40 x 30 x 5 with a rib 20 x 2 x 10 on top (x 10 - 30, y 14 - 16): the rib's
+    foot on its side y = 14 filleted (r 1) ends at the rib's end faces, where the plate
+    continues past it (a step on the plate's side); the plate's top edge at y = 0 filleted
+    too (r 1), on the same top face."""
+    plate = BRepPrimAPI_MakeBox(40.0, 30.0, 5.0).Shape()
+    rib_box = BRepPrimAPI_MakeBox(gp_Pnt(10, 14, 5), 20.0, 2.0, 10.0).Shape()
+    fused = heal(BRepAlgoAPI_Fuse(plate, rib_box).Shape())
+    edges = catalogue._select(
+        fused, lambda m: _near(m, (20.0, 14.0, 5.0)) or _near(m, (20.0, 0.0, 5.0))
+    )
+    assert len(edges) == 2
+    part = catalogue.fillet(fused, edges, 1.0, "rib")
+    cls = classify_solid(heal(part.shape))
+    return part, cls, simplify(cls.shape, specs_from_classification(cls))
+
+
+@pytest.mark.slow
+def test_a_fillet_ending_at_a_step_goes_whole_into_its_other_face(rib):
+    """The rib's foot fillet cannot share the plate's merged face (the step at its ends),
+    but its own piece holds that misfit: the plate is fitted with the edge fillet's half
+    alone, and the foot fillet goes whole into the rib's side, an exact extrusion."""
+    part, cls, r = rib
+    specs = specs_from_classification(cls)
+    assert len(specs.fillets) == 2
+    assert sorted(r.blends_removed) == sorted(s.face for s in specs.fillets)
+    assert r.blends_kept == []
+    assert any("merged whole" in n for n in r.notes)
+    assert r.valid and r.faces_after == r.faces_before - 2
+    assert_same_solid(part.shape, r, 6, 6)
+
+
+def test_medial_cross_parameters_are_those_of_the_smooth_edges(rib):
+    """The cross parameters a medial curve records (the whole-fillet route's profile runs
+    to the far one) are the iso-lines of the smooth edges: the surface there lies on them
+    (BRepExtrema), on a fillet surface bounded along its length (a cylinder)."""
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
+    from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+    from OCP.TopAbs import TopAbs_EDGE
+    from OCP.TopoDS import TopoDS
+
+    from medax.cad.simplify.medial import medial_curve
+    from medax.cad.simplify.occ import shape_map
+
+    _, cls, _ = rib
+    faces, emap = list(faces_of(cls.shape)), shape_map(cls.shape, TopAbs_EDGE)
+    for spec in specs_from_classification(cls).fillets:
+        edges = [TopoDS.Edge(emap.FindKey(i + 1)) for i in spec.smooth_edges]
+        m = medial_curve(faces[spec.face], *edges)
+        assert not isinstance(m, str), m
+        surf = BRep_Tool.Surface_s(faces[spec.face])
+        for c, edge in zip(m.cross, edges, strict=True):
+            for v in (2.0, 9.0):  # along the cylinder, inside both fillets' lengths
+                p = surf.Value(c, v) if m.iso == "u" else surf.Value(v, c)
+                dist = BRepExtrema_DistShapeShape(BRepBuilderAPI_MakeVertex(p).Vertex(), edge)
+                assert dist.Value() < 1e-9

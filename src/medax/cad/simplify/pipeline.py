@@ -140,6 +140,8 @@ class _Job:
     whole: dict[int, int] = field(default_factory=dict)  # fillet -> face it merges into whole
     # fillet -> its supporting face that has no surface for its half (why it was kept)
     no_surface: dict[int, int] = field(default_factory=dict)
+    # fillets whose own piece held the misfit of that face (the face is fitted without them)
+    own_misfit: set[int] = field(default_factory=set)
 
     @property
     def vol0(self) -> float:
@@ -444,7 +446,9 @@ def _one_sided(job: _Job, blends: BlendInput) -> None:
     """Fillets kept because one supporting face has no surface for their half are merged
     whole into the other supporting face, where that face then has an exact surface (an
     extrusion or revolution whose profile runs across the whole fillet): the face that had
-    none is left as it was, the fillet still goes and the shape is the same. Not for
+    none is left as it was (or fitted without this fillet, when the fillet's own piece held
+    its misfit: a fillet ending at a step, where a rib ends on a plate), the fillet still
+    goes and the shape is the same. Not for
     fillets meeting corner blends, riding on or ridden by fillets, or traced ones."""
     by_face = {s.face: s for s in blends.fillets}
     linked = {f for cs in blends.corners for f in cs.fillets}
@@ -455,7 +459,9 @@ def _one_sided(job: _Job, blends: BlendInput) -> None:
         spec, m = by_face.get(f), job.medials.get(f)
         if bad is None or spec is None or m is None or f in linked or m.iso == TRACED:
             continue
-        if bad not in spec.supporting or any(bad in s.supporting for s in job.specs.values()):
+        if bad not in spec.supporting:
+            continue
+        if f not in job.own_misfit and any(bad in s.supporting for s in job.specs.values()):
             continue  # the failing face keeps other fillets' halves: it is tried with them
         k = 1 - spec.supporting.index(bad)  # the side whose face takes the whole fillet
         if not abs(m.cross[1 - k]) < 1e99:  # OCCT's "infinite": the far edge did not project
@@ -633,6 +639,7 @@ def _keep_culprits(job: _Job, sup: int, why: str, culprits: set[int]) -> None:
             if f not in job.kept:
                 job.kept[f] = reason
                 job.no_surface[f] = sup
+                job.own_misfit.add(f)
 
 
 def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
