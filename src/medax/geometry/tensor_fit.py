@@ -160,7 +160,8 @@ def _curved(
     with second differences of samples at most ``spacing`` apart, at every ``other``
     coordinate; a curved part that does not fill its interval gets breaks of its own at its
     ends (padded by two samples), so only it gets fine spans (a fillet strip on a wide
-    plate). Returns the breaks (the given ones and those) and a flag per interval."""
+    plate), and so does each of several curved parts apart by more than 5 % of the
+    interval. Returns the breaks (the given ones and those) and a flag per interval."""
     pts = [lo, *breaks, hi]
     out_breaks: list[float] = []
     flags: list[bool] = []
@@ -180,17 +181,30 @@ def _curved(
         if hit.size == 0:
             flags.append(False)
             continue
-        ca, cb = s[max(hit[0] - 2, 0)], s[min(hit[-1] + 4, n - 1)]
         wide = 0.05 * (b - a)  # a curved part nearly filling its interval: keep it whole
-        if ca - a > wide:
-            out_breaks.append(float(ca))
-            flags.append(False)
-        if b - cb > wide:
-            flags.append(True)
-            out_breaks.append(float(cb))
-            flags.append(False)
-        else:
-            flags.append(True)
+        # curved runs (padded by two samples before, four after) more than ``wide`` apart
+        # are fine on their own, the flat stretch between them one span (bosses spread over
+        # a plate: fine spans only across each)
+        runs: list[list[float]] = []
+        for part in np.split(hit, np.flatnonzero(np.diff(hit) > 1) + 1):
+            ca, cb = float(s[max(part[0] - 2, 0)]), float(s[min(part[-1] + 4, n - 1)])
+            if runs and ca - runs[-1][1] <= wide:
+                runs[-1][1] = cb
+            else:
+                runs.append([ca, cb])
+        if runs[0][0] - a <= wide:
+            runs[0][0] = a
+        if b - runs[-1][1] <= wide:
+            runs[-1][1] = b
+        cuts: list[tuple[float, bool]] = []  # (start, fine) of each piece of [a, b]
+        for ca, cb in runs:
+            if not cuts and ca > a:
+                cuts.append((a, False))
+            cuts.append((ca, True))
+            if cb < b:
+                cuts.append((cb, False))
+        out_breaks += [x for x, _ in cuts[1:]]
+        flags += [fine for _, fine in cuts]
     return out_breaks, flags
 
 

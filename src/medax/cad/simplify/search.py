@@ -115,7 +115,8 @@ def isolate(
 
     A failure traced to some of the fillets tried (:class:`Failure` ``blamed``: a new face
     that failed its own check) is not bisected: the others are tried without them, then the
-    blamed ones on their own (one blamed fillet is kept at once). On a 555-face part with
+    blamed ones on their own (one blamed fillet is kept at once; several are halved at once
+    when all the others were accepted, since together they would repeat the failed attempt). On a 555-face part with
     214 fillets, bisection alone ran out of time with half of them untried."""
     order = [f for c in clusters(specs) for f in c]
     accepted: dict[int, FilletSpec] = {}
@@ -143,11 +144,16 @@ def isolate(
         if len(fillets) == 1:
             keep(fillets[0], r)
         elif blamed and len(blamed) < len(fillets):
-            rec([f for f in fillets if f not in blamed])
+            before = set(accepted)
+            others = [f for f in fillets if f not in blamed]
+            rec(others)
             if len(blamed) == 1:
                 keep(next(iter(blamed)), r)
             else:
-                rec([f for f in fillets if f in blamed])
+                # with all the others accepted, the blamed ones together are the attempt
+                # that failed: its result is known
+                same = set(accepted) == before | set(others)
+                rec([f for f in fillets if f in blamed], r if same else None)
         else:
             rec(fillets[: len(fillets) // 2])
             rec(fillets[len(fillets) // 2 :])
