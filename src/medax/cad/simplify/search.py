@@ -116,8 +116,9 @@ def isolate(
     A failure traced to some of the fillets tried (:class:`Failure` ``blamed``: a new face
     that failed its own check) is not bisected: the others are tried without them, then the
     blamed ones on their own (one blamed fillet is kept at once; several are halved at once
-    when all the others were accepted, since together they would repeat the failed attempt). On a 555-face part with
-    214 fillets, bisection alone ran out of time with half of them untried."""
+    when all the others were accepted, since together they would repeat the failed
+    attempt). On a 555-face part with 214 fillets, bisection alone ran out of time with half
+    of them untried."""
     order = [f for c in clusters(specs) for f in c]
     accepted: dict[int, FilletSpec] = {}
     best: A | None = None
