@@ -7,13 +7,15 @@ check it independently of the simplifier:
 - validity: ``BRepCheck_Analyzer`` and as many closed shells as the input (an outer one and
   one per cavity), on the file as read back;
 - volume change: OCCT's default integrator (``BRepGProp.VolumeProperties_s`` without an
-  accuracy) on the file as written, and Gauss-Kronrod on a NURBS copy, both against the
-  input measured the same way;
+  accuracy) on the file as written, and the adaptive one to 1e-9 on a NURBS copy, both
+  against the input measured the same way;
 - and, in the same run, ``BRepAlgoAPI_Defeaturing`` removing the same faces (faces, validity,
   volume change, time).
 
-One JSON record per part goes to ``--records`` (resumable: parts with a record are skipped
-unless ``--again``); the table and the kept reasons, grouped, are printed at the end.
+The time limit ``--timeout`` is the part's: reading, classifying and simplifying; the file
+checks that follow get ``--check-timeout`` more. One JSON record per part goes to
+``--records`` (resumable: parts with a record are skipped unless ``--again``); the table and
+the kept reasons, grouped, are printed at the end.
 
     .venv/bin/python benchmarks/bench_corpus.py ../shared/bench/cad/corpus [--timeout 600]
 """
@@ -48,8 +50,11 @@ def _volume_nurbs(shape: Any) -> float:
 
     from medax.cad.simplify.validate import nurbs_copy
 
+    # the adaptive integrator to 1e-9 relative: Gauss-Kronrod to 1e-10 on the NURBS copy of
+    # a 500-face part ran past the part's time budget, and the two agree to ~4e-10 on
+    # fitted faces (``medax.cad.simplify.validate``)
     props = GProp_GProps()
-    BRepGProp.VolumePropertiesGK_s(nurbs_copy(shape), props, 1e-10)
+    BRepGProp.VolumeProperties_s(nurbs_copy(shape), props, 1e-9)
     return float(props.Mass())
 
 
@@ -138,30 +143,36 @@ def child(part: str, out_dir: str) -> dict[str, Any]:
     return rec
 
 
-def run_part(part: Path, out_dir: Path, timeout: float) -> dict[str, Any]:
-    """The record of ``part`` from a child process (``status`` says how it ended)."""
+def run_part(part: Path, out_dir: Path, timeout: float, checks: float) -> dict[str, Any]:
+    """The record of ``part`` from a child process (``status`` says how it ended): the part
+    has ``timeout`` seconds to be simplified, the file checks ``checks`` more."""
     t0 = time.perf_counter()
     try:
         p = subprocess.run(
             [sys.executable, __file__, "--child", str(part), str(out_dir)],
             capture_output=True,
             text=True,
-            timeout=timeout,
+            timeout=timeout + checks,
         )
     except subprocess.TimeoutExpired as err:
         out = err.stdout.decode() if isinstance(err.stdout, bytes) else (err.stdout or "")
         partial = [ln for ln in out.splitlines() if ln.startswith("{")]
-        if not partial:
+        if not partial or json.loads(partial[-1])["time_s"] > timeout:
             return {"part": part.name, "status": f"timeout after {timeout:.0f} s"}
         rec = json.loads(partial[-1])
-        rec["status"] = f"simplified in {rec['time_s']:.0f} s; file checks past {timeout:.0f} s"
+        rec["status"] = f"simplified in {rec['time_s']:.0f} s; file checks past {checks:.0f} s"
         return rec
     lines = [ln for ln in p.stdout.splitlines() if ln.startswith("{")]
     if p.returncode != 0 or not lines:
         tail = (p.stderr.strip().splitlines() or ["no output"])[-1]
         return {"part": part.name, "status": f"exit {p.returncode}: {tail[:200]}"}
     rec = json.loads(lines[-1])
-    rec["status"] = "done"
+    simplified = max((s["simplify_s"] for s in rec.get("solids", [])), default=0.0)
+    rec["status"] = (
+        "done"
+        if rec.get("classify_s", 0.0) + simplified <= timeout
+        else (f"simplified past {timeout:.0f} s")
+    )
     rec["wall_s"] = time.perf_counter() - t0
     return rec
 
@@ -258,6 +269,9 @@ def main(argv: list[str]) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("inputs", nargs="+", help="part files or folders")
     ap.add_argument("--timeout", type=float, default=600.0, help="seconds per part (600)")
+    ap.add_argument(
+        "--check-timeout", type=float, default=600.0, help="seconds more for the file checks (600)"
+    )
     ap.add_argument("--records", default="corpus-records", help="folder of per-part records")
     ap.add_argument("--again", action="store_true", help="rerun parts that have a record")
     ap.add_argument("--markdown", action="store_true", help="also print the table as Markdown")
@@ -274,7 +288,7 @@ def main(argv: list[str]) -> int:
             records.append(json.loads(path.read_text()))
             continue
         print(f"[{i + 1}/{len(parts)}] {part.name}", file=sys.stderr, flush=True)
-        rec = run_part(part, rec_dir, args.timeout)
+        rec = run_part(part, rec_dir, args.timeout, args.check_timeout)
         path.write_text(json.dumps(rec) + "\n")
         records.append(rec)
     report(records)
