@@ -83,7 +83,7 @@ BUILD_TOL = tolerances.BUILD_TOL
 #: it keep their tangency across the medial curves (2e-3 rad on the 12-edge box; 9e-3 rad
 #: when fitted to 0.4), and those whose fit stalls on a curvature jump off its knot lines
 #: are merged (most of them stalled within 4x), still checked against the full tolerance.
-FIT_SHARE, ACCEPT_SHARE = 0.1, 0.4
+FIT_SHARE, ACCEPT_SHARE = 0.1, 0.8
 #: Deviation samples per face (n x n) for groups on a fitted surface.
 FITTED_DEVIATION_SAMPLES = 12
 #: Seconds the search for failing fillets may take after the first rebuild failed.
