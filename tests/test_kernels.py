@@ -1,8 +1,8 @@
 """The compiled kernels (medax.geometry.kernels) against independent computations: scipy's
 de Boor evaluation for the jets, dense sampling refined by scipy's bounded Brent search for
 the closest points (global and within a bracket), on polynomial B-splines (one compiled
-call), rational and sub-curves (jets from Python, compiled steps) and splines with C0
-corners."""
+call), rational curves (compiled Newton on homogeneous jets), sub-curves (jets from
+Python, compiled steps) and splines with C0 corners."""
 
 from __future__ import annotations
 
@@ -190,6 +190,54 @@ def test_newton_rows_step_shrinks_the_bracket_and_bisects():
     done, s, a, b = step(np.zeros((1, 2)), np.zeros((1, 2)))  # C' = 0: g = 0
     assert done and s == 0.9 and (a, b) == (0.0, 1.0)
     np.testing.assert_array_equal(foot, c0)
+
+
+def test_newton_table_on_a_rational_arc_finds_the_circle_feet_as_the_steps_do():
+    """The compiled Newton of rational B-splines (jets in the kernel): on an exact NURBS
+    quarter circle of radius 2 in space (centre c, tilted plane), the feet of points off
+    the arc's plane are the circle's radial projections (c + R u / |u|, u the point's
+    offset projected on the plane) to 1e-13; and they equal bit for bit the step-by-step
+    iteration with the jets evaluated from Python (kernels.newton_rows)."""
+    e1 = np.array([1.0, 2.0, 2.0]) / 3.0
+    e2 = np.array([2.0, 1.0, -2.0]) / 3.0
+    centre, radius = np.array([5.0, -1.0, 3.0]), 2.0
+    plane = np.array([[1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]) * radius
+    arc = BSpline(
+        centre + plane @ np.vstack((e1, e2)), 2, weights=np.array([1.0, math.sqrt(0.5), 1.0])
+    )
+    table = arc.jet_table()
+    assert table is not None and table[3]
+    ang = RNG.uniform(0.1, 0.5 * math.pi - 0.1, 40)
+    rad = RNG.uniform(0.3, 3.5, 40)
+    normal = np.cross(e1, e2)
+    x = (
+        centre
+        + (rad * np.cos(ang))[:, None] * e1
+        + (rad * np.sin(ang))[:, None] * e2
+        + RNG.uniform(-1.0, 1.0, 40)[:, None] * normal
+    )
+    a, b, s0 = np.zeros(40), np.ones(40), np.full(40, 0.5)
+    t, foot = kernels.newton_table(*table, x, a, b, s0, 60)
+    truth = centre + radius * (np.cos(ang)[:, None] * e1 + np.sin(ang)[:, None] * e2)
+    np.testing.assert_allclose(foot, truth, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(arc.evaluate(t), truth, rtol=0, atol=1e-13)
+    # the same iteration, one compiled step per Python round with the jets from arc.jet
+    s, aa, bb = s0.copy(), a.copy(), b.copy()
+    ref_t, ref_foot = np.empty(40), np.empty((40, 3))
+    rows = np.arange(40)
+    for it in range(60):
+        sr, ar, br = s[rows], aa[rows], bb[rows]
+        c0, c1, c2 = (np.ascontiguousarray(c) for c in arc.jet(sr))
+        fr = np.empty((rows.size, 3))
+        done = kernels.newton_rows(c0, c1, c2, x[rows], sr, ar, br, it == 59, fr)
+        s[rows], aa[rows], bb[rows] = sr, ar, br
+        ref_t[rows[done]], ref_foot[rows[done]] = sr[done], fr[done]
+        rows = rows[~done]
+        if rows.size == 0:
+            break
+    assert rows.size == 0
+    np.testing.assert_array_equal(t, ref_t)
+    np.testing.assert_array_equal(foot, ref_foot)
 
 
 def test_first_run_compile_is_announced(monkeypatch, caplog):

@@ -13,6 +13,9 @@ same algorithms as compiled loops over the points, one call per query:
   :func:`medax.geometry.curve.closest_near` on such tables;
 * :func:`candidates` and :func:`newton_rows` - the candidate search and one safeguarded
   Newton step for the curves without a polynomial table (their jets come from Python);
+* :func:`newton_table` - the whole safeguarded Newton iteration of curves with a jet table
+  but no global search table (rational B-splines: the homogeneous jet and the quotient
+  rule in the kernel);
 * ``basis_rows`` (:mod:`medax.geometry.basis_kernel`, announced and warmed up here with
   the others) - B-spline basis values and derivatives by Cox-de Boor.
 
@@ -185,6 +188,74 @@ def newton_rows(
             for d in range(dim):
                 foot[i, d] = w[0, d] + ds * (w[1, d] + 0.5 * ds * w[2, d])
     return done
+
+
+@njit(cache=True, error_model="numpy")
+def _jet_table(
+    inner: FloatArray,
+    starts: FloatArray,
+    rows: FloatArray,
+    rational: bool,
+    t: float,
+    h: FloatArray,
+    w: FloatArray,
+) -> None:
+    """Into ``w`` (3, dim): the jet of a one-curve table (:func:`jet_rows`) at ``t``
+    clamped to ``[0, 1]``, as :meth:`medax.geometry.bspline.BSpline.jet` forms it: of a
+    rational curve from its homogeneous jet (``rows`` (degree + 1, dim + 1, spans), weight
+    last; into ``h`` (3, dim + 1)) by the quotient rule, in the same operations."""
+    if t == t:
+        t = min(max(t, 0.0), 1.0)
+    span = _span(inner, t)
+    if not rational:
+        _jet1(rows, span, t - starts[span], w)
+        return
+    _jet1(rows, span, t - starts[span], h)
+    dim = w.shape[1]
+    w0, w1, w2 = h[0, dim], h[1, dim], h[2, dim]
+    for d in range(dim):
+        c = h[0, d] / w0
+        d1 = (h[1, d] - w1 * c) / w0
+        w[0, d] = c
+        w[1, d] = d1
+        w[2, d] = (h[2, d] - 2.0 * w1 * d1 - w2 * c) / w0
+
+
+@njit(cache=True, error_model="numpy")
+def newton_table(  # type: ignore[no-untyped-def]
+    inner: FloatArray,
+    starts: FloatArray,
+    rows: FloatArray,
+    rational: bool,
+    x: FloatArray,
+    a: FloatArray,
+    b: FloatArray,
+    s: FloatArray,
+    iters: int,
+):
+    """The safeguarded Newton iteration of :func:`medax.geometry.curve._newton_in_brackets`
+    (:func:`_safe_step` from ``s`` (n,) in the brackets ``a``, ``b`` (n,), at most ``iters``
+    steps) for points ``x`` (n, dim) on a one-curve table, its jets evaluated here
+    (:func:`_jet_table`): parameters (n,) and foot points (n, dim)."""
+    n, dim = x.shape
+    t = np.empty(n)
+    foot = np.empty((n, dim))
+    w = np.empty((3, dim))
+    h = np.empty((3, dim + 1))
+    for i in range(n):
+        si, ai, bi = s[i], a[i], b[i]
+        if not np.isfinite(si):
+            si = 0.5 * (ai + bi)
+        for it in range(iters):
+            _jet_table(inner, starts, rows, rational, si, h, w)
+            g, dg = _g_dg(w, x[i])
+            si, ai, bi, done, ds = _safe_step(g, dg, si, ai, bi, it == iters - 1)
+            if done:
+                for d in range(dim):
+                    foot[i, d] = w[0, d] + ds * (w[1, d] + 0.5 * ds * w[2, d])
+                break
+        t[i] = si
+    return t, foot
 
 
 @njit(cache=True, error_model="numpy")
@@ -713,6 +784,7 @@ _COMPILED = (
     track_step_rows,
     certify_rows,
     basis_rows,
+    newton_table,
 )
 _announced = False
 
@@ -750,6 +822,8 @@ def warm_up() -> None:
     x = np.zeros((1, 2))
     z = np.zeros(1)
     newton_rows(x, x, x, x, z.copy(), z.copy(), np.ones(1), False, np.empty((1, 2)))
+    for rational in (False, True):
+        newton_table(inner, starts, rows, rational, x[:, :1].copy(), z, np.ones(1), z, 60)
     ts = np.linspace(0.0, 1.0, 5)
     pts = np.column_stack((ts, ts * ts))
     slopes = np.column_stack((np.ones(5), 2.0 * ts))
