@@ -240,6 +240,58 @@ def test_newton_table_on_a_rational_arc_finds_the_circle_feet_as_the_steps_do():
     np.testing.assert_array_equal(foot, ref_foot)
 
 
+def _all_pairs_cross(a: np.ndarray, b: np.ndarray, eps: float, skip_neighbours: bool) -> bool:
+    """Brute force: every segment of ``a`` against every segment of ``b`` (no boxes)."""
+    if len(a) < 2 or len(b) < 2:
+        return False
+    a0, a1 = a[:-1, None, :], a[1:, None, :]
+    b0, b1 = b[None, :-1, :], b[None, 1:, :]
+
+    def orient(p, q, r):
+        return (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1]) - (q[..., 1] - p[..., 1]) * (
+            r[..., 0] - p[..., 0]
+        )
+
+    tol = eps * eps
+    hit = (orient(a0, a1, b0) * orient(a0, a1, b1) < -tol) & (
+        orient(b0, b1, a0) * orient(b0, b1, a1) < -tol
+    )
+    if skip_neighbours:
+        i, j = np.indices(hit.shape)
+        hit &= j >= i + 2
+    return bool(hit.any())
+
+
+def test_crossing_kernels_equal_all_pairs_tables():
+    """The chunked compiled crossing tests (boxes of 16 segments) answer as the brute-force
+    table of every segment pair, on random walks (many crossings and near misses), smooth
+    curves that do and do not meet, a figure eight and polylines of 2 - 40 points."""
+    from medax.geometry.crossing_kernel import polylines_cross, self_crossing
+
+    rng = np.random.default_rng(7)
+    cases = []
+    for n in (2, 3, 4, 5, 17, 18, 33, 40, 200):
+        cases.append(np.cumsum(rng.normal(size=(n, 2)), axis=0))
+        cases.append(np.cumsum(rng.normal(size=(n, 2)) * [1.0, 0.05], axis=0))
+    t = np.linspace(0.0, 2.0 * math.pi, 201)
+    cases.append(np.column_stack((np.sin(t), np.sin(2.0 * t))))  # a figure eight
+    cases.append(np.column_stack((t, np.sin(t))))
+    cases.append(np.column_stack((t, np.sin(t) + 2.5)))  # above the last: no crossing
+    cases.append(np.column_stack((t, np.cos(t))))  # crosses the sine twice
+    seen = {True: 0, False: 0}
+    for eps in (0.0, 1e-12, 1e-3):
+        for a in cases:
+            a = np.ascontiguousarray(a)
+            ref = _all_pairs_cross(a, a, eps, skip_neighbours=True)
+            assert self_crossing(a, eps) == ref
+            seen[ref] += 1
+        for a, b in zip(cases[:-1], cases[1:], strict=True):
+            ref = _all_pairs_cross(a, b, eps, skip_neighbours=False)
+            assert polylines_cross(np.ascontiguousarray(a), np.ascontiguousarray(b), eps) == ref
+            seen[ref] += 1
+    assert seen[True] >= 20 and seen[False] >= 20
+
+
 def test_first_run_compile_is_announced(monkeypatch, caplog):
     """Without a cache index the first query logs the compile message (INFO) once."""
     monkeypatch.setattr(kernels, "_announced", False)

@@ -17,7 +17,9 @@ same algorithms as compiled loops over the points, one call per query:
   but no global search table (rational B-splines: the homogeneous jet and the quotient
   rule in the kernel);
 * ``basis_rows`` (:mod:`medax.geometry.basis_kernel`, announced and warmed up here with
-  the others) - B-spline basis values and derivatives by Cox-de Boor.
+  the others) - B-spline basis values and derivatives by Cox-de Boor;
+* ``polylines_cross`` and ``self_crossing`` (:mod:`medax.geometry.crossing_kernel`,
+  likewise) - the region's side-crossing checks.
 
 Compiled with ``cache=True``: the first run after an install compiles (a few seconds, logged
 at INFO) and stores the machine code in ``__pycache__`` next to this file, or, where that is
@@ -37,6 +39,7 @@ from numba import njit
 
 from medax.geometry._types import FloatArray
 from medax.geometry.basis_kernel import basis_rows
+from medax.geometry.crossing_kernel import polylines_cross, self_crossing
 
 log = logging.getLogger(__name__)
 
@@ -785,6 +788,8 @@ _COMPILED = (
     certify_rows,
     basis_rows,
     newton_table,
+    polylines_cross,
+    self_crossing,
 )
 _announced = False
 
@@ -839,3 +844,5 @@ def warm_up() -> None:
     track_step_rows(np.zeros((6, 1)), xs, t, np.ones(1), False)
     certify_rows(ts, pts.T.copy(), ts.copy(), x, t, t, 0.1, 0.01, 0.0, 0.0)
     basis_rows(np.array([0.0, 0.0, 1.0, 1.0]), 1, t, np.array([1], dtype=np.int64))
+    polylines_cross(pts, pts[::-1].copy(), 0.0)
+    self_crossing(pts, 0.0)
