@@ -240,6 +240,52 @@ def test_newton_table_on_a_rational_arc_finds_the_circle_feet_as_the_steps_do():
     np.testing.assert_array_equal(foot, ref_foot)
 
 
+def _arc_distance(x: np.ndarray, centre, radius: float, a0: float, a1: float) -> np.ndarray:
+    """Distance from ``x`` (n, 2) to the circle arc of angles ``[a0, a1]`` (a0 < a1)."""
+    v = x - centre
+    ang = np.arctan2(v[:, 1], v[:, 0])
+    ang = np.where(ang < a0 - 1e-12, ang + 2.0 * math.pi, ang)
+    on = ang <= a1
+    ends = np.array([[math.cos(a0), math.sin(a0)], [math.cos(a1), math.sin(a1)]]) * radius
+    to_ends = np.linalg.norm(v[:, None, :] - ends[None], axis=2).min(axis=1)
+    return np.where(on, np.abs(np.linalg.norm(v, axis=1) - radius), to_ends)
+
+
+def test_closest_on_a_rational_spline_with_a_corner_equals_the_two_arcs():
+    """Global closest points on a rational B-spline (one compiled call:
+    kernels.closest_table): two exact quarter circles (centres (0, 0) and (-1, 1), radius
+    1) meeting at a 90-degree C0 corner (0, 1); the distance of 400 points around equals
+    the nearer arc's in closed form to 1e-13 (and 40 more near the corner), the foot is the
+    curve at ``t``, and points on the corner's convex side get the corner itself."""
+    r = math.sqrt(0.5)
+    c = BSpline(
+        np.array([[1, 0], [1, 1], [0, 1], [0, 2], [-1, 2]], float),
+        2,
+        np.array([0, 0, 0, 0.5, 0.5, 1, 1, 1], float),
+        np.array([1, r, 1, r, 1]),
+    )
+    assert c.jet_table() is not None and c.breaks().tolist() == [0.5]
+    x = np.vstack(
+        (
+            RNG.uniform([-2.5, -1.5], [2.5, 3.0], (400, 2)),
+            RNG.uniform([-0.45, 0.55], [0, 1], (40, 2)),
+        )
+    )
+    got = c.closest(x)
+    ref = np.minimum(
+        _arc_distance(x, np.array([0.0, 0.0]), 1.0, 0.0, 0.5 * math.pi),
+        _arc_distance(x, np.array([-1.0, 1.0]), 1.0, 0.0, 0.5 * math.pi),
+    )
+    np.testing.assert_allclose(got.distance, ref, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(c.evaluate(got.t), got.foot, rtol=0, atol=1e-13)
+    # on the corner's convex side (left of x = 0 and below y = 1, where neither arc's
+    # normal lines reach) and nearer than the ends (within 0.7 of it): the corner
+    corner = (x[:, 0] < -0.05) & (x[:, 1] < 0.95) & (np.linalg.norm(x - [0.0, 1.0], axis=1) < 0.7)
+    assert corner.sum() >= 10
+    np.testing.assert_allclose(got.foot[corner], np.tile([0.0, 1.0], (corner.sum(), 1)))
+    np.testing.assert_array_equal(got.t[corner], 0.5)
+
+
 def _all_pairs_cross(a: np.ndarray, b: np.ndarray, eps: float, skip_neighbours: bool) -> bool:
     """Brute force: every segment of ``a`` against every segment of ``b`` (no boxes)."""
     if len(a) < 2 or len(b) < 2:

@@ -13,9 +13,10 @@ same algorithms as compiled loops over the points, one call per query:
   :func:`medax.geometry.curve.closest_near` on such tables;
 * :func:`candidates` and :func:`newton_rows` - the candidate search and one safeguarded
   Newton step for the curves without a polynomial table (their jets come from Python);
-* :func:`newton_table` - the whole safeguarded Newton iteration of curves with a jet table
-  but no global search table (rational B-splines: the homogeneous jet and the quotient
-  rule in the kernel);
+* :func:`newton_table` and :func:`closest_table` - the whole safeguarded Newton iteration
+  and the whole global closest-point search of curves with a jet table but no global
+  search table (rational B-splines: the homogeneous jet and the quotient rule in the
+  kernel);
 * ``basis_rows`` (:mod:`medax.geometry.basis_kernel`, announced and warmed up here with
   the others) - B-spline basis values and derivatives by Cox-de Boor;
 * ``polylines_cross`` and ``self_crossing`` (:mod:`medax.geometry.crossing_kernel`,
@@ -246,19 +247,38 @@ def newton_table(  # type: ignore[no-untyped-def]
     w = np.empty((3, dim))
     h = np.empty((3, dim + 1))
     for i in range(n):
-        si, ai, bi = s[i], a[i], b[i]
-        if not np.isfinite(si):
-            si = 0.5 * (ai + bi)
-        for it in range(iters):
-            _jet_table(inner, starts, rows, rational, si, h, w)
-            g, dg = _g_dg(w, x[i])
-            si, ai, bi, done, ds = _safe_step(g, dg, si, ai, bi, it == iters - 1)
-            if done:
-                for d in range(dim):
-                    foot[i, d] = w[0, d] + ds * (w[1, d] + 0.5 * ds * w[2, d])
-                break
-        t[i] = si
+        t[i] = _newton1(inner, starts, rows, rational, x[i], a[i], b[i], s[i], iters, h, w, foot[i])
     return t, foot
+
+
+@njit(cache=True, error_model="numpy")
+def _newton1(
+    inner: FloatArray,
+    starts: FloatArray,
+    rows: FloatArray,
+    rational: bool,
+    xi: FloatArray,
+    a: float,
+    b: float,
+    s: float,
+    iters: int,
+    h: FloatArray,
+    w: FloatArray,
+    foot: FloatArray,
+) -> float:
+    """One row of :func:`newton_table`: the parameter; its foot point into ``foot`` (dim,)
+    (left as it is if no step ends the row)."""
+    if not np.isfinite(s):
+        s = 0.5 * (a + b)
+    for it in range(iters):
+        _jet_table(inner, starts, rows, rational, s, h, w)
+        g, dg = _g_dg(w, xi)
+        s, a, b, done, ds = _safe_step(g, dg, s, a, b, it == iters - 1)
+        if done:
+            for d in range(xi.size):
+                foot[d] = w[0, d] + ds * (w[1, d] + 0.5 * ds * w[2, d])
+            break
+    return s
 
 
 @njit(cache=True, error_model="numpy")
@@ -479,6 +499,86 @@ def bracket_rows(  # type: ignore[no-untyped-def]
         )
         w_lo[i], w_hi[i] = ts[j0], ts[j2]
     return t, foot, ta, tb, s0, inside, w_lo, w_hi
+
+
+@njit(cache=True, error_model="numpy")
+def closest_table(  # type: ignore[no-untyped-def]
+    ts: FloatArray,
+    pts: FloatArray,
+    slopes: FloatArray,
+    centre: FloatArray,
+    ct: FloatArray,
+    pp: FloatArray,
+    inner: FloatArray,
+    starts: FloatArray,
+    rows: FloatArray,
+    rational: bool,
+    breaks: FloatArray,
+    x: FloatArray,
+    k: int,
+    iters: int,
+):
+    """The global closest points of :func:`medax.geometry.curve.closest_by_search` on one
+    curve with a jet table but no global search table (a rational B-spline): the ``k``
+    best local minima of the sampled distance (:func:`candidates`), each bracketed
+    (:func:`_bracket`) and refined by the safeguarded Newton iteration (:func:`_newton1`,
+    jets here), a nearer C0 corner ``breaks`` (sorted) in its window taken, the nearest
+    candidate kept (the first on ties); the steps of the Python path, in its order of
+    operations. Parameters (n,), foot points (n, dim), distances (n,)."""
+    n, dim = x.shape
+    m = ts.size
+    bounds = np.empty(2, dtype=np.int64)
+    bounds[0], bounds[1] = 0, m
+    xc = np.empty((n, dim))
+    for i in range(n):
+        for d in range(dim):
+            xc[i, d] = x[i, d] - centre[d]
+    cand = candidates(ct, pp, bounds, xc, k)
+    t_out = np.empty(n)
+    foot_out = np.empty((n, dim))
+    dist_out = np.empty(n)
+    w = np.empty((3, dim))
+    h = np.empty((3, dim + 1))
+    foot = np.empty(dim)
+    g3 = np.empty(3)
+    d3 = np.empty(3)
+    j3 = np.empty(3, dtype=np.int64)
+    nb = breaks.size
+    for i in range(n):
+        xi = x[i]
+        best = np.inf
+        for q in range(k):
+            t, ta, tb, s0, interior, j0, j2 = _bracket(
+                ts, pts, slopes, 0, m - 1, cand[i, 0, q], xi, foot, g3, d3, j3
+            )
+            if interior:
+                t = _newton1(inner, starts, rows, rational, xi, ta, tb, s0, iters, h, w, foot)
+            if nb:  # the first corner at or above the window's start, if in the window
+                lo, hi = ts[j0], ts[j2]
+                ib = np.searchsorted(breaks, lo)
+                e = breaks[min(ib, nb - 1)]
+                if ib < nb and e <= hi:
+                    _jet_table(inner, starts, rows, rational, e, h, w)
+                    de = 0.0
+                    df = 0.0
+                    for d in range(dim):
+                        de += (w[0, d] - xi[d]) * (w[0, d] - xi[d])
+                        df += (foot[d] - xi[d]) * (foot[d] - xi[d])
+                    if de < df:
+                        t = e
+                        for d in range(dim):
+                            foot[d] = w[0, d]
+            dd = 0.0
+            for d in range(dim):
+                dd += (foot[d] - xi[d]) * (foot[d] - xi[d])
+            dist = np.sqrt(dd)
+            if q == 0 or dist < best:
+                best = dist
+                t_out[i] = t
+                dist_out[i] = dist
+                for d in range(dim):
+                    foot_out[i, d] = foot[d]
+    return t_out, foot_out, dist_out
 
 
 @njit(cache=True, error_model="numpy")
@@ -788,6 +888,7 @@ _COMPILED = (
     certify_rows,
     basis_rows,
     newton_table,
+    closest_table,
     polylines_cross,
     self_crossing,
 )
@@ -827,8 +928,6 @@ def warm_up() -> None:
     x = np.zeros((1, 2))
     z = np.zeros(1)
     newton_rows(x, x, x, x, z.copy(), z.copy(), np.ones(1), False, np.empty((1, 2)))
-    for rational in (False, True):
-        newton_table(inner, starts, rows, rational, x[:, :1].copy(), z, np.ones(1), z, 60)
     ts = np.linspace(0.0, 1.0, 5)
     pts = np.column_stack((ts, ts * ts))
     slopes = np.column_stack((np.ones(5), 2.0 * ts))
@@ -837,6 +936,13 @@ def warm_up() -> None:
         np.array([0, 5]), inner, starts, rows, np.zeros(0), np.array([0, 0]), x, 2,
     )  # fmt: skip
     closest_bracketed(inner, starts, rows, np.zeros(1, dtype=np.int64), x, z, np.ones(1), z)
+    for rational, dim in ((False, 2), (True, 1)):  # (the rows: 2 coordinates, or 1 and w)
+        xd, pd, sd = x[:, :dim].copy(), pts[:, :dim].copy(), slopes[:, :dim].copy()
+        newton_table(inner, starts, rows, rational, xd, z, np.ones(1), z, 60)
+        closest_table(
+            ts, pd, sd, np.zeros(dim), pd.T.copy(), np.einsum("ij,ij->i", pd, pd), inner,
+            starts, rows, rational, np.zeros(0), xd, 2, 60,
+        )  # fmt: skip
     cand = candidates(pts.T.copy(), np.einsum("ij,ij->i", pts, pts), np.array([0, 5]), x, 2)
     bracket_rows(ts, pts, slopes, x, cand[:, 0, 0].copy())
     xs = np.zeros((2, 1))
