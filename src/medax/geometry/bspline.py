@@ -178,7 +178,7 @@ class BSpline(Curve):
         # Taylor coefficients at each interval start (right limits: scipy evaluates a knot
         # with the interval to its right)
         taylor = np.array([np.asarray(self._spl(x[:-1], nu)) for nu in range(k + 1)])
-        fact = np.array([float(np.prod(np.arange(1, nu + 1))) for nu in range(k + 1)])
+        fact = np.array([float(math.factorial(nu)) for nu in range(k + 1)])
         return self._pack(x, (taylor / fact[:, None, None])[::-1])  # highest power first
 
     def _pack(self, x: FloatArray, c0: FloatArray) -> tuple[FloatArray, FloatArray]:
