@@ -315,13 +315,15 @@ class BSpline(Curve):
     def derivative(self, t: FloatArray, order: int = 1) -> FloatArray:
         if self.weights is None:
             return self._raw(t, order)
-        h0, h1 = self._raw(t, 0), self._raw(t, 1)
+        # (one jet evaluation for all orders: the homogeneous derivatives come together)
+        h = self._raw_many(t, (0, 1) if order == 1 else (0, 1, 2))
+        h0, h1 = h[0], h[1]
         w0, w1 = h0[:, -1:], h1[:, -1:]
         c = h0[:, :-1] / w0
         d1 = (h1[:, :-1] - w1 * c) / w0
         if order == 1:
             return d1
-        h2 = self._raw(t, 2)
+        h2 = h[2]
         w2 = h2[:, -1:]
         return (h2[:, :-1] - 2.0 * w1 * d1 - w2 * c) / w0
 
