@@ -252,10 +252,10 @@ def _arc_distance(x: np.ndarray, centre, radius: float, a0: float, a1: float) ->
 
 
 def test_closest_on_a_rational_spline_with_a_corner_equals_the_two_arcs():
-    """Global closest points on a rational B-spline (one compiled call:
-    kernels.closest_table): two exact quarter circles (centres (0, 0) and (-1, 1), radius
-    1) meeting at a 90-degree C0 corner (0, 1); the distance of 400 points around equals
-    the nearer arc's in closed form to 1e-13 (and 40 more near the corner), the foot is the
+    """Global closest points on a rational B-spline (the Newton steps in one compiled call,
+    kernels.newton_table): two exact quarter circles (centres (0, 0) and (-1, 1), radius 1)
+    meeting at a 90-degree C0 corner (0, 1); the distance of 400 points around equals the
+    nearer arc's in closed form to 1e-13 (and 40 more near the corner), the foot is the
     curve at ``t``, and points on the corner's convex side get the corner itself."""
     r = math.sqrt(0.5)
     c = BSpline(
@@ -312,7 +312,7 @@ def test_crossing_kernels_equal_all_pairs_tables():
     """The chunked compiled crossing tests (boxes of 16 segments) answer as the brute-force
     table of every segment pair, on random walks (many crossings and near misses), smooth
     curves that do and do not meet, a figure eight and polylines of 2 - 40 points."""
-    from medax.geometry.crossing_kernel import polylines_cross, self_crossing
+    from medax.geometry.crossing_kernel import polylines_cross, self_crossing  # (one kernel)
 
     rng = np.random.default_rng(7)
     cases = []

@@ -21,33 +21,27 @@ CHUNK = 16
 
 
 @njit(cache=True, error_model="numpy")
-def _orient(px: float, py: float, qx: float, qy: float, rx: float, ry: float) -> float:
-    """``(q - p) x (r - p)``: > 0 where ``r`` is left of the line from ``p`` to ``q``."""
-    return (qx - px) * (ry - py) - (qy - py) * (rx - px)
-
-
-@njit(cache=True, error_model="numpy")
 def _cross(a: FloatArray, i: int, b: FloatArray, j: int, tol: float) -> bool:
-    """Whether segment ``a[i] a[i+1]`` properly crosses ``b[j] b[j+1]`` (products of
-    orientations below ``-tol``)."""
+    """Whether segment ``a[i] a[i+1]`` properly crosses ``b[j] b[j+1]``: the products of
+    the orientations ``(q - p) x (r - p)`` of each one's ends against the other's line are
+    below ``-tol``."""
     a0x, a0y, a1x, a1y = a[i, 0], a[i, 1], a[i + 1, 0], a[i + 1, 1]
     b0x, b0y, b1x, b1y = b[j, 0], b[j, 1], b[j + 1, 0], b[j + 1, 1]
-    o1 = _orient(a0x, a0y, a1x, a1y, b0x, b0y)
-    o2 = _orient(a0x, a0y, a1x, a1y, b1x, b1y)
-    o3 = _orient(b0x, b0y, b1x, b1y, a0x, a0y)
-    o4 = _orient(b0x, b0y, b1x, b1y, a1x, a1y)
+    o1 = (a1x - a0x) * (b0y - a0y) - (a1y - a0y) * (b0x - a0x)
+    o2 = (a1x - a0x) * (b1y - a0y) - (a1y - a0y) * (b1x - a0x)
+    o3 = (b1x - b0x) * (a0y - b0y) - (b1y - b0y) * (a0x - b0x)
+    o4 = (b1x - b0x) * (a1y - b0y) - (b1y - b0y) * (a1x - b0x)
     return o1 * o2 < -tol and o3 * o4 < -tol
 
 
 @njit(cache=True, error_model="numpy")
-def _boxes(p: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Bounding boxes lo, hi (chunks, 2) of the chunks of segments of polyline ``p``
-    (n, 2), n >= 2: chunk ``c`` holds segments ``c CHUNK ..`` (its points up to
-    ``(c + 1) CHUNK``, or the last)."""
+def _boxes(p: FloatArray) -> FloatArray:
+    """Bounding boxes (chunks, 4: lo x, lo y, hi x, hi y) of the chunks of segments of
+    polyline ``p`` (n, 2), n >= 2: chunk ``c`` holds segments ``c CHUNK ..`` (its points
+    up to ``(c + 1) CHUNK``, or the last)."""
     nseg = p.shape[0] - 1
     nc = (nseg + CHUNK - 1) // CHUNK
-    lo = np.empty((nc, 2))
-    hi = np.empty((nc, 2))
+    box = np.empty((nc, 4))
     for c in range(nc):
         first = c * CHUNK
         last = min(first + CHUNK, nseg)  # the chunk's last point
@@ -60,57 +54,45 @@ def _boxes(p: FloatArray) -> tuple[FloatArray, FloatArray]:
                     mn = v
                 if v > mx:
                     mx = v
-            lo[c, d] = mn
-            hi[c, d] = mx
-    return lo, hi
+            box[c, d] = mn
+            box[c, 2 + d] = mx
+    return box
 
 
 @njit(cache=True, error_model="numpy")
-def _overlap(
-    alo: FloatArray, ahi: FloatArray, i: int, blo: FloatArray, bhi: FloatArray, j: int, eps: float
-) -> bool:
-    """Whether box ``i`` of ``a`` and box ``j`` of ``b`` overlap to ``eps``."""
-    for d in range(2):
-        if not (alo[i, d] <= bhi[j, d] + eps and blo[j, d] <= ahi[i, d] + eps):
-            return False
-    return True
-
-
-@njit(cache=True, error_model="numpy")
-def polylines_cross(a: FloatArray, b: FloatArray, eps: float) -> bool:
-    """Whether polylines ``a`` (n, 2) and ``b`` (m, 2) properly cross (to ``eps``)."""
-    if a.shape[0] < 2 or b.shape[0] < 2:
+def crossing(a: FloatArray, b: FloatArray, eps: float, itself: bool) -> bool:
+    """Whether polylines ``a`` (n, 2) and ``b`` (m, 2) properly cross (to ``eps``), or with
+    ``itself`` (``b`` is ``a``) whether ``a`` crosses itself: segments that are not
+    neighbours. Chunk pairs whose boxes do not overlap (to ``eps``) are skipped."""
+    if a.shape[0] < (4 if itself else 2) or b.shape[0] < 2:
         return False
-    alo, ahi = _boxes(a)
-    blo, bhi = _boxes(b)
+    ba = _boxes(a)
+    bb = ba if itself else _boxes(b)
     na, nb = a.shape[0] - 1, b.shape[0] - 1
     tol = eps * eps
-    for ci in range(alo.shape[0]):
-        for cj in range(blo.shape[0]):
-            if not _overlap(alo, ahi, ci, blo, bhi, cj, eps):
+    for ci in range(ba.shape[0]):
+        for cj in range(ci if itself else 0, bb.shape[0]):
+            if not (
+                ba[ci, 0] <= bb[cj, 2] + eps
+                and bb[cj, 0] <= ba[ci, 2] + eps
+                and ba[ci, 1] <= bb[cj, 3] + eps
+                and bb[cj, 1] <= ba[ci, 3] + eps
+            ):
                 continue
             for i in range(ci * CHUNK, min((ci + 1) * CHUNK, na)):
-                for j in range(cj * CHUNK, min((cj + 1) * CHUNK, nb)):
+                j0 = max(cj * CHUNK, i + 2) if itself else cj * CHUNK
+                for j in range(j0, min((cj + 1) * CHUNK, nb)):
                     if _cross(a, i, b, j, tol):
                         return True
     return False
 
 
-@njit(cache=True, error_model="numpy")
+def polylines_cross(a: FloatArray, b: FloatArray, eps: float) -> bool:
+    """Whether polylines ``a`` (n, 2) and ``b`` (m, 2) properly cross (to ``eps``)."""
+    return bool(crossing(np.ascontiguousarray(a), np.ascontiguousarray(b), float(eps), False))
+
+
 def self_crossing(p: FloatArray, eps: float) -> bool:
-    """Whether polyline ``p`` (n, 2) properly crosses itself: segments that are not
-    neighbours (to ``eps``)."""
-    if p.shape[0] < 4:
-        return False
-    lo, hi = _boxes(p)
-    ns = p.shape[0] - 1
-    tol = eps * eps
-    for ci in range(lo.shape[0]):
-        for cj in range(ci, lo.shape[0]):
-            if not _overlap(lo, hi, ci, lo, hi, cj, eps):
-                continue
-            for i in range(ci * CHUNK, min((ci + 1) * CHUNK, ns)):
-                for j in range(max(cj * CHUNK, i + 2), min((cj + 1) * CHUNK, ns)):
-                    if _cross(p, i, p, j, tol):
-                        return True
-    return False
+    """Whether polyline ``p`` (n, 2) properly crosses itself (to ``eps``)."""
+    q = np.ascontiguousarray(p)
+    return bool(crossing(q, q, float(eps), True))

@@ -382,10 +382,9 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
     sign change, whose inverse quadratic interpolation starts a bracketed Newton iteration;
     a bracket without a sign change keeps its nearest sample (an end of the curve). Curves
     with polynomial tables run it all in one compiled call
-    (:func:`medax.geometry.kernels.closest_search`), those with a jet table only (rational
-    B-splines) the same steps as below in one compiled call
-    (:func:`medax.geometry.kernels.closest_table`); the others evaluate their jets from
-    Python between the compiled steps (:func:`_newton_in_brackets`).
+    (:func:`medax.geometry.kernels.closest_search`); the others bracket in one compiled
+    call and refine in another (:func:`_newton_in_brackets`: rational B-splines) or evaluate
+    their jets from Python between the compiled steps.
     """
     n = points.shape[0]
     if n == 0:
@@ -395,15 +394,6 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
         t2, f2, d2 = poly.closest(points)
         return Closest(t=t2[:, 0], foot=f2[:, 0], distance=d2[:, 0])
     ts, pts = curve._search
-    table = curve.jet_table()
-    if table is not None and ts.size * n <= 50 * _TREE_ABOVE:  # (all of it compiled)
-        centre, ct, pp = curve._table
-        tt, ff, dd = kernels.closest_table(
-            ts, np.ascontiguousarray(pts), np.ascontiguousarray(curve._slopes), centre, ct, pp,
-            *table, np.asarray(curve.breaks(), dtype=np.float64),
-            np.ascontiguousarray(points, dtype=np.float64), k, 60,
-        )  # fmt: skip
-        return Closest(t=tt, foot=ff, distance=dd)
     cand = _candidate_samples(curve, points, k).ravel()
     x = np.ascontiguousarray(np.repeat(points, k, axis=0))
     t, foot, ta, tb, s0, interior, w_lo, w_hi = kernels.bracket_rows(

@@ -13,14 +13,14 @@ same algorithms as compiled loops over the points, one call per query:
   :func:`medax.geometry.curve.closest_near` on such tables;
 * :func:`candidates` and :func:`newton_rows` - the candidate search and one safeguarded
   Newton step for the curves without a polynomial table (their jets come from Python);
-* :func:`newton_table` and :func:`closest_table` - the whole safeguarded Newton iteration
-  and the whole global closest-point search of curves with a jet table but no global
-  search table (rational B-splines: the homogeneous jet and the quotient rule in the
-  kernel);
+* :func:`newton_table` - the whole safeguarded Newton iteration of curves with a jet table
+  but no global search table (rational B-splines: the homogeneous jet and the quotient
+  rule in the kernel; a separate global search kernel for them cost 2.4 s more to compile
+  for a few percent of a part's axis time);
 * ``basis_rows`` (:mod:`medax.geometry.basis_kernel`, announced and warmed up here with
   the others) - B-spline basis values and derivatives by Cox-de Boor;
-* ``polylines_cross`` and ``self_crossing`` (:mod:`medax.geometry.crossing_kernel`,
-  likewise) - the region's side-crossing checks.
+* ``crossing`` (:mod:`medax.geometry.crossing_kernel`, likewise) - the region's
+  side-crossing checks.
 
 Compiled with ``cache=True``: the first run after an install compiles (a few seconds, logged
 at INFO) and stores the machine code in ``__pycache__`` next to this file, or, where that is
@@ -40,7 +40,7 @@ from numba import njit
 
 from medax.geometry._types import FloatArray
 from medax.geometry.basis_kernel import basis_rows
-from medax.geometry.crossing_kernel import polylines_cross, self_crossing
+from medax.geometry.crossing_kernel import crossing
 
 log = logging.getLogger(__name__)
 
@@ -247,38 +247,19 @@ def newton_table(  # type: ignore[no-untyped-def]
     w = np.empty((3, dim))
     h = np.empty((3, dim + 1))
     for i in range(n):
-        t[i] = _newton1(inner, starts, rows, rational, x[i], a[i], b[i], s[i], iters, h, w, foot[i])
+        si, ai, bi = s[i], a[i], b[i]
+        if not np.isfinite(si):
+            si = 0.5 * (ai + bi)
+        for it in range(iters):
+            _jet_table(inner, starts, rows, rational, si, h, w)
+            g, dg = _g_dg(w, x[i])
+            si, ai, bi, done, ds = _safe_step(g, dg, si, ai, bi, it == iters - 1)
+            if done:
+                for d in range(dim):
+                    foot[i, d] = w[0, d] + ds * (w[1, d] + 0.5 * ds * w[2, d])
+                break
+        t[i] = si
     return t, foot
-
-
-@njit(cache=True, error_model="numpy")
-def _newton1(
-    inner: FloatArray,
-    starts: FloatArray,
-    rows: FloatArray,
-    rational: bool,
-    xi: FloatArray,
-    a: float,
-    b: float,
-    s: float,
-    iters: int,
-    h: FloatArray,
-    w: FloatArray,
-    foot: FloatArray,
-) -> float:
-    """One row of :func:`newton_table`: the parameter; its foot point into ``foot`` (dim,)
-    (left as it is if no step ends the row)."""
-    if not np.isfinite(s):
-        s = 0.5 * (a + b)
-    for it in range(iters):
-        _jet_table(inner, starts, rows, rational, s, h, w)
-        g, dg = _g_dg(w, xi)
-        s, a, b, done, ds = _safe_step(g, dg, s, a, b, it == iters - 1)
-        if done:
-            for d in range(xi.size):
-                foot[d] = w[0, d] + ds * (w[1, d] + 0.5 * ds * w[2, d])
-            break
-    return s
 
 
 @njit(cache=True, error_model="numpy")
@@ -499,86 +480,6 @@ def bracket_rows(  # type: ignore[no-untyped-def]
         )
         w_lo[i], w_hi[i] = ts[j0], ts[j2]
     return t, foot, ta, tb, s0, inside, w_lo, w_hi
-
-
-@njit(cache=True, error_model="numpy")
-def closest_table(  # type: ignore[no-untyped-def]
-    ts: FloatArray,
-    pts: FloatArray,
-    slopes: FloatArray,
-    centre: FloatArray,
-    ct: FloatArray,
-    pp: FloatArray,
-    inner: FloatArray,
-    starts: FloatArray,
-    rows: FloatArray,
-    rational: bool,
-    breaks: FloatArray,
-    x: FloatArray,
-    k: int,
-    iters: int,
-):
-    """The global closest points of :func:`medax.geometry.curve.closest_by_search` on one
-    curve with a jet table but no global search table (a rational B-spline): the ``k``
-    best local minima of the sampled distance (:func:`candidates`), each bracketed
-    (:func:`_bracket`) and refined by the safeguarded Newton iteration (:func:`_newton1`,
-    jets here), a nearer C0 corner ``breaks`` (sorted) in its window taken, the nearest
-    candidate kept (the first on ties); the steps of the Python path, in its order of
-    operations. Parameters (n,), foot points (n, dim), distances (n,)."""
-    n, dim = x.shape
-    m = ts.size
-    bounds = np.empty(2, dtype=np.int64)
-    bounds[0], bounds[1] = 0, m
-    xc = np.empty((n, dim))
-    for i in range(n):
-        for d in range(dim):
-            xc[i, d] = x[i, d] - centre[d]
-    cand = candidates(ct, pp, bounds, xc, k)
-    t_out = np.empty(n)
-    foot_out = np.empty((n, dim))
-    dist_out = np.empty(n)
-    w = np.empty((3, dim))
-    h = np.empty((3, dim + 1))
-    foot = np.empty(dim)
-    g3 = np.empty(3)
-    d3 = np.empty(3)
-    j3 = np.empty(3, dtype=np.int64)
-    nb = breaks.size
-    for i in range(n):
-        xi = x[i]
-        best = np.inf
-        for q in range(k):
-            t, ta, tb, s0, interior, j0, j2 = _bracket(
-                ts, pts, slopes, 0, m - 1, cand[i, 0, q], xi, foot, g3, d3, j3
-            )
-            if interior:
-                t = _newton1(inner, starts, rows, rational, xi, ta, tb, s0, iters, h, w, foot)
-            if nb:  # the first corner at or above the window's start, if in the window
-                lo, hi = ts[j0], ts[j2]
-                ib = np.searchsorted(breaks, lo)
-                e = breaks[min(ib, nb - 1)]
-                if ib < nb and e <= hi:
-                    _jet_table(inner, starts, rows, rational, e, h, w)
-                    de = 0.0
-                    df = 0.0
-                    for d in range(dim):
-                        de += (w[0, d] - xi[d]) * (w[0, d] - xi[d])
-                        df += (foot[d] - xi[d]) * (foot[d] - xi[d])
-                    if de < df:
-                        t = e
-                        for d in range(dim):
-                            foot[d] = w[0, d]
-            dd = 0.0
-            for d in range(dim):
-                dd += (foot[d] - xi[d]) * (foot[d] - xi[d])
-            dist = np.sqrt(dd)
-            if q == 0 or dist < best:
-                best = dist
-                t_out[i] = t
-                dist_out[i] = dist
-                for d in range(dim):
-                    foot_out[i, d] = foot[d]
-    return t_out, foot_out, dist_out
 
 
 @njit(cache=True, error_model="numpy")
@@ -888,9 +789,7 @@ _COMPILED = (
     certify_rows,
     basis_rows,
     newton_table,
-    closest_table,
-    polylines_cross,
-    self_crossing,
+    crossing,
 )
 _announced = False
 
@@ -937,12 +836,7 @@ def warm_up() -> None:
     )  # fmt: skip
     closest_bracketed(inner, starts, rows, np.zeros(1, dtype=np.int64), x, z, np.ones(1), z)
     for rational, dim in ((False, 2), (True, 1)):  # (the rows: 2 coordinates, or 1 and w)
-        xd, pd, sd = x[:, :dim].copy(), pts[:, :dim].copy(), slopes[:, :dim].copy()
-        newton_table(inner, starts, rows, rational, xd, z, np.ones(1), z, 60)
-        closest_table(
-            ts, pd, sd, np.zeros(dim), pd.T.copy(), np.einsum("ij,ij->i", pd, pd), inner,
-            starts, rows, rational, np.zeros(0), xd, 2, 60,
-        )  # fmt: skip
+        newton_table(inner, starts, rows, rational, x[:, :dim].copy(), z, np.ones(1), z, 60)
     cand = candidates(pts.T.copy(), np.einsum("ij,ij->i", pts, pts), np.array([0, 5]), x, 2)
     bracket_rows(ts, pts, slopes, x, cand[:, 0, 0].copy())
     xs = np.zeros((2, 1))
@@ -950,5 +844,4 @@ def warm_up() -> None:
     track_step_rows(np.zeros((6, 1)), xs, t, np.ones(1), False)
     certify_rows(ts, pts.T.copy(), ts.copy(), x, t, t, 0.1, 0.01, 0.0, 0.0)
     basis_rows(np.array([0.0, 0.0, 1.0, 1.0]), 1, t, np.array([1], dtype=np.int64))
-    polylines_cross(pts, pts[::-1].copy(), 0.0)
-    self_crossing(pts, 0.0)
+    crossing(pts, pts[::-1].copy(), 0.0, False)
