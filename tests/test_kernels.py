@@ -1,8 +1,8 @@
 """The compiled kernels (medax.geometry.kernels) against independent computations: scipy's
 de Boor evaluation for the jets, dense sampling refined by scipy's bounded Brent search for
 the closest points (global and within a bracket), on polynomial B-splines (one compiled
-call), rational and sub-curves (jets from Python, compiled steps) and splines with C0
-corners."""
+call), rational curves (compiled Newton on homogeneous jets), sub-curves (jets from
+Python, compiled steps) and splines with C0 corners."""
 
 from __future__ import annotations
 
@@ -190,6 +190,152 @@ def test_newton_rows_step_shrinks_the_bracket_and_bisects():
     done, s, a, b = step(np.zeros((1, 2)), np.zeros((1, 2)))  # C' = 0: g = 0
     assert done and s == 0.9 and (a, b) == (0.0, 1.0)
     np.testing.assert_array_equal(foot, c0)
+
+
+def test_newton_table_on_a_rational_arc_finds_the_circle_feet_as_the_steps_do():
+    """The compiled Newton of rational B-splines (jets in the kernel): on an exact NURBS
+    quarter circle of radius 2 in space (centre c, tilted plane), the feet of points off
+    the arc's plane are the circle's radial projections (c + R u / |u|, u the point's
+    offset projected on the plane) to 1e-13; and they equal bit for bit the step-by-step
+    iteration with the jets evaluated from Python (kernels.newton_rows)."""
+    e1 = np.array([1.0, 2.0, 2.0]) / 3.0
+    e2 = np.array([2.0, 1.0, -2.0]) / 3.0
+    centre, radius = np.array([5.0, -1.0, 3.0]), 2.0
+    plane = np.array([[1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]) * radius
+    arc = BSpline(
+        centre + plane @ np.vstack((e1, e2)), 2, weights=np.array([1.0, math.sqrt(0.5), 1.0])
+    )
+    table = arc.jet_table()
+    assert table is not None and table[3]
+    ang = RNG.uniform(0.1, 0.5 * math.pi - 0.1, 40)
+    rad = RNG.uniform(0.3, 3.5, 40)
+    normal = np.cross(e1, e2)
+    x = (
+        centre
+        + (rad * np.cos(ang))[:, None] * e1
+        + (rad * np.sin(ang))[:, None] * e2
+        + RNG.uniform(-1.0, 1.0, 40)[:, None] * normal
+    )
+    a, b, s0 = np.zeros(40), np.ones(40), np.full(40, 0.5)
+    t, foot = kernels.newton_table(*table, x, a, b, s0, 60)
+    truth = centre + radius * (np.cos(ang)[:, None] * e1 + np.sin(ang)[:, None] * e2)
+    np.testing.assert_allclose(foot, truth, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(arc.evaluate(t), truth, rtol=0, atol=1e-13)
+    # the same iteration, one compiled step per Python round with the jets from arc.jet
+    s, aa, bb = s0.copy(), a.copy(), b.copy()
+    ref_t, ref_foot = np.empty(40), np.empty((40, 3))
+    rows = np.arange(40)
+    for it in range(60):
+        sr, ar, br = s[rows], aa[rows], bb[rows]
+        c0, c1, c2 = (np.ascontiguousarray(c) for c in arc.jet(sr))
+        fr = np.empty((rows.size, 3))
+        done = kernels.newton_rows(c0, c1, c2, x[rows], sr, ar, br, it == 59, fr)
+        s[rows], aa[rows], bb[rows] = sr, ar, br
+        ref_t[rows[done]], ref_foot[rows[done]] = sr[done], fr[done]
+        rows = rows[~done]
+        if rows.size == 0:
+            break
+    assert rows.size == 0
+    np.testing.assert_array_equal(t, ref_t)
+    np.testing.assert_array_equal(foot, ref_foot)
+
+
+def _arc_distance(x: np.ndarray, centre, radius: float, a0: float, a1: float) -> np.ndarray:
+    """Distance from ``x`` (n, 2) to the circle arc of angles ``[a0, a1]`` (a0 < a1)."""
+    v = x - centre
+    ang = np.arctan2(v[:, 1], v[:, 0])
+    ang = np.where(ang < a0 - 1e-12, ang + 2.0 * math.pi, ang)
+    on = ang <= a1
+    ends = np.array([[math.cos(a0), math.sin(a0)], [math.cos(a1), math.sin(a1)]]) * radius
+    to_ends = np.linalg.norm(v[:, None, :] - ends[None], axis=2).min(axis=1)
+    return np.where(on, np.abs(np.linalg.norm(v, axis=1) - radius), to_ends)
+
+
+def test_closest_on_a_rational_spline_with_a_corner_equals_the_two_arcs():
+    """Global closest points on a rational B-spline (the Newton steps in one compiled call,
+    kernels.newton_table): two exact quarter circles (centres (0, 0) and (-1, 1), radius 1)
+    meeting at a 90-degree C0 corner (0, 1); the distance of 400 points around equals the
+    nearer arc's in closed form to 1e-13 (and 40 more near the corner), the foot is the
+    curve at ``t``, and points on the corner's convex side get the corner itself."""
+    r = math.sqrt(0.5)
+    c = BSpline(
+        np.array([[1, 0], [1, 1], [0, 1], [0, 2], [-1, 2]], float),
+        2,
+        np.array([0, 0, 0, 0.5, 0.5, 1, 1, 1], float),
+        np.array([1, r, 1, r, 1]),
+    )
+    assert c.jet_table() is not None and c.breaks().tolist() == [0.5]
+    x = np.vstack(
+        (
+            RNG.uniform([-2.5, -1.5], [2.5, 3.0], (400, 2)),
+            RNG.uniform([-0.45, 0.55], [0, 1], (40, 2)),
+        )
+    )
+    got = c.closest(x)
+    ref = np.minimum(
+        _arc_distance(x, np.array([0.0, 0.0]), 1.0, 0.0, 0.5 * math.pi),
+        _arc_distance(x, np.array([-1.0, 1.0]), 1.0, 0.0, 0.5 * math.pi),
+    )
+    np.testing.assert_allclose(got.distance, ref, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(c.evaluate(got.t), got.foot, rtol=0, atol=1e-13)
+    # on the corner's convex side (left of x = 0 and below y = 1, where neither arc's
+    # normal lines reach) and nearer than the ends (within 0.7 of it): the corner
+    corner = (x[:, 0] < -0.05) & (x[:, 1] < 0.95) & (np.linalg.norm(x - [0.0, 1.0], axis=1) < 0.7)
+    assert corner.sum() >= 10
+    np.testing.assert_allclose(got.foot[corner], np.tile([0.0, 1.0], (corner.sum(), 1)))
+    np.testing.assert_array_equal(got.t[corner], 0.5)
+
+
+def _all_pairs_cross(a: np.ndarray, b: np.ndarray, eps: float, skip_neighbours: bool) -> bool:
+    """Brute force: every segment of ``a`` against every segment of ``b`` (no boxes)."""
+    if len(a) < 2 or len(b) < 2:
+        return False
+    a0, a1 = a[:-1, None, :], a[1:, None, :]
+    b0, b1 = b[None, :-1, :], b[None, 1:, :]
+
+    def orient(p, q, r):
+        return (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1]) - (q[..., 1] - p[..., 1]) * (
+            r[..., 0] - p[..., 0]
+        )
+
+    tol = eps * eps
+    hit = (orient(a0, a1, b0) * orient(a0, a1, b1) < -tol) & (
+        orient(b0, b1, a0) * orient(b0, b1, a1) < -tol
+    )
+    if skip_neighbours:
+        i, j = np.indices(hit.shape)
+        hit &= j >= i + 2
+    return bool(hit.any())
+
+
+def test_crossing_kernels_equal_all_pairs_tables():
+    """The chunked compiled crossing tests (boxes of 16 segments) answer as the brute-force
+    table of every segment pair, on random walks (many crossings and near misses), smooth
+    curves that do and do not meet, a figure eight and polylines of 2 - 40 points."""
+    from medax.geometry.crossing_kernel import polylines_cross, self_crossing  # (one kernel)
+
+    rng = np.random.default_rng(7)
+    cases = []
+    for n in (2, 3, 4, 5, 17, 18, 33, 40, 200):
+        cases.append(np.cumsum(rng.normal(size=(n, 2)), axis=0))
+        cases.append(np.cumsum(rng.normal(size=(n, 2)) * [1.0, 0.05], axis=0))
+    t = np.linspace(0.0, 2.0 * math.pi, 201)
+    cases.append(np.column_stack((np.sin(t), np.sin(2.0 * t))))  # a figure eight
+    cases.append(np.column_stack((t, np.sin(t))))
+    cases.append(np.column_stack((t, np.sin(t) + 2.5)))  # above the last: no crossing
+    cases.append(np.column_stack((t, np.cos(t))))  # crosses the sine twice
+    seen = {True: 0, False: 0}
+    for eps in (0.0, 1e-12, 1e-3):
+        for a in cases:
+            a = np.ascontiguousarray(a)
+            ref = _all_pairs_cross(a, a, eps, skip_neighbours=True)
+            assert self_crossing(a, eps) == ref
+            seen[ref] += 1
+        for a, b in zip(cases[:-1], cases[1:], strict=True):
+            ref = _all_pairs_cross(a, b, eps, skip_neighbours=False)
+            assert polylines_cross(np.ascontiguousarray(a), np.ascontiguousarray(b), eps) == ref
+            seen[ref] += 1
+    assert seen[True] >= 20 and seen[False] >= 20
 
 
 def test_first_run_compile_is_announced(monkeypatch, caplog):

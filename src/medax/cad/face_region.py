@@ -147,7 +147,7 @@ def _profile(c: Any) -> Profile:
         periodic = bool(bs.IsPeriodic())
         if periodic:  # (one period, the same parameters)
             bs.SetNotPeriodic()
-        knots = np.array(list(bs.KnotSequence()), dtype=float)
+        knots = _values(bs.KnotSequence())
         deg = bs.Degree()
         return Profile("nurbs", _frame_any(), spline=_to_bspline(bs, 3), t0=knots[deg],
                        t1=knots[-deg - 1], periodic=periodic)  # fmt: skip
@@ -189,8 +189,8 @@ def bspline_embedding(bs: Any) -> NurbsSurface:
     # (one OCCT call per pole and none for unit weights: fitted faces have 10^3 poles)
     poles = np.array([[bs.Pole(a, b).Coord() for b in cols] for a in rows], dtype=float)
     poles = poles.reshape(nu, nv, 3)
-    uk = np.array(list(bs.UKnotSequence()), dtype=float)
-    vk = np.array(list(bs.VKnotSequence()), dtype=float)
+    uk = _values(bs.UKnotSequence())
+    vk = _values(bs.VKnotSequence())
     weights = None
     if bs.IsURational() or bs.IsVRational():
         weights = np.array([[bs.Weight(a, b) for b in cols] for a in rows], dtype=float)
@@ -203,16 +203,23 @@ def curve_copy(bs: Any) -> BSpline:
     return _to_bspline(bs, 3)
 
 
+def _values(arr: Any) -> FloatArray:
+    """The values of an OCCT ``TColStd_Array1OfReal`` (n,), read by index: iterating the
+    OCP array (``list(arr)``) costs ~0.25 ms per array, 30x the indexed reads."""
+    return np.array([arr.Value(i) for i in range(arr.Lower(), arr.Upper() + 1)], dtype=float)
+
+
 def _to_bspline(bs: Any, dim: int) -> BSpline:
     if bs.IsPeriodic():
         bs = bs.Copy()
         bs.SetNotPeriodic()
     n = bs.NbPoles()
+    poles = [bs.Pole(i) for i in range(1, n + 1)]  # (one OCCT call per pole)
     if dim == 2:
-        ctrl = np.array([[bs.Pole(i).X(), bs.Pole(i).Y()] for i in range(1, n + 1)])
+        ctrl = np.array([[p.X(), p.Y()] for p in poles])
     else:
-        ctrl = np.array([[bs.Pole(i).X(), bs.Pole(i).Y(), bs.Pole(i).Z()] for i in range(1, n + 1)])
-    knots = np.array(list(bs.KnotSequence()), dtype=float)
+        ctrl = np.array([[p.X(), p.Y(), p.Z()] for p in poles])
+    knots = _values(bs.KnotSequence())
     weights = np.array([bs.Weight(i) for i in range(1, n + 1)]) if bs.IsRational() else None
     return BSpline(ctrl, bs.Degree(), knots, weights)
 

@@ -147,14 +147,22 @@ class BSpline(Curve):
     def dim(self) -> int:
         return int(self.control_points.shape[1])
 
+    @cached_property
+    def _runs(self) -> tuple[FloatArray, np.ndarray, FloatArray]:
+        """The distinct knots (k,), their multiplicities (k,) and the C0 joints (read-only;
+        the tracer asks for them at every query)."""
+        kn, mult = np.unique(self.knots, return_counts=True)
+        joints = kn[(kn > 0.0) & (kn < 1.0) & (mult >= self.degree)]
+        for a in (kn, mult, joints):
+            a.flags.writeable = False
+        return kn, mult, joints
+
     def breaks(self) -> FloatArray:
         """Interior knots of multiplicity >= degree (C0 joints)."""
-        kn, mult = np.unique(self.knots, return_counts=True)
-        inner = (kn > 0.0) & (kn < 1.0) & (mult >= self.degree)
-        return kn[inner]
+        return self._runs[2]
 
     def complexity(self) -> int:
-        return max(1, int(np.unique(self.knots).size - 1))
+        return max(1, int(self._runs[0].size - 1))
 
     @cached_property
     def _pieces(self) -> tuple[FloatArray, FloatArray]:
@@ -170,7 +178,7 @@ class BSpline(Curve):
         # Taylor coefficients at each interval start (right limits: scipy evaluates a knot
         # with the interval to its right)
         taylor = np.array([np.asarray(self._spl(x[:-1], nu)) for nu in range(k + 1)])
-        fact = np.array([float(np.prod(np.arange(1, nu + 1))) for nu in range(k + 1)])
+        fact = np.array([float(math.factorial(nu)) for nu in range(k + 1)])
         return self._pack(x, (taylor / fact[:, None, None])[::-1])  # highest power first
 
     def _pack(self, x: FloatArray, c0: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -240,6 +248,15 @@ class BSpline(Curve):
         rows = np.ascontiguousarray(coefs[:, :, 0, :].transpose(1, 2, 0))
         return np.ascontiguousarray(x[1:-1]), x, rows
 
+    def jet_table(self) -> tuple[FloatArray, FloatArray, FloatArray, bool] | None:
+        """:attr:`_row_pieces` (homogeneous for a NURBS) and whether rational, for the
+        compiled Newton of :func:`kernels.newton_table`; None above
+        :data:`POWER_BASIS_MAX_DEGREE` (jets from scipy)."""
+        if self.degree > POWER_BASIS_MAX_DEGREE:
+            return None
+        inner, x, rows = self._row_pieces
+        return inner, x, rows, self.weights is not None
+
     def poly_search(self) -> PolySearch | None:
         """The compiled search tables of this curve
         (:class:`~medax.geometry.pair_search.PolySearch`), or None for a rational curve or
@@ -256,7 +273,7 @@ class BSpline(Curve):
     def chord_smooth(self) -> bool:
         """C1 with a piecewise polynomial ``C''``: no interior knot of multiplicity above
         ``degree - 1`` (and degree at least 2)."""
-        _, mult = np.unique(self.knots, return_counts=True)
+        mult = self._runs[1]
         return self.degree >= 2 and bool(np.all(mult[1:-1] <= self.degree - 1))
 
     @staticmethod
@@ -298,13 +315,15 @@ class BSpline(Curve):
     def derivative(self, t: FloatArray, order: int = 1) -> FloatArray:
         if self.weights is None:
             return self._raw(t, order)
-        h0, h1 = self._raw(t, 0), self._raw(t, 1)
+        # (one jet evaluation for all orders: the homogeneous derivatives come together)
+        h = self._raw_many(t, (0, 1) if order == 1 else (0, 1, 2))
+        h0, h1 = h[0], h[1]
         w0, w1 = h0[:, -1:], h1[:, -1:]
         c = h0[:, :-1] / w0
         d1 = (h1[:, :-1] - w1 * c) / w0
         if order == 1:
             return d1
-        h2 = self._raw(t, 2)
+        h2 = h[2]
         w2 = h2[:, -1:]
         return (h2[:, :-1] - 2.0 * w1 * d1 - w2 * c) / w0
 

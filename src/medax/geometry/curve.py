@@ -66,6 +66,12 @@ class Curve(ABC):
         work between them override this."""
         return self.evaluate(t), self.derivative(t), self.derivative(t, 2)
 
+    def jet_table(self) -> tuple[FloatArray, FloatArray, FloatArray, bool] | None:
+        """The one-curve polynomial table of :func:`kernels.newton_table` (interior breaks,
+        span starts, coefficient rows, whether the rows are homogeneous), whose jets equal
+        :meth:`jet`'s; None (the default) for kinds without one."""
+        return None
+
     def chord_smooth(self) -> bool:
         """Whether the curve is C1 with a piecewise continuous second derivative, so that
         between two parameters it stays within ``step^2 / 8 x max|C''|`` of its chord
@@ -376,8 +382,9 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
     sign change, whose inverse quadratic interpolation starts a bracketed Newton iteration;
     a bracket without a sign change keeps its nearest sample (an end of the curve). Curves
     with polynomial tables run it all in one compiled call
-    (:func:`medax.geometry.kernels.closest_search`); the others evaluate their jets from
-    Python between the compiled steps (:func:`_newton_in_brackets`).
+    (:func:`medax.geometry.kernels.closest_search`); the others bracket in one compiled
+    call and refine in another (:func:`_newton_in_brackets`: rational B-splines) or evaluate
+    their jets from Python between the compiled steps.
     """
     n = points.shape[0]
     if n == 0:
@@ -508,8 +515,10 @@ def _newton_in_brackets(
     curve: Curve, x: FloatArray, a: FloatArray, b: FloatArray, s: FloatArray, iters: int = 60
 ) -> tuple[FloatArray, FloatArray]:
     """The root of ``g(t) = (C(t) - x) . C'(t)`` in ``[a, b]`` (n,) where ``g(a) < 0 < g(b)``,
-    from ``s`` (n,): parameters (n,) and foot points (n, dim), for curves without polynomial
-    tables (their jets evaluated here, the steps compiled: :func:`kernels.newton_rows`).
+    from ``s`` (n,): parameters (n,) and foot points (n, dim), for curves without a compiled
+    global search: one compiled call for those with a jet table (rational B-splines:
+    :meth:`Curve.jet_table`, :func:`kernels.newton_table`), else their jets evaluated here
+    and the steps compiled (:func:`kernels.newton_rows`).
 
     Newton steps kept inside the shrinking sign-change bracket (bisection when a step leaves
     it or ``g' <= 0``); a row stops at its first step of at most ``_STEP_TOL`` (see there),
@@ -519,8 +528,11 @@ def _newton_in_brackets(
     a = np.array(a, dtype=np.float64)
     b = np.array(b, dtype=np.float64)
     s = np.array(s, dtype=np.float64)
-    s = np.where(np.isfinite(s), s, 0.5 * (a + b))
     x = np.ascontiguousarray(x, dtype=np.float64)
+    table = curve.jet_table()
+    if table is not None:  # (the whole iteration compiled, the jets too)
+        return kernels.newton_table(*table, x, a, b, s, iters)  # type: ignore[no-any-return]
+    s = np.where(np.isfinite(s), s, 0.5 * (a + b))
     foot = np.empty_like(x)
     rows = np.arange(s.size)
     for it in range(iters):

@@ -13,8 +13,14 @@ same algorithms as compiled loops over the points, one call per query:
   :func:`medax.geometry.curve.closest_near` on such tables;
 * :func:`candidates` and :func:`newton_rows` - the candidate search and one safeguarded
   Newton step for the curves without a polynomial table (their jets come from Python);
+* :func:`newton_table` - the whole safeguarded Newton iteration of curves with a jet table
+  but no global search table (rational B-splines: the homogeneous jet and the quotient
+  rule in the kernel; a separate global search kernel for them cost 2.4 s more to compile
+  for a few percent of a part's axis time);
 * ``basis_rows`` (:mod:`medax.geometry.basis_kernel`, announced and warmed up here with
-  the others) - B-spline basis values and derivatives by Cox-de Boor.
+  the others) - B-spline basis values and derivatives by Cox-de Boor;
+* ``crossing`` (:mod:`medax.geometry.crossing_kernel`, likewise) - the region's
+  side-crossing checks.
 
 Compiled with ``cache=True``: the first run after an install compiles (a few seconds, logged
 at INFO) and stores the machine code in ``__pycache__`` next to this file, or, where that is
@@ -34,6 +40,7 @@ from numba import njit
 
 from medax.geometry._types import FloatArray
 from medax.geometry.basis_kernel import basis_rows
+from medax.geometry.crossing_kernel import crossing
 
 log = logging.getLogger(__name__)
 
@@ -185,6 +192,74 @@ def newton_rows(
             for d in range(dim):
                 foot[i, d] = w[0, d] + ds * (w[1, d] + 0.5 * ds * w[2, d])
     return done
+
+
+@njit(cache=True, error_model="numpy")
+def _jet_table(
+    inner: FloatArray,
+    starts: FloatArray,
+    rows: FloatArray,
+    rational: bool,
+    t: float,
+    h: FloatArray,
+    w: FloatArray,
+) -> None:
+    """Into ``w`` (3, dim): the jet of a one-curve table (:func:`jet_rows`) at ``t``
+    clamped to ``[0, 1]``, as :meth:`medax.geometry.bspline.BSpline.jet` forms it: of a
+    rational curve from its homogeneous jet (``rows`` (degree + 1, dim + 1, spans), weight
+    last; into ``h`` (3, dim + 1)) by the quotient rule, in the same operations."""
+    if t == t:
+        t = min(max(t, 0.0), 1.0)
+    span = _span(inner, t)
+    if not rational:
+        _jet1(rows, span, t - starts[span], w)
+        return
+    _jet1(rows, span, t - starts[span], h)
+    dim = w.shape[1]
+    w0, w1, w2 = h[0, dim], h[1, dim], h[2, dim]
+    for d in range(dim):
+        c = h[0, d] / w0
+        d1 = (h[1, d] - w1 * c) / w0
+        w[0, d] = c
+        w[1, d] = d1
+        w[2, d] = (h[2, d] - 2.0 * w1 * d1 - w2 * c) / w0
+
+
+@njit(cache=True, error_model="numpy")
+def newton_table(  # type: ignore[no-untyped-def]
+    inner: FloatArray,
+    starts: FloatArray,
+    rows: FloatArray,
+    rational: bool,
+    x: FloatArray,
+    a: FloatArray,
+    b: FloatArray,
+    s: FloatArray,
+    iters: int,
+):
+    """The safeguarded Newton iteration of :func:`medax.geometry.curve._newton_in_brackets`
+    (:func:`_safe_step` from ``s`` (n,) in the brackets ``a``, ``b`` (n,), at most ``iters``
+    steps) for points ``x`` (n, dim) on a one-curve table, its jets evaluated here
+    (:func:`_jet_table`): parameters (n,) and foot points (n, dim)."""
+    n, dim = x.shape
+    t = np.empty(n)
+    foot = np.empty((n, dim))
+    w = np.empty((3, dim))
+    h = np.empty((3, dim + 1))
+    for i in range(n):
+        si, ai, bi = s[i], a[i], b[i]
+        if not np.isfinite(si):
+            si = 0.5 * (ai + bi)
+        for it in range(iters):
+            _jet_table(inner, starts, rows, rational, si, h, w)
+            g, dg = _g_dg(w, x[i])
+            si, ai, bi, done, ds = _safe_step(g, dg, si, ai, bi, it == iters - 1)
+            if done:
+                for d in range(dim):
+                    foot[i, d] = w[0, d] + ds * (w[1, d] + 0.5 * ds * w[2, d])
+                break
+        t[i] = si
+    return t, foot
 
 
 @njit(cache=True, error_model="numpy")
@@ -713,6 +788,8 @@ _COMPILED = (
     track_step_rows,
     certify_rows,
     basis_rows,
+    newton_table,
+    crossing,
 )
 _announced = False
 
@@ -758,6 +835,8 @@ def warm_up() -> None:
         np.array([0, 5]), inner, starts, rows, np.zeros(0), np.array([0, 0]), x, 2,
     )  # fmt: skip
     closest_bracketed(inner, starts, rows, np.zeros(1, dtype=np.int64), x, z, np.ones(1), z)
+    for rational, dim in ((False, 2), (True, 1)):  # (the rows: 2 coordinates, or 1 and w)
+        newton_table(inner, starts, rows, rational, x[:, :dim].copy(), z, np.ones(1), z, 60)
     cand = candidates(pts.T.copy(), np.einsum("ij,ij->i", pts, pts), np.array([0, 5]), x, 2)
     bracket_rows(ts, pts, slopes, x, cand[:, 0, 0].copy())
     xs = np.zeros((2, 1))
@@ -765,3 +844,4 @@ def warm_up() -> None:
     track_step_rows(np.zeros((6, 1)), xs, t, np.ones(1), False)
     certify_rows(ts, pts.T.copy(), ts.copy(), x, t, t, 0.1, 0.01, 0.0, 0.0)
     basis_rows(np.array([0.0, 0.0, 1.0, 1.0]), 1, t, np.array([1], dtype=np.int64))
+    crossing(pts, pts[::-1].copy(), 0.0, False)

@@ -10,7 +10,9 @@ import numpy as np
 
 from medax import tolerances
 from medax.errors import RegionError
+from medax.geometry import kernels
 from medax.geometry._types import FloatArray
+from medax.geometry.crossing_kernel import polylines_cross, self_crossing
 from medax.geometry.curve import Curve
 from medax.geometry.embedded_curve import EmbeddedCurve
 from medax.geometry.embedding import Embedding, PlaneEmbedding
@@ -179,9 +181,15 @@ class Region:
         return tuple(EmbeddedCurve(s, self.embedding) for s in self.sides)
 
     @cached_property
+    def _side_samples(self) -> tuple[FloatArray, ...]:
+        """``_SAMPLES`` points of each side at equal parameter steps (each (n, 2)), shared
+        by the checks and the boundary."""
+        return tuple(s.sample(_SAMPLES) for s in self.sides)
+
+    @cached_property
     def boundary(self) -> FloatArray:
         """Closed sampled boundary in the parameter plane, shape ``(4 * n, 2)``."""
-        return np.concatenate([s.sample(_SAMPLES)[:-1] for s in self.sides])
+        return np.concatenate([p[:-1] for p in self._side_samples])
 
     @cached_property
     def diagonal(self) -> float:
@@ -245,7 +253,7 @@ class Region:
         RegionError
             Naming the side or corner that is wrong.
         """
-        pts = np.concatenate([s.sample(_SAMPLES) for s in self.sides])
+        pts = np.concatenate(self._side_samples)
         with np.errstate(over="ignore", invalid="ignore"):
             diag = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0)))
         if not np.isfinite(diag):
@@ -272,7 +280,10 @@ class Region:
             check_simple(self.sides, diag, self.name)
 
     def _check_crossings(self, diag: float) -> None:
-        polys = [s.sample(_SAMPLES) for s in self.sides]
+        """Sides crossing each other or themselves (compiled chunked tests,
+        :mod:`medax.geometry.crossing_kernel`)."""
+        kernels.announce_compile()
+        polys = [np.ascontiguousarray(p) for p in self._side_samples]
         for i in range(4):
             for j in range(i + 1, 4):
                 a, b = polys[i], polys[j]
@@ -281,71 +292,11 @@ class Region:
                     a, b = a[:-2], b[2:]
                 elif i == 0 and j == 3:
                     a, b = a[2:], b[:-2]
-                if _polylines_cross(a, b, 1e-12 * diag):
+                if polylines_cross(a, b, 1e-12 * diag):
                     raise RegionError(f"region '{self.name}': side {i} crosses side {j}")
         for i, p in enumerate(polys):
-            if _self_crossing(p, 1e-12 * diag):
+            if self_crossing(p, 1e-12 * diag):
                 raise RegionError(f"region '{self.name}': side {i} crosses itself")
-
-
-def _orient(p: FloatArray, q: FloatArray, r: FloatArray) -> FloatArray:
-    return (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1]) - (q[..., 1] - p[..., 1]) * (
-        r[..., 0] - p[..., 0]
-    )
-
-
-def _segments_cross(
-    a0: FloatArray, a1: FloatArray, b0: FloatArray, b1: FloatArray, eps: float
-) -> np.ndarray:
-    """Proper intersections of segments ``a0a1`` (..., n, 2) with ``b0b1`` (..., m, 2),
-    shape (..., n, m)."""
-    A0, A1 = a0[..., :, None, :], a1[..., :, None, :]
-    B0, B1 = b0[..., None, :, :], b1[..., None, :, :]
-    o1, o2 = _orient(A0, A1, B0), _orient(A0, A1, B1)
-    o3, o4 = _orient(B0, B1, A0), _orient(B0, B1, A1)
-    tol = eps * eps
-    return (o1 * o2 < -tol) & (o3 * o4 < -tol)
-
-
-_CHUNK = 16  # segments per bounding box in the crossing tests
-
-
-def _chunks(p: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Segments of polyline ``p`` (n, 2) in chunks: starts, ends (c, CHUNK, 2) padded by
-    repeating the last segment, and chunk bounding boxes lo, hi (c, 2)."""
-    s0, s1 = p[:-1], p[1:]
-    c = -(-len(s0) // _CHUNK)
-    idx = np.minimum(np.arange(c * _CHUNK), len(s0) - 1).reshape(c, _CHUNK)
-    a0, a1 = s0[idx], s1[idx]
-    lo = np.minimum(a0.min(axis=1), a1.min(axis=1))
-    hi = np.maximum(a0.max(axis=1), a1.max(axis=1))
-    return a0, a1, lo, hi
-
-
-def _polylines_cross(a: FloatArray, b: FloatArray, eps: float) -> bool:
-    """Whether polylines ``a`` and ``b`` properly cross: only segment chunks whose bounding
-    boxes overlap are tested (a dense n x m table is ~40x slower for smooth sides)."""
-    if len(a) < 2 or len(b) < 2:
-        return False
-    a0, a1, alo, ahi = _chunks(a)
-    b0, b1, blo, bhi = _chunks(b)
-    over = np.all((alo[:, None] <= bhi[None] + eps) & (blo[None] <= ahi[:, None] + eps), axis=2)
-    i, j = np.nonzero(over)
-    return bool(i.size) and bool(np.any(_segments_cross(a0[i], a1[i], b0[j], b1[j], eps)))
-
-
-def _self_crossing(p: FloatArray, eps: float) -> bool:
-    """Whether polyline ``p`` crosses itself (segments that are not neighbours)."""
-    if len(p) < 4:
-        return False
-    a0, a1, lo, hi = _chunks(p)
-    over = np.all((lo[:, None] <= hi[None] + eps) & (lo[None] <= hi[:, None] + eps), axis=2)
-    i, j = np.nonzero(np.triu(over))
-    table = _segments_cross(a0[i], a1[i], a0[j], a1[j], eps)
-    # global segment numbers: exclude a segment against itself and its neighbours
-    gi = (i[:, None] * _CHUNK + np.arange(_CHUNK))[:, :, None]
-    gj = (j[:, None] * _CHUNK + np.arange(_CHUNK))[:, None, :]
-    return bool(np.any(table & (gj >= gi + 2)))
 
 
 def normalised_region(region: Region) -> tuple[Region, FloatArray, float]:
