@@ -157,8 +157,8 @@ def medial_curve(
         if closed_dir and hi - lo >= period:
             return "fillet wraps almost all around its axis: not supported"
         if not closed_dir:  # a bounded surface (a B-spline blend) is not continued past its end
-            b0, b1, c0, c1 = surf.Bounds()
-            lo, hi = (max(lo, b0), min(hi, b1)) if iso == "v" else (max(lo, c0), min(hi, c1))
+            b0, b1, d0, d1 = surf.Bounds()  # (not c1: the smooth edge's cross parameter)
+            lo, hi = (max(lo, b0), min(hi, b1)) if iso == "v" else (max(lo, d0), min(hi, d1))
     curve = surf.UIso(mid) if iso == "u" else surf.VIso(mid)
     mk = BRepBuilderAPI_MakeEdge(curve, lo, hi)
     if not mk.IsDone():

@@ -29,6 +29,7 @@ from OCP.TopoDS import TopoDS
 from medax import tolerances
 from medax._progress import log_progress
 from medax.cad.simplify.bridge import bridge_edge
+from medax.cad.simplify.chains import Chain, chain_arcs, chain_specs, find_chains, links
 from medax.cad.simplify.corner import corner_arcs, plane_normal
 from medax.cad.simplify.fitted import FittedSurface, GraphSetup, graph_setup, graph_surface
 from medax.cad.simplify.groups import Group, GroupError, build_groups
@@ -134,6 +135,9 @@ class _Job:
     whole: dict[int, int] = field(default_factory=dict)  # fillet -> face it merges into whole
     # fillet -> its supporting face that has no surface for its half (why it was kept)
     no_surface: dict[int, int] = field(default_factory=dict)
+    # chains of tangent fillets (:mod:`.chains`): each goes whole or not at all
+    chains: list[Chain] = field(default_factory=list)
+    chain_links: set[tuple[int, int]] = field(default_factory=set)
 
     @property
     def vol0(self) -> float:
@@ -217,14 +221,18 @@ def simplify(
             kept[spec.face] = m
         else:
             job.medials[spec.face] = m
+    _chains(job, blends)
     _corners(job, blends)
     _bridges(job, blends)
     say(f"{len(job.medials)} fillets with a medial curve, {len(job.corners)} corner blends split")
     job.specs = {s.face: s for s in blends.fillets if s.face in job.medials}
+    for ch in job.chains:
+        if all(f in job.specs for f in ch.members):
+            job.specs.update(chain_specs(ch))
     for f, why in mitre_keeps(mitre_pairs(work, fmap, job.specs), job.corners).items():
         job.specs.pop(f)
         kept[f] = why
-    _cascade(job.specs, job.corners, kept)
+    _cascade(job.specs, job.corners, kept, job.chains)
     _refresh_surfaces(job)
     n_fit = sum(1 for v in job.surfaces.values() if v == FITTED)
     say(f"{len(job.specs)} fillets on {len(job.surfaces)} merged faces ({n_fit} fitted)")
@@ -241,7 +249,8 @@ def simplify(
     if isinstance(first, str):
         say(f"rebuild with all fillets failed ({first}); isolating the failing fillets")
         deadline = time.perf_counter() + time_budget
-        result, specs = isolate(specs, attempt, kept, say, deadline, first)
+        together = [set(ch.members) for ch in job.chains]
+        result, specs = isolate(specs, attempt, kept, say, deadline, first, together)
     else:
         result = first
     used_corners = (
@@ -321,6 +330,27 @@ def _corners(job: _Job, blends: BlendInput) -> None:
         job.corners[cs.face], job.arcs[cs.face] = cs, r[0]
 
 
+def _chains(job: _Job, blends: BlendInput) -> None:
+    """Chains of tangent fillets (see :mod:`.chains`) into ``job.chains``; the fillets of
+    linked sets that are no open chain between two faces are kept with the reason."""
+    by_face = {s.face: s for s in blends.fillets}
+    job.chain_links = links(by_face)
+    chains, refused = find_chains(by_face)
+    for f, why in refused.items():
+        job.medials.pop(f, None)
+        job.kept.setdefault(f, why)
+    for ch in chains:
+        missing = [f for f in ch.members if f not in job.medials]
+        if missing:
+            for f in ch.members:
+                job.medials.pop(f, None)
+                job.kept.setdefault(
+                    f, f"in a chain of tangent fillets with fillet {missing[0]}, which is kept"
+                )
+            continue
+        job.chains.append(ch)
+
+
 def _bridges(job: _Job, blends: BlendInput) -> None:
     """Bridges of the fillets that ride on another fillet with a medial curve (see
     :mod:`.bridge`) into ``job.bridges``; a rider without one is kept."""
@@ -328,6 +358,8 @@ def _bridges(job: _Job, blends: BlendInput) -> None:
     for spec in blends.fillets:
         for base, e in zip(spec.supporting, spec.smooth_edges, strict=True):
             if spec.face not in job.medials or base not in job.medials:
+                continue
+            if (spec.face, base) in job.chain_links:  # next in a chain: no bridge
                 continue
             supports = tuple(job.face(s) for s in by_face[base].supporting)
             r = bridge_edge(
@@ -345,12 +377,24 @@ def _bridges(job: _Job, blends: BlendInput) -> None:
             job.bridges[(spec.face, base)] = r[0]
 
 
-def _cascade(specs: dict[int, FilletSpec], corners: dict[int, CornerSpec], kept) -> None:  # type: ignore[no-untyped-def]
-    """A corner blend goes only with all its fillets, and a fillet only with its corners:
-    drop both ways until nothing changes."""
+def _cascade(  # type: ignore[no-untyped-def]
+    specs: dict[int, FilletSpec], corners: dict[int, CornerSpec], kept, chains: list[Chain]
+) -> None:
+    """A corner blend goes only with all its fillets, and a fillet only with its corners;
+    a chain of fillets goes whole or not at all: drop until nothing changes."""
     changed = True
     while changed:
         changed = False
+        for ch in chains:
+            gone = [f for f in ch.members if f not in specs]
+            if gone and len(gone) < len(ch.members):
+                for f in ch.members:
+                    if f in specs:
+                        specs.pop(f)
+                        kept.setdefault(
+                            f, f"in a chain of tangent fillets with fillet {gone[0]}, which is kept"
+                        )
+                changed = True
         for c, cs in list(corners.items()):
             gone = [f for f in cs.fillets if f not in specs]
             if gone:
@@ -370,7 +414,7 @@ def _refresh_surfaces(job: _Job) -> None:
     runs again whenever fillets are dropped."""
     specs, kept = job.specs, job.kept
     while True:
-        _cascade(specs, job.corners, kept)
+        _cascade(specs, job.corners, kept, job.chains)
         surfaces, failed = _surfaces_for(job, specs, job.corners)
         if not failed:
             job.surfaces = surfaces
@@ -390,7 +434,12 @@ def _surfaces_for(
     first face that has none, each with that face and the reason (empty when every face
     has one)."""
     with_corner = {s for cs in corners.values() for s in cs.supporting}
-    with_corner |= {s for base in riders(specs) for s in specs[base].supporting}
+    with_corner |= {
+        s
+        for base, rs in riders(specs).items()
+        if any((r, base) not in job.chain_links for r in rs)
+        for s in specs[base].supporting
+    }
     surfaces: dict[int, MergedSurface | str] = {}
     for sup, hs in halves_of(specs).items():
         if sup in specs:  # a simplified fillet: its riders' pieces go to its supports
@@ -416,9 +465,23 @@ def _surface_of(
     planar = BRepAdaptor_Surface(support).GetType() == GeomAbs_Plane
     if with_corner:
         return FITTED if planar else "corner or bridged pieces on a curved face"
-    halves = [
-        Half(job.face(f), job.medials[f], TopoDS.Edge(job.emap.FindKey(e + 1))) for f, e in hs
-    ]
+    halves = []
+    for f, e in hs:
+        half = Half(job.face(f), job.medials[f], TopoDS.Edge(job.emap.FindKey(e + 1)))
+        ch = next((c for c in job.chains if sup in c.ends and f in c.members), None)
+        if ch is not None:
+            end = ch.ends.index(sup)
+            faces = [job.face(g) for g in ch.members]
+            arcs = chain_arcs(ch, end, faces, job.medials)
+            if isinstance(arcs, str):
+                return arcs
+            others = [
+                job.face(g)
+                for i, g in enumerate(ch.members)
+                if g != f and (ch.side(i) == end or i == ch.middle)
+            ]
+            half = replace(half, chain=tuple(others), arcs=tuple(arcs))
+        halves.append(half)
     try:
         ms = merged_surface(support, halves, job.btol)
     except (ValueError, RuntimeError) as err:  # OCCT construction failures
@@ -527,7 +590,10 @@ def _split(
     and its groups. The split a fit round kept (``keep``) is taken again by the next call
     when it was made with the same tool edges (the fit rounds only read it; an attempt,
     whose rebuild adds pcurves to its edges, takes it and leaves none behind)."""
-    tools = [job.medials[f].edge for f in sel if f not in job.whole]
+    whole = {f for ch in job.chains for i, f in enumerate(ch.members) if i != ch.middle} | set(
+        job.whole
+    )
+    tools = [job.medials[f].edge for f in sel if f not in whole]
     tools += [e for c in csel for e in job.arcs[c]]
     tools += [e for (f, base), e in job.bridges.items() if f in sel and base in sel]
     last, job.last_split = job.last_split, None
@@ -574,7 +640,7 @@ def _fit_round(job: _Job, probe: bool) -> bool:
         for f in blamed:
             job.specs.pop(f, None)
             job.kept.setdefault(f, f"rebuild failed: {err}")
-        _cascade(job.specs, job.corners, job.kept)
+        _cascade(job.specs, job.corners, job.kept, job.chains)
         return True
     except CadError:
         return False  # the attempt will report it
@@ -594,7 +660,7 @@ def _fit_round(job: _Job, probe: bool) -> bool:
                 if f not in job.kept:
                     job.kept[f] = f"supporting face {sup}: {why}"
                     job.no_surface[f] = sup
-    _cascade(job.specs, job.corners, job.kept)
+    _cascade(job.specs, job.corners, job.kept, job.chains)
     return True
 
 

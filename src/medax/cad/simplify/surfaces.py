@@ -48,6 +48,10 @@ class Half:
     face: Any
     medial: Medial
     edge: Any
+    #: For the first fillet of a chain (:mod:`.chains`): the faces of the members after it
+    #: and the section arcs (each (3, 3)) of all the members that join this face, in order.
+    chain: tuple[Any, ...] = ()
+    arcs: tuple[Array, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -102,15 +106,19 @@ def _boundary_samples(face: Any, n: int = 17) -> Array:
 
 
 def _chain(
-    segment: tuple[Array, Array], arcs: list[Array], tol: float, fixed: Array | None = None
+    segment: tuple[Array, Array],
+    arcs: list[list[Array]],
+    tol: float,
+    fixed: Array | None = None,
 ) -> list[Any] | str:
-    """Profile pieces: line ``segment`` (p0, p1) with each arc (3 points, first on the line's
-    end) attached at the matching end; free line ends extended, except an end at ``fixed``
-    (a point on the axis of revolution). Returns curves in order."""
+    """Profile pieces: line ``segment`` (p0, p1) with each sequence of arcs (each arc 3
+    points, the first arc's first on the line's end, each next one starting where the one
+    before ends) attached at the matching end; free line ends extended, except an end at
+    ``fixed`` (a point on the axis of revolution). Returns curves in order."""
     p0, p1 = segment
-    at: dict[int, Array] = {}
+    at: dict[int, list[Array]] = {}
     for arc in arcs:
-        d0, d1 = np.linalg.norm(arc[0] - p0), np.linalg.norm(arc[0] - p1)
+        d0, d1 = np.linalg.norm(arc[0][0] - p0), np.linalg.norm(arc[0][0] - p1)
         end = 0 if d0 < d1 else 1
         if min(d0, d1) > tol:
             return "a fillet half does not meet an end of the face's section"
@@ -129,15 +137,30 @@ def _chain(
     q1 = p1 if 1 in at or stays(p1) else p1 + FREE_END_EXTENSION * length * t
     pieces: list[Any] = []
     if 0 in at:
-        a = at[0][::-1]
-        a[-1] = q0
-        pieces.append(GC_MakeArcOfCircle(pnt(a[0]), pnt(a[1]), pnt(a[2])).Value())
+        pieces += [_arc_piece(a[::-1]) for a in reversed(_attached(at[0], q0, tol))]
     pieces.append(GC_MakeSegment(pnt(q0), pnt(q1)).Value())
     if 1 in at:
-        a = at[1].copy()
-        a[0] = q1
-        pieces.append(GC_MakeArcOfCircle(pnt(a[0]), pnt(a[1]), pnt(a[2])).Value())
+        pieces += [_arc_piece(a) for a in _attached(at[1], q1, tol)]
     return pieces
+
+
+def _attached(arcs: list[Array], start: Array, tol: float) -> list[Array]:
+    """Copies of ``arcs`` (each (3, 3)), the first starting exactly at ``start`` and each
+    next one exactly where the one before ends (they meet within ``tol`` already: edges
+    shared by two faces, sampled on each)."""
+    out, p = [], start
+    for a in arcs:
+        if float(np.linalg.norm(a[0] - p)) > tol:
+            raise ValueError("the arcs of a chain of fillets do not meet")
+        b = a.copy()
+        b[0] = p
+        out.append(b)
+        p = b[-1]
+    return out
+
+
+def _arc_piece(a: Array) -> Any:
+    return GC_MakeArcOfCircle(pnt(a[0]), pnt(a[1]), pnt(a[2])).Value()
 
 
 def _join(pieces: list[Any], tol: float) -> Any:
@@ -172,7 +195,7 @@ def merged_surface(support: Any, halves: list[Half], tol: float) -> MergedSurfac
     ``tol`` is the length tolerance of the geometric tests (e.g. 1e-7 x the part diagonal).
     """
     sad = BRepAdaptor_Surface(support)
-    hads = [BRepAdaptor_Surface(h.face) for h in halves]
+    hads = [BRepAdaptor_Surface(f) for h in halves for f in (h.face, *h.chain)]
     kinds = {a.GetType() for a in hads}
     if kinds == {GeomAbs_Cylinder} and sad.GetType() == GeomAbs_Plane:
         return _extrusion(support, halves, hads, tol)
@@ -198,13 +221,16 @@ def _extrusion(support: Any, halves: list[Half], hads: list[Any], tol: float) ->
     ext = _line_extent(proj(pts), tol)
     if ext is None:
         return "supporting plane's section is not a line"
-    arcs = [proj(_half_points(h)) for h in halves]
+    arcs = [[proj(a) for a in h.arcs] if h.arcs else [proj(_half_points(h))] for h in halves]
     pieces = _chain(ext, arcs, 10 * tol)
     if isinstance(pieces, str):
         return pieces
     profile = _join(pieces, tol)
     # finite along d: the group's extent along d plus a margin (projections need bounds)
-    along = np.concatenate([(pts - o) @ d] + [(_boundary_samples(h.face) - o) @ d for h in halves])
+    along = np.concatenate(
+        [(pts - o) @ d]
+        + [(_boundary_samples(f) - o) @ d for h in halves for f in (h.face, *h.chain)]
+    )
     start = float((o - xyz(profile.StartPoint())) @ d)
     lo, hi = float(along.min()), float(along.max())
     margin = 0.1 * (hi - lo) + 10 * tol
@@ -297,7 +323,9 @@ def _revolution(support: Any, halves: list[Half], hads: list[Any], tol: float) -
     ext = _line_extent(pts, tol)
     if ext is None:
         return "supporting face's meridian section is not a line"
-    arcs = [meridian(_half_points(h)) for h in halves]
+    if any(h.chain for h in halves):
+        return "a chain of fillets on a face of revolution (not supported)"
+    arcs = [[meridian(_half_points(h))] for h in halves]
     pieces = _chain(ext, arcs, 10 * tol, fixed)
     if isinstance(pieces, str):
         return pieces
