@@ -29,7 +29,7 @@ from OCP.TopoDS import TopoDS
 from medax import tolerances
 from medax._progress import log_progress
 from medax.cad.simplify.bridge import bridge_edge
-from medax.cad.simplify.chains import Chain, chain_arcs, chain_specs, find_chains, links
+from medax.cad.simplify.chains import Chain, chain_arcs, chain_specs, find_chains
 from medax.cad.simplify.corner import corner_arcs, plane_normal
 from medax.cad.simplify.fitted import FittedSurface, GraphSetup, graph_setup, graph_surface
 from medax.cad.simplify.groups import Group, GroupError, build_groups
@@ -138,6 +138,8 @@ class _Job:
     # chains of tangent fillets (:mod:`.chains`): each goes whole or not at all
     chains: list[Chain] = field(default_factory=list)
     chain_links: set[tuple[int, int]] = field(default_factory=set)
+    # rider -> (the fillet it rides on with no bridge, its medial curve, why it was kept)
+    unbridged: dict[int, tuple[int, Medial, str]] = field(default_factory=dict)
 
     @property
     def vol0(self) -> float:
@@ -243,6 +245,7 @@ def simplify(
     if n_fit:
         _fit_pass(job)
     _one_sided(job, blends)
+    _readmit_riders(job, blends)
     specs, corners = job.specs, job.corners
     first = attempt(specs) if specs else None
     result: _Attempt | None
@@ -331,24 +334,31 @@ def _corners(job: _Job, blends: BlendInput) -> None:
 
 
 def _chains(job: _Job, blends: BlendInput) -> None:
-    """Chains of tangent fillets (see :mod:`.chains`) into ``job.chains``; the fillets of
-    linked sets that are no open chain between two faces are kept with the reason."""
+    """Chains of tangent fillets (see :mod:`.chains`) into ``job.chains``. A chain
+    member with no medial curve (kept) is a face like any other: the runs of members
+    between such faces are chains of their own (a run of one is a plain fillet)."""
     by_face = {s.face: s for s in blends.fillets}
-    job.chain_links = links(by_face)
-    chains, refused = find_chains(by_face)
-    for f, why in refused.items():
-        job.medials.pop(f, None)
-        job.kept.setdefault(f, why)
+    # linked sets that are no open chain (closed, branching, ending on blends) are left to
+    # the riders' rules (:func:`_bridges`, :func:`_readmit_riders`)
+    chains, _ = find_chains(by_face)
     for ch in chains:
-        missing = [f for f in ch.members if f not in job.medials]
-        if missing:
-            for f in ch.members:
-                job.medials.pop(f, None)
-                job.kept.setdefault(
-                    f, f"in a chain of tangent fillets with fillet {missing[0]}, which is kept"
-                )
-            continue
-        job.chains.append(ch)
+        runs: list[list[int]] = [[]]
+        for i in range(len(ch.members)):
+            if ch.members[i] in job.medials:
+                runs[-1].append(i)
+            elif runs[-1]:
+                runs.append([])
+        for run in runs:
+            if len(run) < 2:
+                continue
+            i, j = run[0], run[-1]
+            ends = (ch.toward(i, 0), ch.toward(j, 1))
+            job.chains.append(
+                Chain(tuple(ch.members[k] for k in run), ends, tuple(ch.specs[k] for k in run))
+            )
+    for ch in job.chains:
+        for f, g in zip(ch.members[:-1], ch.members[1:], strict=True):
+            job.chain_links |= {(f, g), (g, f)}
 
 
 def _bridges(job: _Job, blends: BlendInput) -> None:
@@ -371,10 +381,55 @@ def _bridges(job: _Job, blends: BlendInput) -> None:
                 job.btol,
             )
             if isinstance(r, str):
-                job.medials.pop(spec.face)
-                job.kept[spec.face] = f"rides on fillet {base}: {r}"
+                why = f"rides on fillet {base}: {r}"
+                job.unbridged[spec.face] = (base, job.medials.pop(spec.face), why)
+                job.kept[spec.face] = why
                 break
             job.bridges[(spec.face, base)] = r[0]
+
+
+def _readmit_riders(job: _Job, blends: BlendInput) -> None:
+    """Riders kept for want of a bridge (:func:`_bridges`) whose base fillet is kept anyway
+    are tried as plain fillets: the base is then a supporting face like any other, and the
+    rider's half on it merges into it (a torus round a kept cylindrical fillet: an exact
+    revolution). When that costs fillets that went before (a fitted face that no longer
+    fits with the new halves), nothing changes."""
+    by_face = {s.face: s for s in blends.fillets}
+    back = {
+        r: (base, m, why)
+        for r, (base, m, why) in job.unbridged.items()
+        if job.kept.get(r) == why and base not in job.specs and base not in job.whole
+    }
+    if not back:
+        return
+    before: tuple[dict[int, Any], ...] = (
+        dict(job.specs),
+        dict(job.kept),
+        dict(job.surfaces),
+        dict(job.no_surface),
+    )
+    for r, (_, m, _) in back.items():
+        job.medials[r] = m
+        job.specs[r] = by_face[r]
+        job.kept.pop(r)
+    _refresh_surfaces(job)
+    if any(v == FITTED for v in job.surfaces.values()):
+        _fit_pass(job)
+    lost = sorted(f for f in before[0] if f not in job.specs)
+    if lost:
+        state: tuple[dict[int, Any], ...] = (job.specs, job.kept, job.surfaces, job.no_surface)
+        for now, old in zip(state, before, strict=True):
+            now.clear()  # in place: the caller holds ``job.kept``
+            now.update(old)
+        for r, (_, _, why) in back.items():
+            job.medials.pop(r)
+            job.kept[r] = f"{why}; as a plain fillet on it (it is kept) fillets {lost[:5]} fail"
+        return
+    for r, (base, _, why) in back.items():
+        if r in job.kept:
+            job.kept[r] = f"{why}; as a plain fillet on it (it is kept): {job.kept[r]}"
+        else:
+            job.say(f"fillet {r} merged into fillet {base}, which is kept (no bridge over it)")
 
 
 def _cascade(  # type: ignore[no-untyped-def]

@@ -144,6 +144,56 @@ def _chain(
     return pieces
 
 
+def _arc_core(
+    centre: Array, radius: float, d: Array, pts: Array, arcs: list[list[Array]], tol: float
+) -> list[Any] | str:
+    """Profile pieces when the supporting face is a cylinder on an axis along ``d``: its
+    section is the arc of ``centre`` (3,) and ``radius`` spanned by ``pts`` (n, 3, projected
+    on the section plane through ``centre``), with each sequence of ``arcs`` attached at the
+    matching end as in :func:`_chain`; free ends continued by a tenth of the sweep."""
+    e1 = pts[0] - centre
+    e1 -= (e1 @ d) * d
+    if np.linalg.norm(e1) < tol:
+        return "degenerate section of the supporting cylinder"
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(d, e1)
+    r = pts - centre
+    if np.abs(np.linalg.norm(r, axis=1) - radius).max() > tol:
+        return "the supporting cylinder's boundary is not on its circle"
+    th = np.sort(np.mod(np.arctan2(r @ e2, r @ e1), 2 * math.pi))
+    gaps = np.diff(np.concatenate([th, th[:1] + 2 * math.pi]))
+    g = int(np.argmax(gaps))
+    if gaps[g] < 0.1:
+        return "the supporting cylinder is closed round its axis"
+    t0 = float(th[(g + 1) % len(th)])
+    t1 = t0 + 2 * math.pi - float(gaps[g])
+
+    def at(t: float) -> Array:
+        return centre + radius * (math.cos(t) * e1 + math.sin(t) * e2)
+
+    ends = (at(t0), at(t1))
+    where: dict[int, list[Array]] = {}
+    for seq in arcs:
+        dist = [float(np.linalg.norm(seq[0][0] - p)) for p in ends]
+        k = int(np.argmin(dist))
+        if dist[k] > tol:
+            return "a fillet half does not meet an end of the face's section"
+        if k in where:
+            return "two fillet halves meet the same end of the face's section"
+        where[k] = seq
+    room = min(0.1 * (t1 - t0), 0.5 * float(gaps[g]))
+    a0 = t0 if 0 in where else t0 - room
+    a1 = t1 if 1 in where else t1 + room
+    q0, q1 = at(a0), at(a1)
+    pieces: list[Any] = []
+    if 0 in where:
+        pieces += [_arc_piece(a[::-1]) for a in reversed(_attached(where[0], q0, tol))]
+    pieces.append(_arc_piece(np.array([q0, at(0.5 * (a0 + a1)), q1])))
+    if 1 in where:
+        pieces += [_arc_piece(a) for a in _attached(where[1], q1, tol)]
+    return pieces
+
+
 def _attached(arcs: list[Array], start: Array, tol: float) -> list[Array]:
     """Copies of ``arcs`` (each (3, 3)), the first starting exactly at ``start`` and each
     next one exactly where the one before ends (they meet within ``tol`` already: edges
@@ -199,6 +249,9 @@ def merged_surface(support: Any, halves: list[Half], tol: float) -> MergedSurfac
     kinds = {a.GetType() for a in hads}
     if kinds == {GeomAbs_Cylinder} and sad.GetType() == GeomAbs_Plane:
         return _extrusion(support, halves, hads, tol)
+    if kinds == {GeomAbs_Cylinder} and sad.GetType() == GeomAbs_Cylinder:
+        # a cylinder on a parallel axis (the end face of a chain of fillets, :mod:`.chains`)
+        return _extrusion(support, halves, hads, tol)
     if kinds <= {GeomAbs_Torus, GeomAbs_Cylinder} and GeomAbs_Torus in kinds:
         return _revolution(support, halves, hads, tol)
     return "no exact surface for this face and its fillet halves (fitting not implemented)"
@@ -209,20 +262,27 @@ def _extrusion(support: Any, halves: list[Half], hads: list[Any], tol: float) ->
     d = dirs[0]
     if any(np.linalg.norm(np.cross(d, e)) > 1e-9 for e in dirs[1:]):
         return "fillets along non-parallel edges of one plane: no extrusion (not supported)"
-    n = xyz(BRepAdaptor_Surface(support).Plane().Axis().Direction())
-    if abs(n @ d) > 1e-9:
-        return "fillet axis not parallel to the supporting plane"
+    sad = BRepAdaptor_Surface(support)
     pts = _boundary_samples(support)
     o = pts[0]
 
     def proj(p: Array) -> Array:
         return p - np.outer((p - o) @ d, d) if p.ndim == 2 else p - ((p - o) @ d) * d
 
-    ext = _line_extent(proj(pts), tol)
-    if ext is None:
-        return "supporting plane's section is not a line"
     arcs = [[proj(a) for a in h.arcs] if h.arcs else [proj(_half_points(h))] for h in halves]
-    pieces = _chain(ext, arcs, 10 * tol)
+    if sad.GetType() == GeomAbs_Cylinder:
+        c, a = _axis(sad)
+        if np.linalg.norm(np.cross(d, a)) > 1e-9:
+            return "fillet axis not parallel to the supporting cylinder's axis"
+        pieces = _arc_core(proj(c), sad.Cylinder().Radius(), d, proj(pts), arcs, 10 * tol)
+    else:
+        n = xyz(sad.Plane().Axis().Direction())
+        if abs(n @ d) > 1e-9:
+            return "fillet axis not parallel to the supporting plane"
+        ext = _line_extent(proj(pts), tol)
+        if ext is None:
+            return "supporting plane's section is not a line"
+        pieces = _chain(ext, arcs, 10 * tol)
     if isinstance(pieces, str):
         return pieces
     profile = _join(pieces, tol)
