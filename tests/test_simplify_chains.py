@@ -147,3 +147,28 @@ def test_two_arc_chain_removed_at_the_tangency_line(two):
     d = [np.abs(j[:, [0, 2]] - TANGENCY).max() for j in joints]
     assert min(d) <= 1e-9 * r.diagonal
     assert len(joints) == 4  # and the three sharp corners
+
+
+@pytest.mark.parametrize("bad", [{4}, {0}, set()])
+def test_isolation_never_splits_a_chain(bad):
+    """A chain is one unit of the search: every attempt holds all of its fillets or none,
+    and a failing member keeps the whole chain (truth: the attempts' own selections)."""
+    import math as m
+
+    from medax.cad.simplify.search import isolate
+    from medax.cad.simplify.specs import FilletSpec
+
+    specs = {f: FilletSpec(f, (2 * f, 2 * f + 1), (100 + f, 101 + f), 1.0) for f in range(12)}
+    chain = {3, 4, 5}
+    calls: list[set[int]] = []
+
+    def attempt(sel):  # type: ignore[no-untyped-def]
+        calls.append(set(sel))
+        hit = sorted(set(sel) & bad)
+        return f"fillet {hit[0]} fails" if hit else ("ok", frozenset(sel))
+
+    kept: dict[int, str] = {}
+    _, accepted = isolate(specs, attempt, kept, lambda s: None, m.inf, "first", [chain])
+    assert all(chain <= c or not chain & c for c in calls)
+    lost = chain | bad if bad & chain else bad
+    assert set(kept) == lost and set(accepted) == set(specs) - lost
