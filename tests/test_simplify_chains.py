@@ -96,6 +96,28 @@ def two_arc_slab() -> object:
     )
 
 
+#: a two-arc chain (r 4 from the bottom plane, then r 10) ending on a convex cylinder of
+#: radius 30 (tangent to the r 10 arc, sharp against the top plane): no fillet itself
+Q1 = np.array([60.0, 4.0])
+QU = np.array([math.cos(-math.pi / 4), math.sin(-math.pi / 4)])
+Q2 = Q1 - 6.0 * QU
+Q3 = Q2 - np.array([20.0, 0.0])
+QTOP = Q3 + 30.0 * np.array([math.cos(0.7), math.sin(0.7)])
+
+
+def cylinder_end_slab() -> object:
+    return _slab(
+        [
+            GC_MakeSegment(_p(0, 0), _p(Q1[0], 0)).Value(),
+            _arc(Q1, 4.0, -math.pi / 2, -math.pi / 4),
+            _arc(Q2, 10.0, -math.pi / 4, 0.0),
+            _arc(Q3, 30.0, 0.0, 0.7),
+            GC_MakeSegment(_p(*QTOP), _p(0, QTOP[1])).Value(),
+            GC_MakeSegment(_p(0, QTOP[1]), _p(0, 0)).Value(),
+        ]
+    )
+
+
 @pytest.fixture(scope="module")
 def three():
     return classified_and_simplified(three_arc_slab())
@@ -147,6 +169,17 @@ def test_two_arc_chain_removed_at_the_tangency_line(two):
     d = [np.abs(j[:, [0, 2]] - TANGENCY).max() for j in joints]
     assert min(d) <= 1e-9 * r.diagonal
     assert len(joints) == 4  # and the three sharp corners
+
+
+def test_chain_ending_on_a_cylinder():
+    """The r 10 arc merges whole into the radius-30 cylinder it is tangent to: an arc -
+    arc profile extruded (the end face's section is an arc, not a line)."""
+    cls, r = classified_and_simplified(cylinder_end_slab())
+    assert len(cls.fillets) == 2
+    assert not r.blends_kept and len(r.blends_removed) == 2
+    assert (r.faces_before, r.faces_after) == (8, 6)
+    assert_same_solid(cls.shape, r, 9, 16, volume_tol=1e-10, deviation_tol=1e-9)
+    assert {g.surface for g in r.face_groups if g.halves} == {"extrusion"}
 
 
 @pytest.mark.parametrize("bad", [{4}, {0}, set()])
