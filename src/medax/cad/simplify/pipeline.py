@@ -83,6 +83,9 @@ FIT_SHARE, ACCEPT_SHARE = 0.1, 0.4
 FITTED_DEVIATION_SAMPLES = 12
 #: Seconds the search for failing fillets may take after the first rebuild failed.
 ISOLATION_BUDGET = 300.0
+#: Riders tried one at a time as plain fillets on their kept base, at most (each try is a
+#: pass over the fitted faces).
+MAX_RIDER_TRIES = 8
 #: Marker in the surface table: this supporting plane gets a fitted surface per attempt.
 FITTED = "fitted"
 
@@ -402,6 +405,17 @@ def _readmit_riders(job: _Job, blends: BlendInput) -> None:
     }
     if not back:
         return
+    if _try_riders(job, by_face, back):
+        return
+    for r in sorted(back)[:MAX_RIDER_TRIES]:  # all at once cost fillets: each on its own
+        _try_riders(job, by_face, {r: back[r]})
+
+
+def _try_riders(
+    job: _Job, by_face: dict[int, FilletSpec], back: dict[int, tuple[int, Medial, str]]
+) -> bool:
+    """Riders ``back`` tried as plain fillets (see :func:`_readmit_riders`); False, with
+    nothing changed, when that costs fillets that went before."""
     before: tuple[dict[int, Any], ...] = (
         dict(job.specs),
         dict(job.kept),
@@ -424,12 +438,13 @@ def _readmit_riders(job: _Job, blends: BlendInput) -> None:
         for r, (_, _, why) in back.items():
             job.medials.pop(r)
             job.kept[r] = f"{why}; as a plain fillet on it (it is kept) fillets {lost[:5]} fail"
-        return
+        return False
     for r, (base, _, why) in back.items():
         if r in job.kept:
             job.kept[r] = f"{why}; as a plain fillet on it (it is kept): {job.kept[r]}"
         else:
             job.say(f"fillet {r} merged into fillet {base}, which is kept (no bridge over it)")
+    return True
 
 
 def _cascade(  # type: ignore[no-untyped-def]
@@ -709,8 +724,13 @@ def _fit_round(job: _Job, probe: bool) -> bool:
         return False
     job.say(f"fitted surfaces failed on faces {sorted(bad)}: their fillets are kept")
     for sup, why in bad.items():
+        # a chain of fillets ending on the face is dropped first, alone (it goes whole or
+        # not at all, and its pieces are the likeliest to spoil the fit): the face's other
+        # fillets are tried again without it in the next round
+        chained = {f for ch in job.chains if sup in ch.ends for f in ch.members}
+        chained &= {f for f, s in job.specs.items() if sup in s.supporting}
         for f, s in list(job.specs.items()):
-            if sup in s.supporting:
+            if sup in s.supporting and (not chained or f in chained):
                 job.specs.pop(f)
                 if f not in job.kept:
                     job.kept[f] = f"supporting face {sup}: {why}"
