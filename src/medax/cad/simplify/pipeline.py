@@ -395,8 +395,9 @@ def _readmit_riders(job: _Job, blends: BlendInput) -> None:
     """Riders kept for want of a bridge (:func:`_bridges`) whose base fillet is kept anyway
     are tried as plain fillets: the base is then a supporting face like any other, and the
     rider's half on it merges into it (a torus round a kept cylindrical fillet: an exact
-    revolution). When that costs fillets that went before (a fitted face that no longer
-    fits with the new halves), nothing changes."""
+    revolution). When that costs as many fillets that went before as it gains (a fitted
+    face that no longer fits with the new halves), nothing changes; all riders are tried
+    at once, then (when that does not pay) each alone."""
     by_face = {s.face: s for s in blends.fillets}
     back = {
         r: (base, m, why)
@@ -415,7 +416,8 @@ def _try_riders(
     job: _Job, by_face: dict[int, FilletSpec], back: dict[int, tuple[int, Medial, str]]
 ) -> bool:
     """Riders ``back`` tried as plain fillets (see :func:`_readmit_riders`); False, with
-    nothing changed, when that costs fillets that went before."""
+    nothing changed, when that costs as many fillets that went before as it gains (a
+    fitted face that no longer fits with the new halves)."""
     before: tuple[dict[int, Any], ...] = (
         dict(job.specs),
         dict(job.kept),
@@ -430,7 +432,8 @@ def _try_riders(
     if any(v == FITTED for v in job.surfaces.values()):
         _fit_pass(job)
     lost = sorted(f for f in before[0] if f not in job.specs)
-    if lost:
+    gained = [r for r in back if r in job.specs]
+    if lost and len(gained) <= len(lost):
         state: tuple[dict[int, Any], ...] = (job.specs, job.kept, job.surfaces, job.no_surface)
         for now, old in zip(state, before, strict=True):
             now.clear()  # in place: the caller holds ``job.kept``
