@@ -3,9 +3,11 @@
 Two cases have an exact answer (the issue's step 3):
 
 - **extrusion**: the halves are cylinders with parallel axes ``d`` and the supporting face is
-  a plane containing ``d``. The section by a plane normal to ``d`` is a G1 chain
-  arc - line - arc; joined into one rational B-spline it is extruded along ``d``, as the
-  exact B-spline surface of that extrusion (:func:`extruded_bspline`).
+  a plane containing ``d`` (or a cylinder on an axis along ``d``: the end face of a chain of
+  fillets, :mod:`.chains`, whose half is a sequence of arcs). The section by a plane normal
+  to ``d`` is a G1 chain arc(s) - line (or arc) - arc(s); joined into one rational B-spline
+  it is extruded along ``d``, as the exact B-spline surface of that extrusion
+  (:func:`extruded_bspline`).
 - **revolution**: the halves are tori (or cylinders) on one axis and the supporting face is a
   plane normal to it or a coaxial cylinder or cone. The meridian section (line and arcs)
   joined into one B-spline is revolved about the axis, starting at the x-direction of the
