@@ -29,6 +29,7 @@ from OCP.TopoDS import TopoDS
 from medax import tolerances
 from medax._progress import log_progress
 from medax.cad.simplify.bridge import bridge_edge
+from medax.cad.simplify.chains import Chain, chain_arcs, chain_specs, find_chains
 from medax.cad.simplify.corner import corner_arcs, plane_normal
 from medax.cad.simplify.fitted import (
     FittedSurface,
@@ -88,6 +89,9 @@ FIT_SHARE, ACCEPT_SHARE = 0.1, 0.8
 FITTED_DEVIATION_SAMPLES = 12
 #: Seconds the search for failing fillets may take after the first rebuild failed.
 ISOLATION_BUDGET = 300.0
+#: Riders tried one at a time as plain fillets on their kept base, at most (each try is a
+#: pass over the fitted faces).
+MAX_RIDER_TRIES = 8
 #: Marker in the surface table: this supporting plane gets a fitted surface per attempt.
 FITTED = "fitted"
 
@@ -142,6 +146,11 @@ class _Job:
     no_surface: dict[int, int] = field(default_factory=dict)
     # fillets whose own piece held the misfit of that face (the face is fitted without them)
     own_misfit: set[int] = field(default_factory=set)
+    # chains of tangent fillets (:mod:`.chains`): each goes whole or not at all
+    chains: list[Chain] = field(default_factory=list)
+    chain_links: set[tuple[int, int]] = field(default_factory=set)
+    # rider -> (the fillet it rides on with no bridge, its medial curve, why it was kept)
+    unbridged: dict[int, tuple[int, Medial, str]] = field(default_factory=dict)
 
     @property
     def vol0(self) -> float:
@@ -225,14 +234,18 @@ def simplify(
             kept[spec.face] = m
         else:
             job.medials[spec.face] = m
+    _chains(job, blends)
     _corners(job, blends)
     _bridges(job, blends)
     say(f"{len(job.medials)} fillets with a medial curve, {len(job.corners)} corner blends split")
     job.specs = {s.face: s for s in blends.fillets if s.face in job.medials}
+    for ch in job.chains:
+        if all(f in job.specs for f in ch.members):
+            job.specs.update(chain_specs(ch))
     for f, why in mitre_keeps(mitre_pairs(work, fmap, job.specs), job.corners).items():
         job.specs.pop(f)
         kept[f] = why
-    _cascade(job.specs, job.corners, kept)
+    _cascade(job.specs, job.corners, kept, job.chains)
     _refresh_surfaces(job)
     n_fit = sum(1 for v in job.surfaces.values() if v == FITTED)
     say(f"{len(job.specs)} fillets on {len(job.surfaces)} merged faces ({n_fit} fitted)")
@@ -243,13 +256,15 @@ def simplify(
     if n_fit:
         _fit_pass(job)
     _one_sided(job, blends)
+    _readmit_riders(job, blends)
     specs, corners = job.specs, job.corners
     first = attempt(specs) if specs else None
     result: _Attempt | None
     if isinstance(first, str):
         say(f"rebuild with all fillets failed ({first}); isolating the failing fillets")
         deadline = time.perf_counter() + time_budget
-        result, specs = isolate(specs, attempt, kept, say, deadline, first)
+        together = [set(ch.members) for ch in job.chains]
+        result, specs = isolate(specs, attempt, kept, say, deadline, first, together)
     else:
         result = first
     used_corners = (
@@ -329,6 +344,34 @@ def _corners(job: _Job, blends: BlendInput) -> None:
         job.corners[cs.face], job.arcs[cs.face] = cs, r[0]
 
 
+def _chains(job: _Job, blends: BlendInput) -> None:
+    """Chains of tangent fillets (see :mod:`.chains`) into ``job.chains``. A chain
+    member with no medial curve (kept) is a face like any other: the runs of members
+    between such faces are chains of their own (a run of one is a plain fillet)."""
+    by_face = {s.face: s for s in blends.fillets}
+    # linked sets that are no open chain (closed, branching, ending on blends) are left to
+    # the riders' rules (:func:`_bridges`, :func:`_readmit_riders`)
+    chains, _ = find_chains(by_face)
+    for ch in chains:
+        runs: list[list[int]] = [[]]
+        for i in range(len(ch.members)):
+            if ch.members[i] in job.medials:
+                runs[-1].append(i)
+            elif runs[-1]:
+                runs.append([])
+        for run in runs:
+            if len(run) < 2:
+                continue
+            i, j = run[0], run[-1]
+            ends = (ch.toward(i, 0), ch.toward(j, 1))
+            job.chains.append(
+                Chain(tuple(ch.members[k] for k in run), ends, tuple(ch.specs[k] for k in run))
+            )
+    for ch in job.chains:
+        for f, g in zip(ch.members[:-1], ch.members[1:], strict=True):
+            job.chain_links |= {(f, g), (g, f)}
+
+
 def _bridges(job: _Job, blends: BlendInput) -> None:
     """Bridges of the fillets that ride on another fillet with a medial curve (see
     :mod:`.bridge`) into ``job.bridges``; a rider without one is kept."""
@@ -336,6 +379,8 @@ def _bridges(job: _Job, blends: BlendInput) -> None:
     for spec in blends.fillets:
         for base, e in zip(spec.supporting, spec.smooth_edges, strict=True):
             if spec.face not in job.medials or base not in job.medials:
+                continue
+            if (spec.face, base) in job.chain_links:  # next in a chain: no bridge
                 continue
             supports = tuple(job.face(s) for s in by_face[base].supporting)
             r = bridge_edge(
@@ -347,18 +392,90 @@ def _bridges(job: _Job, blends: BlendInput) -> None:
                 job.btol,
             )
             if isinstance(r, str):
-                job.medials.pop(spec.face)
-                job.kept[spec.face] = f"rides on fillet {base}: {r}"
+                why = f"rides on fillet {base}: {r}"
+                job.unbridged[spec.face] = (base, job.medials.pop(spec.face), why)
+                job.kept[spec.face] = why
                 break
             job.bridges[(spec.face, base)] = r[0]
 
 
-def _cascade(specs: dict[int, FilletSpec], corners: dict[int, CornerSpec], kept) -> None:  # type: ignore[no-untyped-def]
-    """A corner blend goes only with all its fillets, and a fillet only with its corners:
-    drop both ways until nothing changes."""
+def _readmit_riders(job: _Job, blends: BlendInput) -> None:
+    """Riders kept for want of a bridge (:func:`_bridges`) whose base fillet is kept anyway
+    are tried as plain fillets: the base is then a supporting face like any other, and the
+    rider's half on it merges into it (a torus round a kept cylindrical fillet: an exact
+    revolution). When that costs as many fillets that went before as it gains (a fitted
+    face that no longer fits with the new halves), nothing changes; all riders are tried
+    at once, then (when that does not pay) each alone."""
+    by_face = {s.face: s for s in blends.fillets}
+    back = {
+        r: (base, m, why)
+        for r, (base, m, why) in job.unbridged.items()
+        if job.kept.get(r) == why and base not in job.specs and base not in job.whole
+    }
+    if not back:
+        return
+    if _try_riders(job, by_face, back):
+        return
+    for r in sorted(back)[:MAX_RIDER_TRIES]:  # all at once cost fillets: each on its own
+        _try_riders(job, by_face, {r: back[r]})
+
+
+def _try_riders(
+    job: _Job, by_face: dict[int, FilletSpec], back: dict[int, tuple[int, Medial, str]]
+) -> bool:
+    """Riders ``back`` tried as plain fillets (see :func:`_readmit_riders`); False, with
+    nothing changed, when that costs as many fillets that went before as it gains (a
+    fitted face that no longer fits with the new halves)."""
+    before: tuple[dict[int, Any], ...] = (
+        dict(job.specs),
+        dict(job.kept),
+        dict(job.surfaces),
+        dict(job.no_surface),
+    )
+    for r, (_, m, _) in back.items():
+        job.medials[r] = m
+        job.specs[r] = by_face[r]
+        job.kept.pop(r)
+    _refresh_surfaces(job)
+    if any(v == FITTED for v in job.surfaces.values()):
+        _fit_pass(job)
+    lost = sorted(f for f in before[0] if f not in job.specs)
+    gained = [r for r in back if r in job.specs]
+    if lost and len(gained) <= len(lost):
+        state: tuple[dict[int, Any], ...] = (job.specs, job.kept, job.surfaces, job.no_surface)
+        for now, old in zip(state, before, strict=True):
+            now.clear()  # in place: the caller holds ``job.kept``
+            now.update(old)
+        for r, (_, _, why) in back.items():
+            job.medials.pop(r)
+            job.kept[r] = f"{why}; as a plain fillet on it (it is kept) fillets {lost[:5]} fail"
+        return False
+    for r, (base, _, why) in back.items():
+        if r in job.kept:
+            job.kept[r] = f"{why}; as a plain fillet on it (it is kept): {job.kept[r]}"
+        else:
+            job.say(f"fillet {r} merged into fillet {base}, which is kept (no bridge over it)")
+    return True
+
+
+def _cascade(  # type: ignore[no-untyped-def]
+    specs: dict[int, FilletSpec], corners: dict[int, CornerSpec], kept, chains: list[Chain]
+) -> None:
+    """A corner blend goes only with all its fillets, and a fillet only with its corners;
+    a chain of fillets goes whole or not at all: drop until nothing changes."""
     changed = True
     while changed:
         changed = False
+        for ch in chains:
+            gone = [f for f in ch.members if f not in specs]
+            if gone and len(gone) < len(ch.members):
+                for f in ch.members:
+                    if f in specs:
+                        specs.pop(f)
+                        kept.setdefault(
+                            f, f"in a chain of tangent fillets with fillet {gone[0]}, which is kept"
+                        )
+                changed = True
         for c, cs in list(corners.items()):
             gone = [f for f in cs.fillets if f not in specs]
             if gone:
@@ -378,7 +495,7 @@ def _refresh_surfaces(job: _Job) -> None:
     runs again whenever fillets are dropped."""
     specs, kept = job.specs, job.kept
     while True:
-        _cascade(specs, job.corners, kept)
+        _cascade(specs, job.corners, kept, job.chains)
         surfaces, failed = _surfaces_for(job, specs, job.corners)
         if not failed:
             job.surfaces = surfaces
@@ -398,7 +515,12 @@ def _surfaces_for(
     first face that has none, each with that face and the reason (empty when every face
     has one)."""
     with_corner = {s for cs in corners.values() for s in cs.supporting}
-    with_corner |= {s for base in riders(specs) for s in specs[base].supporting}
+    with_corner |= {
+        s
+        for base, rs in riders(specs).items()
+        if any((r, base) not in job.chain_links for r in rs)
+        for s in specs[base].supporting
+    }
     surfaces: dict[int, MergedSurface | str] = {}
     for sup, hs in halves_of(specs).items():
         if sup in specs:  # a simplified fillet: its riders' pieces go to its supports
@@ -424,9 +546,23 @@ def _surface_of(
     planar = BRepAdaptor_Surface(support).GetType() == GeomAbs_Plane
     if with_corner:
         return FITTED if planar else "corner or bridged pieces on a curved face"
-    halves = [
-        Half(job.face(f), job.medials[f], TopoDS.Edge(job.emap.FindKey(e + 1))) for f, e in hs
-    ]
+    halves = []
+    for f, e in hs:
+        half = Half(job.face(f), job.medials[f], TopoDS.Edge(job.emap.FindKey(e + 1)))
+        ch = next((c for c in job.chains if sup in c.ends and f in c.members), None)
+        if ch is not None:
+            end = ch.ends.index(sup)
+            faces = [job.face(g) for g in ch.members]
+            arcs = chain_arcs(ch, end, faces, job.medials)
+            if isinstance(arcs, str):
+                return arcs
+            others = [
+                job.face(g)
+                for i, g in enumerate(ch.members)
+                if g != f and (ch.side(i) == end or i == ch.middle)
+            ]
+            half = replace(half, chain=tuple(others), arcs=tuple(arcs))
+        halves.append(half)
     try:
         ms = merged_surface(support, halves, job.btol)
     except (ValueError, RuntimeError) as err:  # OCCT construction failures
@@ -539,7 +675,10 @@ def _split(
     and its groups. The split a fit round kept (``keep``) is taken again by the next call
     when it was made with the same tool edges (the fit rounds only read it; an attempt,
     whose rebuild adds pcurves to its edges, takes it and leaves none behind)."""
-    tools = [job.medials[f].edge for f in sel if f not in job.whole]
+    whole = {f for ch in job.chains for i, f in enumerate(ch.members) if i != ch.middle} | set(
+        job.whole
+    )
+    tools = [job.medials[f].edge for f in sel if f not in whole]
     tools += [e for c in csel for e in job.arcs[c]]
     tools += [e for (f, base), e in job.bridges.items() if f in sel and base in sel]
     last, job.last_split = job.last_split, None
@@ -588,7 +727,7 @@ def _fit_round(job: _Job, probe: bool) -> bool:
         for f in blamed:
             job.specs.pop(f, None)
             job.kept.setdefault(f, f"rebuild failed: {err}")
-        _cascade(job.specs, job.corners, job.kept)
+        _cascade(job.specs, job.corners, job.kept, job.chains)
         return True
     except CadError:
         return False  # the attempt will report it
@@ -610,13 +749,18 @@ def _fit_round(job: _Job, probe: bool) -> bool:
         if culprits:  # the misfit lies on these blends' pieces: the others are tried again
             _keep_culprits(job, sup, why, culprits)
             continue
+        # a chain of fillets ending on the face is dropped first, alone (it goes whole or
+        # not at all, and its pieces are the likeliest to spoil the fit): the face's other
+        # fillets are tried again without it in the next round
+        chained = {f for ch in job.chains if sup in ch.ends for f in ch.members}
+        chained &= {f for f, s in job.specs.items() if sup in s.supporting}
         for f, s in list(job.specs.items()):
-            if sup in s.supporting:
+            if sup in s.supporting and (not chained or f in chained):
                 job.specs.pop(f)
                 if f not in job.kept:
                     job.kept[f] = f"supporting face {sup}: {why}"
                     job.no_surface[f] = sup
-    _cascade(job.specs, job.corners, job.kept)
+    _cascade(job.specs, job.corners, job.kept, job.chains)
     return True
 
 

@@ -103,6 +103,7 @@ def isolate(
     say: Callable[[str], None],
     deadline: float,
     why: str,
+    together: Sequence[set[int]] = (),
 ) -> tuple[A | None, dict[int, FilletSpec]]:
     """The fillets that rebuild together after the rebuild with all of ``specs`` failed
     (for the reason ``why``), and their (last successful) attempt.
@@ -118,19 +119,32 @@ def isolate(
     blamed ones on their own (one blamed fillet is kept at once; several are halved at once
     when all the others were accepted, since together they would repeat the failed
     attempt). On a 555-face part with 214 fillets, bisection alone ran out of time with half
-    of them untried."""
+    of them untried.
+
+    ``together``: sets of fillets that go together or not at all (a chain of tangent
+    fillets, :mod:`.chains`): each is one unit of the bisection."""
     order = [f for c in clusters(specs) for f in c]
+    unit_of = {f: frozenset(t) & set(specs) for t in together for f in t if f in specs}
+    units: list[tuple[int, ...]] = []
+    placed: set[int] = set()
+    for f in order:
+        if f not in placed:
+            u = tuple(sorted(unit_of.get(f, {f}), key=order.index))
+            units.append(u)
+            placed |= set(u)
     accepted: dict[int, FilletSpec] = {}
     best: A | None = None
 
-    def keep(f: int, why: str) -> None:
-        kept[f] = f"rebuild failed: {why}"
-        say(f"fillet {f} kept: {why}")
+    def keep(u: tuple[int, ...], why: str) -> None:
+        for f in u:
+            kept[f] = f"rebuild failed: {why}"
+            say(f"fillet {f} kept: {why}")
 
-    def rec(fillets: list[int], known: A | str | None = None) -> None:
+    def rec(group: list[tuple[int, ...]], known: A | str | None = None) -> None:
         nonlocal best
-        if not fillets:
+        if not group:
             return
+        fillets = [f for u in group for f in u]
         if time.perf_counter() > deadline:
             for f in fillets:
                 kept[f] = "not tried alone: the time for finding the failing fillets ran out"
@@ -141,23 +155,24 @@ def isolate(
             accepted.update({f: specs[f] for f in fillets})
             best = r
             return
-        blamed: frozenset[int] = getattr(r, "blamed", frozenset()) & set(fillets)
-        if len(fillets) == 1:
-            keep(fillets[0], r)
-        elif blamed and len(blamed) < len(fillets):
+        hit: frozenset[int] = getattr(r, "blamed", frozenset()) & set(fillets)
+        blamed = [u for u in group if set(u) & hit]
+        if len(group) == 1:
+            keep(group[0], r)
+        elif blamed and len(blamed) < len(group):
             before = set(accepted)
-            others = [f for f in fillets if f not in blamed]
+            others = [u for u in group if u not in blamed]
             rec(others)
             if len(blamed) == 1:
-                keep(next(iter(blamed)), r)
+                keep(blamed[0], r)
             else:
                 # with all the others accepted, the blamed ones together are the attempt
                 # that failed: its result is known
-                same = set(accepted) == before | set(others)
-                rec([f for f in fillets if f in blamed], r if same else None)
+                same = set(accepted) == before | {f for u in others for f in u}
+                rec(blamed, r if same else None)
         else:
-            rec(fillets[: len(fillets) // 2])
-            rec(fillets[len(fillets) // 2 :])
+            rec(group[: len(group) // 2])
+            rec(group[len(group) // 2 :])
 
-    rec(order, why)  # the rebuild with all of them failed for the reason ``why``
+    rec(units, why)  # the rebuild with all of them failed for the reason ``why``
     return best, accepted

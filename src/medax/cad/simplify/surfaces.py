@@ -3,9 +3,11 @@
 Two cases have an exact answer (the issue's step 3):
 
 - **extrusion**: the halves are cylinders with parallel axes ``d`` and the supporting face is
-  a plane containing ``d``. The section by a plane normal to ``d`` is a G1 chain
-  arc - line - arc; joined into one rational B-spline it is extruded along ``d``, as the
-  exact B-spline surface of that extrusion (:func:`extruded_bspline`).
+  a plane containing ``d`` (or a cylinder on an axis along ``d``: the end face of a chain of
+  fillets, :mod:`.chains`, whose half is a sequence of arcs). The section by a plane normal
+  to ``d`` is a G1 chain arc(s) - line (or arc) - arc(s); joined into one rational B-spline
+  it is extruded along ``d``, as the exact B-spline surface of that extrusion
+  (:func:`extruded_bspline`).
 - **revolution**: the halves are tori (or cylinders) on one axis and the supporting face is a
   plane normal to it or a coaxial cylinder or cone. The meridian section (line and arcs)
   joined into one B-spline is revolved about the axis, starting at the x-direction of the
@@ -48,6 +50,10 @@ class Half:
     face: Any
     medial: Medial
     edge: Any
+    #: For the first fillet of a chain (:mod:`.chains`): the faces of the members after it
+    #: and the section arcs (each (3, 3)) of all the members that join this face, in order.
+    chain: tuple[Any, ...] = ()
+    arcs: tuple[Array, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -102,15 +108,19 @@ def _boundary_samples(face: Any, n: int = 17) -> Array:
 
 
 def _chain(
-    segment: tuple[Array, Array], arcs: list[Array], tol: float, fixed: Array | None = None
+    segment: tuple[Array, Array],
+    arcs: list[list[Array]],
+    tol: float,
+    fixed: Array | None = None,
 ) -> list[Any] | str:
-    """Profile pieces: line ``segment`` (p0, p1) with each arc (3 points, first on the line's
-    end) attached at the matching end; free line ends extended, except an end at ``fixed``
-    (a point on the axis of revolution). Returns curves in order."""
+    """Profile pieces: line ``segment`` (p0, p1) with each sequence of arcs (each arc 3
+    points, the first arc's first on the line's end, each next one starting where the one
+    before ends) attached at the matching end; free line ends extended, except an end at
+    ``fixed`` (a point on the axis of revolution). Returns curves in order."""
     p0, p1 = segment
-    at: dict[int, Array] = {}
+    at: dict[int, list[Array]] = {}
     for arc in arcs:
-        d0, d1 = np.linalg.norm(arc[0] - p0), np.linalg.norm(arc[0] - p1)
+        d0, d1 = np.linalg.norm(arc[0][0] - p0), np.linalg.norm(arc[0][0] - p1)
         end = 0 if d0 < d1 else 1
         if min(d0, d1) > tol:
             return "a fillet half does not meet an end of the face's section"
@@ -129,15 +139,80 @@ def _chain(
     q1 = p1 if 1 in at or stays(p1) else p1 + FREE_END_EXTENSION * length * t
     pieces: list[Any] = []
     if 0 in at:
-        a = at[0][::-1]
-        a[-1] = q0
-        pieces.append(GC_MakeArcOfCircle(pnt(a[0]), pnt(a[1]), pnt(a[2])).Value())
+        pieces += [_arc_piece(a[::-1]) for a in reversed(_attached(at[0], q0, tol))]
     pieces.append(GC_MakeSegment(pnt(q0), pnt(q1)).Value())
     if 1 in at:
-        a = at[1].copy()
-        a[0] = q1
-        pieces.append(GC_MakeArcOfCircle(pnt(a[0]), pnt(a[1]), pnt(a[2])).Value())
+        pieces += [_arc_piece(a) for a in _attached(at[1], q1, tol)]
     return pieces
+
+
+def _arc_core(
+    centre: Array, radius: float, d: Array, pts: Array, arcs: list[list[Array]], tol: float
+) -> list[Any] | str:
+    """Profile pieces when the supporting face is a cylinder on an axis along ``d``: its
+    section is the arc of ``centre`` (3,) and ``radius`` spanned by ``pts`` (n, 3, projected
+    on the section plane through ``centre``), with each sequence of ``arcs`` attached at the
+    matching end as in :func:`_chain`; free ends continued by a tenth of the sweep."""
+    e1 = pts[0] - centre
+    e1 -= (e1 @ d) * d
+    if np.linalg.norm(e1) < tol:
+        return "degenerate section of the supporting cylinder"
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(d, e1)
+    r = pts - centre
+    if np.abs(np.linalg.norm(r, axis=1) - radius).max() > tol:
+        return "the supporting cylinder's boundary is not on its circle"
+    th = np.sort(np.mod(np.arctan2(r @ e2, r @ e1), 2 * math.pi))
+    gaps = np.diff(np.concatenate([th, th[:1] + 2 * math.pi]))
+    g = int(np.argmax(gaps))
+    if gaps[g] < 0.1:
+        return "the supporting cylinder is closed round its axis"
+    t0 = float(th[(g + 1) % len(th)])
+    t1 = t0 + 2 * math.pi - float(gaps[g])
+
+    def at(t: float) -> Array:
+        return centre + radius * (math.cos(t) * e1 + math.sin(t) * e2)
+
+    ends = (at(t0), at(t1))
+    where: dict[int, list[Array]] = {}
+    for seq in arcs:
+        dist = [float(np.linalg.norm(seq[0][0] - p)) for p in ends]
+        k = int(np.argmin(dist))
+        if dist[k] > tol:
+            return "a fillet half does not meet an end of the face's section"
+        if k in where:
+            return "two fillet halves meet the same end of the face's section"
+        where[k] = seq
+    room = min(0.1 * (t1 - t0), 0.5 * float(gaps[g]))
+    a0 = t0 if 0 in where else t0 - room
+    a1 = t1 if 1 in where else t1 + room
+    q0, q1 = at(a0), at(a1)
+    pieces: list[Any] = []
+    if 0 in where:
+        pieces += [_arc_piece(a[::-1]) for a in reversed(_attached(where[0], q0, tol))]
+    pieces.append(_arc_piece(np.array([q0, at(0.5 * (a0 + a1)), q1])))
+    if 1 in where:
+        pieces += [_arc_piece(a) for a in _attached(where[1], q1, tol)]
+    return pieces
+
+
+def _attached(arcs: list[Array], start: Array, tol: float) -> list[Array]:
+    """Copies of ``arcs`` (each (3, 3)), the first starting exactly at ``start`` and each
+    next one exactly where the one before ends (they meet within ``tol`` already: edges
+    shared by two faces, sampled on each)."""
+    out, p = [], start
+    for a in arcs:
+        if float(np.linalg.norm(a[0] - p)) > tol:
+            raise ValueError("the arcs of a chain of fillets do not meet")
+        b = a.copy()
+        b[0] = p
+        out.append(b)
+        p = b[-1]
+    return out
+
+
+def _arc_piece(a: Array) -> Any:
+    return GC_MakeArcOfCircle(pnt(a[0]), pnt(a[1]), pnt(a[2])).Value()
 
 
 def _join(pieces: list[Any], tol: float) -> Any:
@@ -172,9 +247,12 @@ def merged_surface(support: Any, halves: list[Half], tol: float) -> MergedSurfac
     ``tol`` is the length tolerance of the geometric tests (e.g. 1e-7 x the part diagonal).
     """
     sad = BRepAdaptor_Surface(support)
-    hads = [BRepAdaptor_Surface(h.face) for h in halves]
+    hads = [BRepAdaptor_Surface(f) for h in halves for f in (h.face, *h.chain)]
     kinds = {a.GetType() for a in hads}
     if kinds == {GeomAbs_Cylinder} and sad.GetType() == GeomAbs_Plane:
+        return _extrusion(support, halves, hads, tol)
+    if kinds == {GeomAbs_Cylinder} and sad.GetType() == GeomAbs_Cylinder:
+        # a cylinder on a parallel axis (the end face of a chain of fillets, :mod:`.chains`)
         return _extrusion(support, halves, hads, tol)
     if kinds <= {GeomAbs_Torus, GeomAbs_Cylinder} and GeomAbs_Torus in kinds:
         return _revolution(support, halves, hads, tol)
@@ -186,25 +264,35 @@ def _extrusion(support: Any, halves: list[Half], hads: list[Any], tol: float) ->
     d = dirs[0]
     if any(np.linalg.norm(np.cross(d, e)) > 1e-9 for e in dirs[1:]):
         return "fillets along non-parallel edges of one plane: no extrusion (not supported)"
-    n = xyz(BRepAdaptor_Surface(support).Plane().Axis().Direction())
-    if abs(n @ d) > 1e-9:
-        return "fillet axis not parallel to the supporting plane"
+    sad = BRepAdaptor_Surface(support)
     pts = _boundary_samples(support)
     o = pts[0]
 
     def proj(p: Array) -> Array:
         return p - np.outer((p - o) @ d, d) if p.ndim == 2 else p - ((p - o) @ d) * d
 
-    ext = _line_extent(proj(pts), tol)
-    if ext is None:
-        return "supporting plane's section is not a line"
-    arcs = [proj(_half_points(h)) for h in halves]
-    pieces = _chain(ext, arcs, 10 * tol)
+    arcs = [[proj(a) for a in h.arcs] if h.arcs else [proj(_half_points(h))] for h in halves]
+    if sad.GetType() == GeomAbs_Cylinder:
+        c, a = _axis(sad)
+        if np.linalg.norm(np.cross(d, a)) > 1e-9:
+            return "fillet axis not parallel to the supporting cylinder's axis"
+        pieces = _arc_core(proj(c), sad.Cylinder().Radius(), d, proj(pts), arcs, 10 * tol)
+    else:
+        n = xyz(sad.Plane().Axis().Direction())
+        if abs(n @ d) > 1e-9:
+            return "fillet axis not parallel to the supporting plane"
+        ext = _line_extent(proj(pts), tol)
+        if ext is None:
+            return "supporting plane's section is not a line"
+        pieces = _chain(ext, arcs, 10 * tol)
     if isinstance(pieces, str):
         return pieces
     profile = _join(pieces, tol)
     # finite along d: the group's extent along d plus a margin (projections need bounds)
-    along = np.concatenate([(pts - o) @ d] + [(_boundary_samples(h.face) - o) @ d for h in halves])
+    along = np.concatenate(
+        [(pts - o) @ d]
+        + [(_boundary_samples(f) - o) @ d for h in halves for f in (h.face, *h.chain)]
+    )
     start = float((o - xyz(profile.StartPoint())) @ d)
     lo, hi = float(along.min()), float(along.max())
     margin = 0.1 * (hi - lo) + 10 * tol
@@ -297,7 +385,9 @@ def _revolution(support: Any, halves: list[Half], hads: list[Any], tol: float) -
     ext = _line_extent(pts, tol)
     if ext is None:
         return "supporting face's meridian section is not a line"
-    arcs = [meridian(_half_points(h)) for h in halves]
+    if any(h.chain for h in halves):
+        return "a chain of fillets on a face of revolution (not supported)"
+    arcs = [[meridian(_half_points(h))] for h in halves]
     pieces = _chain(ext, arcs, 10 * tol, fixed)
     if isinstance(pieces, str):
         return pieces
