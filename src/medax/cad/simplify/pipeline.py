@@ -30,6 +30,7 @@ from medax import tolerances
 from medax._progress import log_progress
 from medax.cad.simplify.bridge import bridge_edge
 from medax.cad.simplify.corner import corner_arcs, plane_normal
+from medax.cad.simplify.cylinder_field import cylinder_surface
 from medax.cad.simplify.fitted import FittedSurface, GraphSetup, graph_setup, graph_surface
 from medax.cad.simplify.groups import Group, GroupError, build_groups
 from medax.cad.simplify.local_measure import (
@@ -481,7 +482,8 @@ def _fitted(job: _Job, split: Any, g: Group, probe: bool = False) -> FittedSurfa
         support = job.face(g.support)
         try:
             # the ring route first (one blend half all the way round a boss or a hole:
-            # planes and cylinders), else the height field over a plane
+            # planes and cylinders), else the height field over a plane, or over the
+            # cylinder (any blend halves on any part of it)
             ring = ring_surface(support, members, fit_tol, job.btol, probe, accept)
             if isinstance(ring, str) and not _ring_kind(support):
                 # (the probe's setup and fit serve the full fit of the same group)
@@ -493,6 +495,12 @@ def _fitted(job: _Job, split: Any, g: Group, probe: bool = False) -> FittedSurfa
                 if isinstance(flat, str) and _ring_applies(ring):
                     flat = f"{flat}; ring route: {ring}"
                 job.cache[key] = flat
+            elif isinstance(ring, str):
+                # a cylinder the ring route refused: the field over the cylinder
+                cyl = cylinder_surface(support, members, fit_tol, job.btol, probe, accept)
+                if isinstance(cyl, str) and _ring_applies(ring):
+                    cyl = f"{cyl}; ring route: {ring}"
+                job.cache[key] = cyl
             else:
                 job.cache[key] = ring
         except Exception as err:  # OCCT failures while sampling the pieces
@@ -501,8 +509,9 @@ def _fitted(job: _Job, split: Any, g: Group, probe: bool = False) -> FittedSurfa
 
 
 def _ring_kind(face: Any) -> bool:
-    """Whether a supporting face takes only the ring route (a cylinder: see
-    :mod:`.ring`)."""
+    """Whether a supporting face takes the ring route and then the field over its
+    cylinder, not the height field over a plane (a cylinder: see :mod:`.ring`,
+    :mod:`.cylinder_field`)."""
     return BRepAdaptor_Surface(face).GetType() == GeomAbs_Cylinder
 
 
