@@ -265,7 +265,7 @@ class _Field:
         label[out[near]] = self.owner[k[near]]
         return label
 
-    def offsets(self, s: Array, z: Array, tol: float) -> tuple[Array, Array, Array]:
+    def offsets(self, s: Array, z: Array, tol: float) -> tuple[Array, np.ndarray, np.ndarray]:
         """Radial offsets ``h``, where they are found (``ok``: the face and its members
         continued by ``reach``) and where the face is (``inside``) at the points
         ``(s, z)`` (any shape, raveled)."""
