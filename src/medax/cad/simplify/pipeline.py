@@ -135,6 +135,10 @@ class _Job:
     whole: dict[int, int] = field(default_factory=dict)  # fillet -> face it merges into whole
     # fillet -> its supporting face that has no surface for its half (why it was kept)
     no_surface: dict[int, int] = field(default_factory=dict)
+    # whether cylinders the ring route refuses take the cylinder field (the second pass:
+    # :func:`_cylinder_pass`), and the fillets a failing face drops first then
+    cylinder_field: bool = False
+    prefer: set[int] = field(default_factory=set)
 
     @property
     def vol0(self) -> float:
@@ -234,7 +238,10 @@ def simplify(
         return _attempt(job, sel)
 
     if n_fit:
+        before_fit = dict(job.specs)
         _fit_pass(job)
+        _cylinder_pass(job, before_fit, blends)
+    job.cylinder_field = True
     _one_sided(job, blends)
     specs, corners = job.specs, job.corners
     first = attempt(specs) if specs else None
@@ -475,6 +482,8 @@ def _fitted(job: _Job, split: Any, g: Group, probe: bool = False) -> FittedSurfa
     with ``probe`` the cheap height-field check only (see :func:`graph_surface`)."""
     assert g.support is not None
     key = (int(probe), g.support, *sorted(split.origin[k] for k in g.members))
+    if job.cylinder_field and _ring_kind(job.face(g.support)):
+        key = (-1, *key)  # (the first pass's ring refusal is no answer now)
     if key not in job.cache:
         members = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
         fit_tol = FIT_SHARE * job.tol * job.diag
@@ -495,7 +504,7 @@ def _fitted(job: _Job, split: Any, g: Group, probe: bool = False) -> FittedSurfa
                 if isinstance(flat, str) and _ring_applies(ring):
                     flat = f"{flat}; ring route: {ring}"
                 job.cache[key] = flat
-            elif isinstance(ring, str):
+            elif isinstance(ring, str) and job.cylinder_field:
                 # a cylinder the ring route refused: the field over the cylinder
                 cyl = cylinder_surface(support, members, fit_tol, job.btol, probe, accept)
                 if isinstance(cyl, str) and _ring_applies(ring):
@@ -597,14 +606,47 @@ def _fit_round(job: _Job, probe: bool) -> bool:
         return False
     job.say(f"fitted surfaces failed on faces {sorted(bad)}: their fillets are kept")
     for sup, why in bad.items():
-        for f, s in list(job.specs.items()):
-            if sup in s.supporting:
+        mine = [f for f, s in job.specs.items() if sup in s.supporting]
+        first = [f for f in mine if f in job.prefer]  # the second pass's newcomers
+        for f in first or mine:
+            if f in job.specs:
                 job.specs.pop(f)
                 if f not in job.kept:
                     job.kept[f] = f"supporting face {sup}: {why}"
                     job.no_surface[f] = sup
     _cascade(job.specs, job.corners, job.kept)
     return True
+
+
+def _cylinder_pass(job: _Job, tried: dict[int, FilletSpec], blends: BlendInput) -> None:
+    """The fillets the fit pass kept because the ring route refused a cylinder of theirs
+    (``tried``: the fillets before the pass), tried again with the cylinder field
+    (:mod:`.cylinder_field`). A face whose fit then fails drops these newcomers first
+    (``job.prefer``): their halves can spoil a face that fitted without them (a plate
+    whose circles round the bosses come off the knot lines), and the fillets merged
+    there before stay merged. Not for fillets meeting corner blends or riding on fillets."""
+    job.cylinder_field = True
+    linked = {f for cs in blends.corners for f in cs.fillets}
+    linked |= {b for s in blends.fillets for b in s.supporting if b in tried}
+    linked |= {s.face for s in blends.fillets if set(s.supporting) & set(tried)}
+    cands = {
+        f
+        for f, sup in job.no_surface.items()
+        if f in tried and f in job.kept and f not in linked and f not in job.specs
+        and _ring_kind(job.face(sup))
+    }  # fmt: skip
+    if not cands:
+        return
+    job.say(f"{len(cands)} fillets kept at cylinders tried with the cylinder field")
+    old = {f: (job.kept.pop(f), job.no_surface.pop(f)) for f in cands}
+    job.specs.update({f: tried[f] for f in cands})
+    job.prefer = set(cands)
+    _refresh_surfaces(job)
+    _fit_pass(job)
+    job.prefer = set()
+    for f in cands:
+        if f not in job.specs and f not in job.kept:  # (dropped without a reason of its own)
+            job.kept[f], job.no_surface[f] = old[f]
 
 
 def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
