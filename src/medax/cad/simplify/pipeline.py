@@ -237,12 +237,14 @@ def simplify(
     def attempt(sel: dict[int, FilletSpec]) -> _Attempt | str:
         return _attempt(job, sel)
 
+    before_fit = dict(job.specs)
     if n_fit:
-        before_fit = dict(job.specs)
         _fit_pass(job)
-        _cylinder_pass(job, before_fit, blends)
-    job.cylinder_field = True
     _one_sided(job, blends)
+    # (after the fillets merged whole: a cylinder's newcomer must not take their place)
+    if n_fit and _cylinder_pass(job, before_fit, blends):
+        _one_sided(job, blends)
+    job.cylinder_field = True
     specs, corners = job.specs, job.corners
     first = attempt(specs) if specs else None
     result: _Attempt | None
@@ -618,14 +620,14 @@ def _fit_round(job: _Job, probe: bool) -> bool:
     return True
 
 
-def _cylinder_pass(job: _Job, tried: dict[int, FilletSpec], blends: BlendInput) -> None:
+def _cylinder_pass(job: _Job, tried: dict[int, FilletSpec], blends: BlendInput) -> bool:
     """The fillets the fit pass kept because the ring route refused a cylinder of theirs
     (``tried``: the fillets before the pass), tried again with the cylinder field
     (:mod:`.cylinder_field`). A face whose fit then fails drops these newcomers first
     (``job.prefer``): their halves can spoil a face that fitted without them (a plate
     whose circles round the bosses come off the knot lines), and the fillets merged
     there before stay merged. Not for fillets meeting corner blends, or riding on fillets
-    or ridden by them that were tried."""
+    or ridden by them that were tried. True when some fillet was tried."""
     job.cylinder_field = True
     linked = {f for cs in blends.corners for f in cs.fillets}
     linked |= {b for s in tried.values() for b in s.supporting if b in tried}
@@ -637,7 +639,7 @@ def _cylinder_pass(job: _Job, tried: dict[int, FilletSpec], blends: BlendInput) 
         and _ring_kind(job.face(sup))
     }  # fmt: skip
     if not cands:
-        return
+        return False
     job.say(f"{len(cands)} fillets kept at cylinders tried with the cylinder field")
     old = {f: (job.kept.pop(f), job.no_surface.pop(f)) for f in cands}
     job.specs.update({f: tried[f] for f in cands})
@@ -648,6 +650,7 @@ def _cylinder_pass(job: _Job, tried: dict[int, FilletSpec], blends: BlendInput) 
     for f in cands:
         if f not in job.specs and f not in job.kept:  # (dropped without a reason of its own)
             job.kept[f], job.no_surface[f] = old[f]
+    return True
 
 
 def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
