@@ -96,8 +96,12 @@ def test_fillets_along_a_partial_cylinder_are_removed(split):
         and i not in {s.face for s in specs.fillets}
     ]
     fitted = [g for g in r.face_groups if g.surface == "fitted"]
-    assert sorted(w for g in fitted for w in g.whole) == sorted(cylinders)
     assert len(cylinders) == (2 if split else 1)
+    on_cylinders = sorted(w for g in fitted for w in g.whole)
+    if split:  # a fillet may go whole into the plane first (an exact extrusion there)
+        assert on_cylinders and set(on_cylinders) <= set(cylinders)
+    else:
+        assert on_cylinders == cylinders
     # the targets, by OCCT and by distances between the whole boundaries
     assert_same_solid(cls.shape, r)
     v0, v1 = _volume(cls.shape), _volume(r.shape)
