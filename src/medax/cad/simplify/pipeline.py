@@ -626,12 +626,10 @@ def _cylinder_pass(job: _Job, tried: dict[int, FilletSpec], blends: BlendInput) 
     (:mod:`.cylinder_field`). A face whose fit then fails drops these newcomers first
     (``job.prefer``): their halves can spoil a face that fitted without them (a plate
     whose circles round the bosses come off the knot lines), and the fillets merged
-    there before stay merged. Not for fillets meeting corner blends, or riding on fillets
-    or ridden by them that were tried. True when some fillet was tried."""
+    there before stay merged. Not for fillets meeting corner blends (a corner goes only
+    with all its fillets). True when some fillet was tried."""
     job.cylinder_field = True
     linked = {f for cs in blends.corners for f in cs.fillets}
-    linked |= {b for s in tried.values() for b in s.supporting if b in tried}
-    linked |= {s.face for s in tried.values() if set(s.supporting) & set(tried)}
     cands = {
         f
         for f, sup in job.no_surface.items()
