@@ -237,12 +237,12 @@ def simplify(
     def attempt(sel: dict[int, FilletSpec]) -> _Attempt | str:
         return _attempt(job, sel)
 
-    before_fit = dict(job.specs)
+    before_fit, corners_before = dict(job.specs), dict(job.corners)
     if n_fit:
         _fit_pass(job)
     _one_sided(job, blends)
     # (after the fillets merged whole: a cylinder's newcomer must not take their place)
-    if n_fit and _cylinder_pass(job, before_fit, blends):
+    if n_fit and _cylinder_pass(job, before_fit, corners_before):
         _one_sided(job, blends)
     job.cylinder_field = True
     specs, corners = job.specs, job.corners
@@ -620,16 +620,17 @@ def _fit_round(job: _Job, probe: bool) -> bool:
     return True
 
 
-def _cylinder_pass(job: _Job, tried: dict[int, FilletSpec], blends: BlendInput) -> bool:
+def _cylinder_pass(job: _Job, tried: dict[int, FilletSpec], corners: dict[int, CornerSpec]) -> bool:
     """The fillets the fit pass kept because the ring route refused a cylinder of theirs
     (``tried``: the fillets before the pass), tried again with the cylinder field
     (:mod:`.cylinder_field`). A face whose fit then fails drops these newcomers first
     (``job.prefer``): their halves can spoil a face that fitted without them (a plate
     whose circles round the bosses come off the knot lines), and the fillets merged
-    there before stay merged. Not for fillets meeting corner blends (a corner goes only
-    with all its fillets). True when some fillet was tried."""
+    there before stay merged. Not for fillets meeting a corner blend that was split before
+    the pass (``corners``: it goes only with all its fillets, and is kept now). True when
+    some fillet was tried."""
     job.cylinder_field = True
-    linked = {f for cs in blends.corners for f in cs.fillets}
+    linked = {f for cs in corners.values() for f in cs.fillets}
     cands = {
         f
         for f, sup in job.no_surface.items()
