@@ -250,3 +250,35 @@ def test_solve_masked_components_match_scalar_solves():
     for k in range(3):
         one = solve_masked(bx, by, ok, z[..., k])
         assert np.abs(both[..., k] - one).max() <= 1e-9 * max(1.0, np.abs(one).max())
+
+
+def test_periodic_fit_of_a_boss_foot_with_its_fillet_half():
+    """A boss (radius 10) with the cylinder half of its foot fillet (a coaxial torus, tube
+    2, down to the 45-degree medial circle): the offsets by :func:`radial_heights`, fitted
+    round the axis with the knot circle at the contact, lie on the torus and the cylinder."""
+    from medax.geometry.periodic_fit import fit_radial_height
+
+    big, r = 10.0, 2.0
+    fr = CylinderFrame.make(np.zeros(3), np.array([0, 0, 1.0]), np.array([1.0, 0, 0]), big)
+    medial = -r * np.sin(np.pi / 4)
+
+    def points(th, z):
+        s, zz = (th * big).ravel(), z.ravel()
+        h, ok = radial_heights(fr, "torus", s, zz, np.zeros(3), np.array([0, 0, 1.0]), r, big + r)
+        h = np.where(zz >= 0.0, 0.0, h)
+        ok = ok | (zz >= 0.0)
+        p = fr.point(s, zz, h).reshape((*th.shape, 3))
+        return p, ok.reshape(th.shape), ok.reshape(th.shape)
+
+    tol = 1e-5
+    fit = fit_radial_height(
+        (medial, 3.0), [0.0], points, tol, 0.5, big, levels=6, s_fine=[True, False]
+    )
+    assert fit is not None and fit.error <= tol
+    rng = np.random.default_rng(6)
+    th, z = rng.uniform(0, PERIOD, 2000), rng.uniform(medial, 3.0, 2000)
+    p = fit.at(th, z)
+    rho = np.hypot(p[:, 0], p[:, 1])
+    on_torus = (rho - big - r) ** 2 + p[:, 2] ** 2 - r * r
+    off = np.where(p[:, 2] < 0, np.abs(on_torus) / (2 * r), np.abs(rho - big))
+    assert off.max() <= 2 * tol
