@@ -436,7 +436,8 @@ def _fit_once(
 def solve_masked(bx: sp.csr_matrix, by: sp.csr_matrix, ok: np.ndarray, z: FloatArray) -> FloatArray:
     """Coefficients (nx, ny) of the penalised least-squares fit to the heights ``z`` at the
     samples of the tensor grid where ``ok`` (both (sx, sy)), ``bx`` (sx, nx) and ``by``
-    (sy, ny) the design matrices of the two directions.
+    (sy, ny) the design matrices of the two directions; (nx, ny, k) for values with
+    components ``z`` (sx, sy, k) (points: one factorisation, k right-hand sides).
 
     Our own solver, because the data are masked (no samples outside the face), so the
     normal matrix ``A^T A + PENALTY D^T D`` is no Kronecker product and no separable solve
@@ -450,10 +451,15 @@ def solve_masked(bx: sp.csr_matrix, by: sp.csr_matrix, ok: np.ndarray, z: FloatA
     SuperLU stays the fallback for bands too large to store or a failed factorisation."""
     nx, ny = bx.shape[1], by.shape[1]
     w = ok.astype(np.float64)
-    rhs = np.asarray(bx.T @ (w * z) @ by, dtype=np.float64)  # (nx, ny)
+    comps = z.shape[2:]  # values with components (sx, sy, k): one factorisation, k sides
+    zk = z.reshape(*ok.shape, -1)
+    rhs = np.stack(
+        [np.asarray(bx.T @ (w * zk[..., k]) @ by, dtype=np.float64) for k in range(zk.shape[2])],
+        axis=2,
+    )  # (nx, ny, k)
     inner_x = nx <= ny  # the smaller direction inner: the narrower band
     if inner_x:
-        b_in, b_out, w, rhs = bx, by, w.T, rhs.T  # w (sy, sx), rhs (ny, nx)
+        b_in, b_out, w, rhs = bx, by, w.T, rhs.transpose(1, 0, 2)  # w (sy, sx), rhs (ny, nx, k)
     else:
         b_in, b_out = by, bx
     n_in, n_out = b_in.shape[1], b_out.shape[1]
@@ -465,9 +471,12 @@ def solve_masked(bx: sp.csr_matrix, by: sp.csr_matrix, ok: np.ndarray, z: FloatA
         try:
             with _one_lapack_thread():
                 factor = cholesky_banded(ab, check_finite=False)
-                c = cho_solve_banded((factor, False), rhs.ravel(), check_finite=False)
-            coef = c.reshape(n_out, n_in)
-            coef = coef.T if inner_x else coef
+                c = cho_solve_banded(
+                    (factor, False), rhs.reshape(n_out * n_in, -1), check_finite=False
+                )
+            coef = c.reshape(n_out, n_in, -1)
+            coef = coef.transpose(1, 0, 2) if inner_x else coef
+            coef = coef.reshape(nx, ny, *comps)
         except LinAlgError:  # not numerically positive definite: the general solver
             coef = _solve_superlu(bx, by, ok, z)
     return np.asarray(coef)

@@ -31,6 +31,7 @@ from medax._progress import log_progress
 from medax.cad.simplify.bridge import bridge_edge
 from medax.cad.simplify.chains import Chain, chain_arcs, chain_specs, find_chains
 from medax.cad.simplify.corner import corner_arcs, plane_normal
+from medax.cad.simplify.cylinder_field import cylinder_surface
 from medax.cad.simplify.fitted import (
     FittedSurface,
     GraphSetup,
@@ -151,6 +152,10 @@ class _Job:
     chain_links: set[tuple[int, int]] = field(default_factory=set)
     # rider -> (the fillet it rides on with no bridge, its medial curve, why it was kept)
     unbridged: dict[int, tuple[int, Medial, str]] = field(default_factory=dict)
+    # whether cylinders the ring route refuses take the cylinder field (the second pass:
+    # :func:`_cylinder_pass`), and the fillets a failing face drops first then
+    cylinder_field: bool = False
+    prefer: set[int] = field(default_factory=set)
 
     @property
     def vol0(self) -> float:
@@ -253,9 +258,14 @@ def simplify(
     def attempt(sel: dict[int, FilletSpec]) -> _Attempt | str:
         return _attempt(job, sel)
 
+    before_fit, corners_before = dict(job.specs), dict(job.corners)
     if n_fit:
         _fit_pass(job)
     _one_sided(job, blends)
+    # (after the fillets merged whole: a cylinder's newcomer must not take their place)
+    if n_fit and _cylinder_pass(job, before_fit, corners_before):
+        _one_sided(job, blends)
+    job.cylinder_field = True
     _readmit_riders(job, blends)
     specs, corners = job.specs, job.corners
     first = attempt(specs) if specs else None
@@ -622,6 +632,8 @@ def _fitted(job: _Job, split: Any, g: Group, probe: bool = False) -> FittedSurfa
     with ``probe`` the cheap height-field check only (see :func:`graph_surface`)."""
     assert g.support is not None
     key = (int(probe), g.support, *sorted(split.origin[k] for k in g.members))
+    if job.cylinder_field and _ring_kind(job.face(g.support)):
+        key = (-1, *key)  # (the first pass's ring refusal is no answer now)
     if key not in job.cache:
         members = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
         fit_tol = FIT_SHARE * job.tol * job.diag
@@ -629,7 +641,8 @@ def _fitted(job: _Job, split: Any, g: Group, probe: bool = False) -> FittedSurfa
         support = job.face(g.support)
         try:
             # the ring route first (one blend half all the way round a boss or a hole:
-            # planes and cylinders), else the height field over a plane
+            # planes and cylinders), else the height field over a plane, or over the
+            # cylinder (any blend halves on any part of it)
             ring = ring_surface(support, members, fit_tol, job.btol, probe, accept)
             if isinstance(ring, str) and not _ring_kind(support):
                 # (the probe's setup and fit serve the full fit of the same group)
@@ -641,6 +654,12 @@ def _fitted(job: _Job, split: Any, g: Group, probe: bool = False) -> FittedSurfa
                 if isinstance(flat, str) and _ring_applies(ring):
                     flat = Refusal(f"{flat}; ring route: {ring}", _culprits_of(flat))
                 job.cache[key] = flat
+            elif isinstance(ring, str) and job.cylinder_field:
+                # a cylinder the ring route refused: the field over the cylinder
+                cyl = cylinder_surface(support, members, fit_tol, job.btol, probe, accept)
+                if isinstance(cyl, str) and _ring_applies(ring):
+                    cyl = f"{cyl}; ring route: {ring}"
+                job.cache[key] = cyl
             else:
                 job.cache[key] = ring
         except Exception as err:  # OCCT failures while sampling the pieces
@@ -649,8 +668,9 @@ def _fitted(job: _Job, split: Any, g: Group, probe: bool = False) -> FittedSurfa
 
 
 def _ring_kind(face: Any) -> bool:
-    """Whether a supporting face takes only the ring route (a cylinder: see
-    :mod:`.ring`)."""
+    """Whether a supporting face takes the ring route and then the field over its
+    cylinder, not the height field over a plane (a cylinder: see :mod:`.ring`,
+    :mod:`.cylinder_field`)."""
     return BRepAdaptor_Surface(face).GetType() == GeomAbs_Cylinder
 
 
@@ -749,13 +769,17 @@ def _fit_round(job: _Job, probe: bool) -> bool:
         if culprits:  # the misfit lies on these blends' pieces: the others are tried again
             _keep_culprits(job, sup, why, culprits)
             continue
-        # a chain of fillets ending on the face is dropped first, alone (it goes whole or
-        # not at all, and its pieces are the likeliest to spoil the fit): the face's other
-        # fillets are tried again without it in the next round
-        chained = {f for ch in job.chains if sup in ch.ends for f in ch.members}
-        chained &= {f for f, s in job.specs.items() if sup in s.supporting}
-        for f, s in list(job.specs.items()):
-            if sup in s.supporting and (not chained or f in chained):
+        # else the second pass's newcomers first (:func:`_cylinder_pass`), or a chain of
+        # fillets ending on the face, alone (it goes whole or not at all, and its pieces are
+        # the likeliest to spoil the fit): the face's other fillets are tried again without
+        # them in the next round
+        mine = [f for f, s in job.specs.items() if sup in s.supporting]
+        first = [f for f in mine if f in job.prefer]
+        if not first:
+            chained = {f for ch in job.chains if sup in ch.ends for f in ch.members}
+            first = [f for f in mine if f in chained]
+        for f in first or mine:
+            if f in job.specs:
                 job.specs.pop(f)
                 if f not in job.kept:
                     job.kept[f] = f"supporting face {sup}: {why}"
@@ -784,6 +808,38 @@ def _keep_culprits(job: _Job, sup: int, why: str, culprits: set[int]) -> None:
                 job.kept[f] = reason
                 job.no_surface[f] = sup
                 job.own_misfit.add(f)
+
+
+def _cylinder_pass(job: _Job, tried: dict[int, FilletSpec], corners: dict[int, CornerSpec]) -> bool:
+    """The fillets the fit pass kept because the ring route refused a cylinder of theirs
+    (``tried``: the fillets before the pass), tried again with the cylinder field
+    (:mod:`.cylinder_field`). A face whose fit then fails drops these newcomers first
+    (``job.prefer``): their halves can spoil a face that fitted without them (a plate
+    whose circles round the bosses come off the knot lines), and the fillets merged
+    there before stay merged. Not for fillets meeting a corner blend that was split before
+    the pass (``corners``: it goes only with all its fillets, and is kept now). True when
+    some fillet was tried."""
+    job.cylinder_field = True
+    linked = {f for cs in corners.values() for f in cs.fillets}
+    cands = {
+        f
+        for f, sup in job.no_surface.items()
+        if f in tried and f in job.kept and f not in linked and f not in job.specs
+        and _ring_kind(job.face(sup))
+    }  # fmt: skip
+    if not cands:
+        return False
+    job.say(f"{len(cands)} fillets kept at cylinders tried with the cylinder field")
+    old = {f: (job.kept.pop(f), job.no_surface.pop(f)) for f in cands}
+    job.specs.update({f: tried[f] for f in cands})
+    job.prefer = set(cands)
+    _refresh_surfaces(job)
+    _fit_pass(job)
+    job.prefer = set()
+    for f in cands:
+        if f not in job.specs and f not in job.kept:  # (dropped without a reason of its own)
+            job.kept[f], job.no_surface[f] = old[f]
+    return True
 
 
 def _attempt(job: _Job, sel: dict[int, FilletSpec]) -> _Attempt | str:
