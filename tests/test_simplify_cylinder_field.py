@@ -98,10 +98,14 @@ def test_fillets_along_a_partial_cylinder_are_removed(split):
     fitted = [g for g in r.face_groups if g.surface == "fitted"]
     assert len(cylinders) == (2 if split else 1)
     on_cylinders = sorted(w for g in fitted for w in g.whole)
-    if split:  # a fillet may go whole into the plane first (an exact extrusion there)
-        assert on_cylinders and set(on_cylinders) <= set(cylinders)
-    else:
-        assert on_cylinders == cylinders
+    # the cylinder with the halves of fillets on parallel axes is an exact extrusion of
+    # arcs when the medial curves' cross parameters are known; else a fillet goes whole
+    # into the plane where that is exact, and the others' halves merge into the cylinder
+    # field
+    whole = [n for n in r.notes if "merged whole" in n]
+    exact = [w for g in r.face_groups if g.surface == "extrusion" for w in g.whole]
+    assert set(on_cylinders) <= set(cylinders)
+    assert on_cylinders or len(whole) == 2 or set(cylinders) <= set(exact)
     # the issue's targets, by OCCT and by distances between the whole boundaries
     assert_same_solid(cls.shape, r)
     v0, v1 = _volume(cls.shape), _volume(r.shape)
