@@ -341,6 +341,11 @@ def test_local_measures_match_whole_solids(box4):
     d = L.volume_delta(big, old) / v_old
     assert abs(d - (1.001**3 - 1.0)) <= 1e-9
     assert abs(L.local_volume_change(big, old, v_old, 1e-6) - (1.001**3 - 1.0)) <= 1e-9
+    # a refusal the fits' own measure agrees with is settled by it; one it does not agree
+    # with is confirmed face by face all the same
+    for expected in (1.001**3 - 1.0, 0.0):
+        d = L.local_volume_change(big, old, v_old, 1e-6, expected)
+        assert d is not None and abs(d - (1.001**3 - 1.0)) <= 1e-9
     shares = L.contributions(big, old, v_old, 1e-6)  # per face, one common point
     assert shares.shape == (len(big) + len(old),)
     assert abs(shares.sum() - (1.001**3 - 1.0)) <= 1e-9

@@ -75,8 +75,8 @@ def local_volume_change(
     The adaptive integrator gives each face's contribution (``shares``: those of
     :func:`contributions`, when already measured). A second measure must agree with their
     sum within a budget: a tenth of the change when it is above ``tol`` (a refusal), else
-    ``tol / 10``. Within ``tol`` that may be ``expected`` (the fits' own measure of their
-    volume change); otherwise face by face OCCT's default integrator (it loses the order of
+    ``tol / 10``. That may be ``expected`` (the fits' own measure of their volume change,
+    within ``tol`` or above it); otherwise face by face OCCT's default integrator (it loses the order of
     its fixed Gauss rules across the C1 knot lines of fitted faces), and Gauss-Kronrod on a
     B-spline copy of the faces where the two differ most, until the faces left unconfirmed
     differ by less than the budget in all (Gauss-Kronrod on every face took 5 - 7 s per
@@ -88,9 +88,8 @@ def local_volume_change(
     d_ad = float(ad.sum())
     refusal = abs(d_ad) > tol
     budget = 0.1 * (abs(d_ad) if refusal else tol)
-    if not refusal and expected is not None and np.isfinite(expected):
-        if abs(d_ad - expected) <= budget:
-            return d_ad
+    if expected is not None and np.isfinite(expected) and abs(d_ad - expected) <= budget:
+        return d_ad  # (a refusal too: the fits measured the same change themselves)
     best = sign * np.array([_contribution(f, origin, None) for f in faces]) / before
     gap = np.abs(ad - best)
     for i in np.argsort(-gap).tolist():  # Gauss-Kronrod on the most disputed faces only
