@@ -76,11 +76,11 @@ def local_volume_change(
     :func:`contributions`, when already measured). A second measure must agree with their
     sum within a budget: a tenth of the change when it is above ``tol`` (a refusal), else
     ``tol / 10``. That may be ``expected`` (the fits' own measure of their volume change,
-    within ``tol`` or above it); otherwise face by face OCCT's default integrator (it loses the order of
-    its fixed Gauss rules across the C1 knot lines of fitted faces), and Gauss-Kronrod on a
-    B-spline copy of the faces where the two differ most, until the faces left unconfirmed
-    differ by less than the budget in all (Gauss-Kronrod on every face took 5 - 7 s per
-    refusal on a 700-face part)."""
+    within ``tol`` or above it); otherwise face by face OCCT's default integrator (it loses
+    the order of its fixed Gauss rules across the C1 knot lines of fitted faces), and Gauss-
+    Kronrod on a B-spline copy of the faces where the two differ most, until the faces left
+    unconfirmed differ by less than the budget in all (Gauss-Kronrod on every face took 5 -
+    7 s per refusal on a 700-face part)."""
     faces = [*new, *old]
     sign = np.array([1.0] * len(new) + [-1.0] * len(old))
     origin = pnt(_centre(faces))
