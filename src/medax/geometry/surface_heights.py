@@ -13,7 +13,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from medax.geometry import kernels
 from medax.geometry._types import FloatArray
+from medax.geometry.nurbs_kernel import heights_newton
 from medax.geometry.surfaces import NurbsSurface
 
 #: Newton iterations at most, and the start grid's samples per direction.
@@ -121,30 +123,18 @@ def _newton(
     """Newton on the in-plane coordinates from ``uv`` (m, 2), each row until its residual
     is below ``0.01 tol``; the parameters kept within ``lo``, ``hi`` (2,). Returns the
     parameters and the surface's jet (points, d/du, d/dv, each (m, 3)) there: a row's last
-    evaluation, the one that found it converged (no evaluation of its own afterwards), or
-    one more for the rows still moving after ``NEWTON_STEPS``."""
+    evaluation, the one that found it converged, or one more for the rows still moving
+    after ``NEWTON_STEPS``. Compiled, point by point
+    (:func:`medax.geometry.nurbs_kernel.heights_newton`)."""
     o, ex, ey, _ = frame
-    uv = uv.copy()
-    jet = tuple(np.empty((len(xy), 3)) for _ in range(3))
-    live = np.arange(len(xy))  # points still moving
-    for _ in range(NEWTON_STEPS):
-        s, su, sv = surf.jet(uv[live])
-        q = s - o
-        fx, fy = q @ ex - xy[live, 0], q @ ey - xy[live, 1]
-        done = np.hypot(fx, fy) < 0.01 * tol
-        for out, val in zip(jet, (s, su, sv), strict=True):
-            out[live[done]] = val[done]
-        move = ~done
-        live, fx, fy = live[move], fx[move], fy[move]
-        if live.size == 0:
-            break
-        su, sv = su[move], sv[move]
-        a, b, c, d = su @ ex, sv @ ex, su @ ey, sv @ ey
-        det = a * d - b * c
-        det = np.where(np.abs(det) > 1e-300, det, 1e-300)
-        step = np.column_stack([(d * fx - b * fy) / det, (a * fy - c * fx) / det])
-        uv[live] = np.clip(uv[live] - step, lo, hi)
-    if live.size:
-        for out, val in zip(jet, surf.jet(uv[live]), strict=True):
-            out[live] = val
-    return uv, (jet[0], jet[1], jet[2])
+    kernels.announce_compile()
+    uv, s, su, sv, _ = heights_newton(
+        surf.kernel_args,
+        np.array([o, ex, ey], dtype=np.float64),
+        np.ascontiguousarray(xy, dtype=np.float64),
+        np.ascontiguousarray(uv, dtype=np.float64),
+        np.array([lo[0], hi[0], lo[1], hi[1]], dtype=np.float64),
+        float(tol),
+        NEWTON_STEPS,
+    )
+    return uv, (s, su, sv)
