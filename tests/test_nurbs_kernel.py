@@ -33,7 +33,9 @@ def _random_surface(pu: int, pv: int, seed: int, graph: bool = False) -> NurbsSu
     return NurbsSurface(poles, pu, pv, uk, vk, weights)
 
 
-@pytest.mark.parametrize(("pu", "pv"), [(1, 2), (3, 3), (POWER_BASIS_MAX_DEGREE, 4), (7, 2), (13, 9)])
+@pytest.mark.parametrize(
+    ("pu", "pv"), [(1, 2), (3, 3), (POWER_BASIS_MAX_DEGREE, 4), (7, 2), (13, 9)]
+)
 def test_jet_equals_occt_d1(pu, pv):
     pytest.importorskip("OCP")
     from OCP.gp import gp_Pnt, gp_Vec
