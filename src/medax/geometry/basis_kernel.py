@@ -59,7 +59,7 @@ def basis_point(  # type: ignore[no-untyped-def]
             ders[r] = p * acc
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def find_span(kn: FloatArray, p: int, t: float) -> int:
     """The span ``s`` of ``t``: the last knot index with ``kn[s] <= t``, kept within the
     domain's spans ``p .. len(kn) - p - 2`` (``np.searchsorted(kn, t, "right") - 1``
@@ -79,7 +79,7 @@ def find_span(kn: FloatArray, p: int, t: float) -> int:
     return a
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def basis_at(  # type: ignore[no-untyped-def]
     basis, t: float, ndu: FloatArray, left: FloatArray, right: FloatArray, values: FloatArray,
     ders: FloatArray,

@@ -777,4 +777,6 @@ def warm_up() -> None:
         span_basis_rows(basis, t)
         surf = (np.ones((2, 2, 4)), basis, basis)
         nurbs_jet_rows(surf, x)
-        heights_newton(surf, np.eye(3), x, x, np.array([0.0, 1.0, 0.0, 1.0]), 0.1, 2)
+        heights_newton(
+            surf, np.eye(3), x, x, np.zeros(1, np.bool_), np.array([0.0, 1.0, 0.0, 1.0]), 0.1, 2
+        )

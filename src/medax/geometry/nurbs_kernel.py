@@ -30,7 +30,7 @@ def _work(surf):  # type: ignore[no-untyped-def]
     )  # fmt: skip
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _jet1(surf, u: float, v: float, work, x: FloatArray, du: FloatArray, dv: FloatArray) -> None:  # type: ignore[no-untyped-def]
     """The point ``x`` (3,) and its derivatives ``du``, ``dv`` (3,) at ``(u, v)``: the
     homogeneous sums over the (pu+1, pv+1) poles of the point's span (over v first, values
@@ -90,25 +90,49 @@ def jet_rows(surf, uv: FloatArray):  # type: ignore[no-untyped-def]
     return x, du, dv
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _plane_jacobian(  # type: ignore[no-untyped-def]
+    du: FloatArray, dv: FloatArray, ex: FloatArray, ey: FloatArray
+):
+    """The in-plane Jacobian ``(a, b, c, d)`` = ``(du.ex, dv.ex, du.ey, dv.ey)``."""
+    a = du[0] * ex[0] + du[1] * ex[1] + du[2] * ex[2]
+    b = dv[0] * ex[0] + dv[1] * ex[1] + dv[2] * ex[2]
+    c = du[0] * ey[0] + du[1] * ey[1] + du[2] * ey[2]
+    d = dv[0] * ey[0] + dv[1] * ey[1] + dv[2] * ey[2]
+    return a, b, c, d
+
+
 @njit(cache=True, error_model="numpy")
 def heights_newton(  # type: ignore[no-untyped-def]
-    surf, frame: FloatArray, xy: FloatArray, uv: FloatArray, box: FloatArray, tol: float,
-    steps: int,
+    surf, frame: FloatArray, xy: FloatArray, uv: FloatArray, chain: np.ndarray, box: FloatArray,
+    tol: float, steps: int,
 ):  # fmt: skip
-    """Newton on the in-plane coordinates, point by point: from ``uv`` (m, 2) until the
+    """Newton on the in-plane coordinates, point by point: from ``uv`` (m, 2), or where
+    ``chain`` (m,) from the previous point's solution moved by the inverse in-plane
+    Jacobian there (one Newton step from a nearby solution), until the
     in-plane distance of ``S(u, v)`` from ``xy`` (m, 2) is below ``0.01 tol``, at most
     ``steps`` steps, the parameters clamped to ``box`` = (u0, u1, v0, v1). ``frame`` (3, 3)
     holds the plane's origin, ``ex``, ``ey``. Returns the parameters (m, 2), the jet there
     (points, d/du, d/dv, each (m, 3): the evaluation that found a row converged, or one
-    more after the last step) and the in-plane distances (m,)."""
+    more after the last step), the unit normals ``d/du x d/dv`` normalised (m, 3) and the
+    in-plane distances (m,)."""
     m = xy.shape[0]
     out = uv.copy()
     x, du, dv = np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 3))
     res = np.empty(m)
+    normal = np.empty((m, 3))
     work = _work(surf)
     o, ex, ey = frame[0], frame[1], frame[2]
     for i in range(m):
         u, v = uv[i, 0], uv[i, 1]
+        if chain[i] and i > 0:
+            a, b, c, d = _plane_jacobian(du[i - 1], dv[i - 1], ex, ey)
+            det = a * d - b * c
+            if not abs(det) > 1e-300:
+                det = 1e-300
+            dx, dy = xy[i, 0] - xy[i - 1, 0], xy[i, 1] - xy[i - 1, 1]
+            u = min(max(out[i - 1, 0] + (d * dx - b * dy) / det, box[0]), box[1])
+            v = min(max(out[i - 1, 1] + (a * dy - c * dx) / det, box[2]), box[3])
         xi, dui, dvi = x[i], du[i], dv[i]
         for k in range(steps + 1):
             _jet1(surf, u, v, work, xi, dui, dvi)
@@ -118,14 +142,16 @@ def heights_newton(  # type: ignore[no-untyped-def]
             res[i] = math.hypot(fx, fy)
             if res[i] < 0.01 * tol or k == steps:
                 break
-            a = dui[0] * ex[0] + dui[1] * ex[1] + dui[2] * ex[2]
-            b = dvi[0] * ex[0] + dvi[1] * ex[1] + dvi[2] * ex[2]
-            c = dui[0] * ey[0] + dui[1] * ey[1] + dui[2] * ey[2]
-            d = dvi[0] * ey[0] + dvi[1] * ey[1] + dvi[2] * ey[2]
+            a, b, c, d = _plane_jacobian(dui, dvi, ex, ey)
             det = a * d - b * c
             if not abs(det) > 1e-300:
                 det = 1e-300
             u = min(max(u - (d * fx - b * fy) / det, box[0]), box[1])
             v = min(max(v - (a * fy - c * fx) / det, box[2]), box[3])
         out[i, 0], out[i, 1] = u, v
-    return out, x, du, dv, res
+        n0 = dui[1] * dvi[2] - dui[2] * dvi[1]
+        n1 = dui[2] * dvi[0] - dui[0] * dvi[2]
+        n2 = dui[0] * dvi[1] - dui[1] * dvi[0]
+        size = max(math.sqrt(n0 * n0 + n1 * n1 + n2 * n2), 1e-300)
+        normal[i, 0], normal[i, 1], normal[i, 2] = n0 / size, n1 / size, n2 / size
+    return out, x, du, dv, normal, res
