@@ -51,3 +51,17 @@ def test_continued_past_the_domain_only_when_asked():
     far = np.array([[R + 1.0, 1.0], [1.0, H + 3.0]])  # beyond the radius, above the top
     _, ok, _ = graph_heights(replace(s, extrapolate=True), FRAME, far, s.bounds, 1e-12)
     assert not ok.any()
+
+
+def test_grid_rows_solved_from_their_neighbours():
+    """A fine grid in row order (each point starts from the one before it): the closed-form
+    heights up to the steep side, and the points past the clamped domain refused without
+    spoiling the points after them."""
+    s = _quarter_cylinder()
+    x = np.concatenate([np.linspace(-0.04, -0.01, 4), np.linspace(0.01, R - 1e-3, 200)])
+    z = np.linspace(0.1, H - 0.1, 120)
+    xy = np.array([(a, b) for a in x for b in z])
+    for surf, inside in ((s, xy[:, 0] > 0.0), (replace(s, extrapolate=True), xy[:, 0] > -1.0)):
+        t, ok, _ = graph_heights(surf, FRAME, xy, s.bounds, 1e-12)
+        assert np.array_equal(ok, inside)
+        np.testing.assert_allclose(t[ok], np.sqrt(R**2 - xy[ok, 0] ** 2), atol=1e-10)

@@ -17,10 +17,13 @@ same algorithms as compiled loops over the points, one call per query:
   but no global search table (rational B-splines: the homogeneous jet and the quotient
   rule in the kernel; a separate global search kernel for them cost 2.4 s more to compile
   for a few percent of a part's axis time);
-* ``basis_rows`` (:mod:`medax.geometry.basis_kernel`, announced and warmed up here with
-  the others) - B-spline basis values and derivatives by Cox-de Boor;
 * ``crossing`` (:mod:`medax.geometry.crossing_kernel`, likewise) - the region's
   side-crossing checks.
+* ``span_basis_rows`` (:mod:`medax.geometry.basis_kernel`) - B-spline basis values and
+  derivatives, per span polynomials or Cox-de Boor; ``jet_rows`` and ``heights_newton``
+  (:mod:`medax.geometry.nurbs_kernel`) - NURBS surface jets and the Newton of
+  :func:`medax.geometry.surface_heights.graph_heights` (announced and warmed up here with
+  the others).
 
 Compiled with ``cache=True``: the first run after an install compiles (a few seconds, logged
 at INFO) and stores the machine code in ``__pycache__`` next to this file, or, where that is
@@ -39,8 +42,10 @@ import numpy as np
 from numba import njit
 
 from medax.geometry._types import FloatArray
-from medax.geometry.basis_kernel import basis_rows
+from medax.geometry.basis_kernel import span_basis_rows
 from medax.geometry.crossing_kernel import crossing
+from medax.geometry.nurbs_kernel import heights_newton
+from medax.geometry.nurbs_kernel import jet_rows as nurbs_jet_rows
 
 log = logging.getLogger(__name__)
 
@@ -787,9 +792,11 @@ _COMPILED = (
     track_table,
     track_step_rows,
     certify_rows,
-    basis_rows,
     newton_table,
     crossing,
+    span_basis_rows,
+    nurbs_jet_rows,
+    heights_newton,
 )
 _announced = False
 
@@ -843,5 +850,13 @@ def warm_up() -> None:
     track_table(inner, starts, rows, np.zeros(0), xs, t, np.ones(1), 8)
     track_step_rows(np.zeros((6, 1)), xs, t, np.ones(1), False)
     certify_rows(ts, pts.T.copy(), ts.copy(), x, t, t, 0.1, 0.01, 0.0, 0.0)
-    basis_rows(np.array([0.0, 0.0, 1.0, 1.0]), 1, t, np.array([1], dtype=np.int64))
     crossing(pts, pts[::-1].copy(), 0.0, False)
+    kn = np.array([0.0, 0.0, 1.0, 1.0])
+    for power in (True, False):  # the power basis and Cox-de Boor
+        basis = (kn, np.zeros((3, 2, 2)), 1, power, False, 0.0, 1.0)
+        span_basis_rows(basis, t)
+        surf = (np.ones((2, 2, 4)), basis, basis)
+        nurbs_jet_rows(surf, x)
+        heights_newton(
+            surf, np.eye(3), x, x, np.zeros(1, np.bool_), np.array([0.0, 1.0, 0.0, 1.0]), 0.1, 2
+        )

@@ -13,13 +13,13 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from medax.geometry import kernels
 from medax.geometry._types import FloatArray
+from medax.geometry.nurbs_kernel import heights_newton
 from medax.geometry.surfaces import NurbsSurface
 
 #: Newton iterations at most, and the start grid's samples per direction.
 NEWTON_STEPS, START_SAMPLES = 30, 48
-#: Above 16x this many points, every SEED_EVERY-th is solved first as a start for the rest.
-SEED_EVERY = 16
 #: The surface is continued by this share of its domain on each side (see graph_heights).
 CONTINUE = 0.02
 
@@ -34,9 +34,13 @@ def graph_heights(
     """Heights of ``surf`` over the plane of ``frame`` = (origin, ex, ey, n) at points ``xy``
     (m, 2) of the plane: ``t`` (m,) with ``origin + x ex + y ey + t n`` on the surface.
 
-    Each point starts from the nearest projected sample of a grid over ``uv_box`` (the
-    piece's parameter box) and is solved by Newton on the 2 x 2 system of its in-plane
-    coordinates. Returns ``t``, ``ok`` (converged to ``tol`` inside the surface's domain,
+    Each point is solved by Newton on the 2 x 2 system of its in-plane coordinates
+    (compiled, point by point). A point no farther from the one before it than the start
+    grid's longest projected cell edge (the rows of the caller's sample grids) starts from
+    that point's solution moved by the inverse in-plane Jacobian there (one Newton step
+    from a nearby solution); the others, and every point that did not converge from there,
+    from the nearest projected sample of a grid over ``uv_box`` (the piece's parameter
+    box). Returns ``t``, ``ok`` (converged to ``tol`` inside the surface's domain,
     continued by ``CONTINUE`` of its size when ``surf.extrapolate``: the polygons that
     give points to a piece are chord approximations of its edges) and the surface's unit
     normals (m, 3) there.
@@ -46,41 +50,74 @@ def graph_heights(
     if surf.extrapolate:
         mu, mv = CONTINUE * (b1 - b0), CONTINUE * (c1 - c0)
         b0, b1, c0, c1 = b0 - mu, b1 + mu, c0 - mv, c1 + mv
-    lo, hi = np.array([b0, c0]), np.array([b1, c1])
-    if len(xy) > 16 * SEED_EVERY:
-        # seeds: every SEED_EVERY-th point solved first (from the start grid); the others
-        # start from their nearest seed's foot moved by the inverse in-plane Jacobian there
-        # (one Newton step from a nearby solution), so most of them take one or two
-        # iterations instead of four
-        seed = np.arange(0, len(xy), SEED_EVERY)
-        start = _grid_start(surf, frame, xy[seed], uv_box)
-        suv, (_, su, sv) = _newton(surf, frame, xy[seed], start, lo, hi, tol)
-        a, b, c, d = su @ ex, sv @ ex, su @ ey, sv @ ey
-        det = a * d - b * c
-        det = np.where(np.abs(det) > 1e-300, det, 1e-300)
-        _, k = cKDTree(xy[seed]).query(xy)
-        dx, dy = xy[:, 0] - xy[seed[k], 0], xy[:, 1] - xy[seed[k], 1]
-        move = np.column_stack([(d[k] * dx - b[k] * dy) / det[k], (a[k] * dy - c[k] * dx) / det[k]])
-        uv = np.clip(suv[k] + move, lo, hi)
-    else:
-        uv = _grid_start(surf, frame, xy, uv_box)
-    uv, (s, su, sv) = _newton(surf, frame, xy, uv, lo, hi, tol)
-    res = _residual(s, frame, xy)
-    again = np.flatnonzero(res > tol)
-    if again.size and len(xy) > 16 * SEED_EVERY:
-        # a seed's neighbour on a steep or strongly curved stretch can start outside
-        # Newton's basin: solve those again from the grid (the rational B-spline of a
-        # round stored as a revolution left 6 of 369 points unsolved from their seeds)
-        start = _grid_start(surf, frame, xy[again], uv_box)
-        uv2, (s2, su2, sv2) = _newton(surf, frame, xy[again], start, lo, hi, tol)
-        better = _residual(s2, frame, xy[again]) < res[again]
+    xy = np.ascontiguousarray(xy, dtype=np.float64)
+    grid = _StartGrid(surf, frame, uv_box)
+    chain = np.zeros(len(xy), dtype=np.bool_)
+    if len(xy) > 1:
+        chain[1:] = np.hypot(*np.diff(xy, axis=0).T) <= grid.reach
+    start = np.zeros((len(xy), 2))
+    heads = np.flatnonzero(~chain)
+    start[heads] = grid.start(xy[heads])
+    box = np.array([b0, b1, c0, c1])
+    kernels.announce_compile()
+    plane = np.array([o, ex, ey], dtype=np.float64)
+    _, s, _, _, normal, res = heights_newton(
+        surf.kernel_args, plane, xy, start, chain, box, float(tol), NEWTON_STEPS
+    )
+    again = np.flatnonzero((res > tol) & chain)
+    if again.size:
+        # a neighbour on a steep or strongly curved stretch, or after a point that did not
+        # converge, can start outside Newton's basin: solve those again from the grid
+        # (the rational B-spline of a round stored as a revolution left 6 of 369 points
+        # unsolved from nearby starts)
+        _, s2, _, _, normal2, res2 = heights_newton(
+            surf.kernel_args, plane, xy[again], grid.start(xy[again]),
+            np.zeros(again.size, dtype=np.bool_), box, float(tol), NEWTON_STEPS,
+        )  # fmt: skip
+        better = res2 < res[again]
         rows = again[better]
-        uv[rows], s[rows], su[rows], sv[rows] = uv2[better], s2[better], su2[better], sv2[better]
-        res[rows] = _residual(s[rows], frame, xy[rows])
-    q = s - o
-    normal = np.cross(su, sv)
-    normal /= np.maximum(np.linalg.norm(normal, axis=1), 1e-300)[:, None]
-    return q @ n, res <= tol, normal
+        s[rows], normal[rows], res[rows] = s2[better], normal2[better], res2[better]
+    return (s - o) @ n, res <= tol, normal
+
+
+class _StartGrid:
+    """The projected samples of a ``START_SAMPLES`` x ``START_SAMPLES`` grid over
+    ``uv_box``: start parameters for points (their nearest sample) and ``reach``, the
+    longest projected cell edge (the farthest a start from the grid can be)."""
+
+    def __init__(
+        self,
+        surf: NurbsSurface,
+        frame: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+        uv_box: tuple[float, float, float, float],
+    ) -> None:
+        o, ex, ey, _ = frame
+        u0, u1, v0, v1 = uv_box
+        gu, gv = np.meshgrid(
+            np.linspace(u0, u1, START_SAMPLES), np.linspace(v0, v1, START_SAMPLES), indexing="ij"
+        )
+        self.uv = np.column_stack([gu.ravel(), gv.ravel()])
+        gq = surf.evaluate(self.uv) - o
+        pxy = np.column_stack([gq @ ex, gq @ ey])
+        g = pxy.reshape(START_SAMPLES, START_SAMPLES, 2)
+        edges = np.concatenate(
+            [
+                np.hypot(*np.diff(g, axis=0).reshape(-1, 2).T),
+                np.hypot(*np.diff(g, axis=1).reshape(-1, 2).T),
+            ]
+        )
+        self.reach = float(np.max(edges)) if edges.size else 0.0
+        self._pxy = pxy
+        self._tree: cKDTree | None = None
+
+    def start(self, xy: FloatArray) -> FloatArray:
+        """Start parameters (m, 2) of points ``xy`` (m, 2): the nearest projected sample's."""
+        if len(xy) == 0:
+            return np.zeros((0, 2))
+        if self._tree is None:
+            self._tree = cKDTree(self._pxy)
+        _, k = self._tree.query(xy)
+        return np.asarray(self.uv[k])
 
 
 def _residual(
@@ -90,61 +127,3 @@ def _residual(
     o, ex, ey, _ = frame
     q = s - o
     return np.asarray(np.hypot(q @ ex - xy[:, 0], q @ ey - xy[:, 1]))
-
-
-def _grid_start(
-    surf: NurbsSurface,
-    frame: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
-    xy: FloatArray,
-    uv_box: tuple[float, float, float, float],
-) -> FloatArray:
-    """Start parameters (m, 2): the nearest projected sample of a grid over ``uv_box``."""
-    o, ex, ey, _ = frame
-    u0, u1, v0, v1 = uv_box
-    gu, gv = np.meshgrid(
-        np.linspace(u0, u1, START_SAMPLES), np.linspace(v0, v1, START_SAMPLES), indexing="ij"
-    )
-    gq = surf.evaluate(np.column_stack([gu.ravel(), gv.ravel()])) - o
-    _, k = cKDTree(np.column_stack([gq @ ex, gq @ ey])).query(xy)
-    return np.column_stack([gu.ravel()[k], gv.ravel()[k]])
-
-
-def _newton(
-    surf: NurbsSurface,
-    frame: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
-    xy: FloatArray,
-    uv: FloatArray,
-    lo: FloatArray,
-    hi: FloatArray,
-    tol: float,
-) -> tuple[FloatArray, tuple[FloatArray, FloatArray, FloatArray]]:
-    """Newton on the in-plane coordinates from ``uv`` (m, 2), each row until its residual
-    is below ``0.01 tol``; the parameters kept within ``lo``, ``hi`` (2,). Returns the
-    parameters and the surface's jet (points, d/du, d/dv, each (m, 3)) there: a row's last
-    evaluation, the one that found it converged (no evaluation of its own afterwards), or
-    one more for the rows still moving after ``NEWTON_STEPS``."""
-    o, ex, ey, _ = frame
-    uv = uv.copy()
-    jet = tuple(np.empty((len(xy), 3)) for _ in range(3))
-    live = np.arange(len(xy))  # points still moving
-    for _ in range(NEWTON_STEPS):
-        s, su, sv = surf.jet(uv[live])
-        q = s - o
-        fx, fy = q @ ex - xy[live, 0], q @ ey - xy[live, 1]
-        done = np.hypot(fx, fy) < 0.01 * tol
-        for out, val in zip(jet, (s, su, sv), strict=True):
-            out[live[done]] = val[done]
-        move = ~done
-        live, fx, fy = live[move], fx[move], fy[move]
-        if live.size == 0:
-            break
-        su, sv = su[move], sv[move]
-        a, b, c, d = su @ ex, sv @ ex, su @ ey, sv @ ey
-        det = a * d - b * c
-        det = np.where(np.abs(det) > 1e-300, det, 1e-300)
-        step = np.column_stack([(d * fx - b * fy) / det, (a * fy - c * fx) / det])
-        uv[live] = np.clip(uv[live] - step, lo, hi)
-    if live.size:
-        for out, val in zip(jet, surf.jet(uv[live]), strict=True):
-            out[live] = val
-    return uv, (jet[0], jet[1], jet[2])

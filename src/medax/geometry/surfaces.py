@@ -26,8 +26,9 @@ import numpy as np
 from medax.errors import InputError
 from medax.geometry import kernels
 from medax.geometry._types import FloatArray
-from medax.geometry.basis_kernel import basis_rows
+from medax.geometry.basis_kernel import span_basis_rows
 from medax.geometry.bspline import POWER_BASIS_MAX_DEGREE, BSpline
+from medax.geometry.nurbs_kernel import jet_rows
 
 
 def _p(p: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -302,23 +303,18 @@ def basis_and_derivative(
     ``knots`` is the full (clamped or not) knot vector with repeated entries. Returns the
     span index (n,) ``i`` (functions ``N_{i-p..i}`` are non-zero), values (n, p+1) and
     derivatives (n, p+1). Cox-de Boor (The NURBS Book, A2.2 and A2.3), compiled
-    (``medax.geometry.basis_kernel.basis_rows``). Outside
+    (``medax.geometry.basis_kernel.basis_point``). Outside
     the domain ``t`` is clamped to it, or with ``extrapolate`` the end spans' polynomials
     are continued.
     """
-    kn = np.asarray(knots, dtype=np.float64)
+    kn = np.ascontiguousarray(knots, dtype=np.float64)
     t = np.asarray(t, dtype=np.float64)
     p = int(degree)
-    m = kn.size - 1
-    n_ctrl = m - p
-    lo, hi = kn[p], kn[n_ctrl]
-    if not extrapolate:
-        t = np.clip(t, lo, hi)
-    span = np.searchsorted(kn, t, side="right") - 1
-    span = np.clip(span, p, n_ctrl - 1)
+    n_ctrl = kn.size - 1 - p
     kernels.announce_compile()
-    values, ders = basis_rows(kn, p, t.ravel(), span.ravel().astype(np.int64))
-    return span, values, ders
+    basis = (kn, np.zeros((1, 1, 1)), p, False, bool(extrapolate), float(kn[p]), float(kn[n_ctrl]))
+    span, values, ders = span_basis_rows(basis, t.ravel())
+    return span.reshape(t.shape), values, ders
 
 
 @dataclass(frozen=True)
@@ -341,7 +337,7 @@ class SpanBasis:
 
     @classmethod
     def of(cls, knots: FloatArray, degree: int, extrapolate: bool = False) -> SpanBasis:
-        kn = np.asarray(knots, dtype=np.float64)
+        kn = np.ascontiguousarray(knots, dtype=np.float64)
         p = int(degree)
         n_ctrl = kn.size - 1 - p
         coef = np.zeros((kn.size - 1, p + 1, p + 1))
@@ -356,31 +352,25 @@ class SpanBasis:
             coef[spans] = np.swapaxes(sol, 1, 2)  # (span, function, power)
         return cls(kn, p, extrapolate, coef, float(kn[p]), float(kn[n_ctrl]))
 
+    @property
+    def kernel_args(self) -> tuple[FloatArray, FloatArray, int, bool, bool, float, float]:
+        """The basis tuple of :func:`medax.geometry.basis_kernel.basis_at`: the power basis
+        up to :data:`~medax.geometry.bspline.POWER_BASIS_MAX_DEGREE`, Cox-de Boor above
+        it (the power basis of a high degree loses digits: a degree-13 fillet blend had
+        1e-9 noise in its points, and Newton on them stalled there)."""
+        power = self.degree <= POWER_BASIS_MAX_DEGREE
+        return (self.knots, self.coef, self.degree, power, bool(self.extrapolate), self.lo, self.hi)
+
     def __call__(self, t: FloatArray) -> tuple[np.ndarray, FloatArray, FloatArray]:
         """Span index (n,), values (n, p+1) and first derivatives (n, p+1) at ``t`` (n,),
-        as :func:`basis_and_derivative`."""
-        kn, p = self.knots, self.degree
-        t = np.asarray(t, dtype=np.float64)
-        if p > POWER_BASIS_MAX_DEGREE:
-            # the power basis of a high degree loses digits (a degree-13 fillet blend: 1e-9
-            # noise in the points, Newton on them stalled there): Cox-de Boor instead
-            return basis_and_derivative(kn, p, t, self.extrapolate)
-        if not self.extrapolate:
-            t = np.clip(t, self.lo, self.hi)
-        span = np.searchsorted(kn, t, side="right") - 1
-        span = np.clip(span, p, kn.size - 2 - p)
-        width = kn[span + 1] - kn[span]
-        tau = (t - kn[span]) / width
-        powers = np.vander(tau, p + 1, increasing=True)  # (n, p+1)
-        dpow = np.zeros_like(powers)
-        dpow[:, 1:] = powers[:, :-1] * np.arange(1, p + 1)
-        c = self.coef[span]  # (n, p+1 functions, p+1 powers)
-        values = np.einsum("nij,nj->ni", c, powers)
-        ders = np.einsum("nij,nj->ni", c, dpow) / width[:, None]
+        as :func:`basis_and_derivative` (compiled: ``basis_kernel.span_basis_rows``)."""
+        kernels.announce_compile()
+        t = np.asarray(t, dtype=np.float64).reshape(-1)
+        span, values, ders = span_basis_rows(self.kernel_args, t)
         return span, values, ders
 
 
-#: Points per chunk of a NURBS evaluation (see ``NurbsSurface._parts``).
+#: Points per chunk of a NURBS evaluation (see ``NurbsSurface._jet``).
 PARTS_CHUNK = 32768
 
 
@@ -420,34 +410,25 @@ class NurbsSurface(_Surface):
         object.__setattr__(self, "_ubasis", SpanBasis.of(self.uknots, self.udeg, self.extrapolate))
         object.__setattr__(self, "_vbasis", SpanBasis.of(self.vknots, self.vdeg, self.extrapolate))
 
-    def _parts(self, p: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        u, v = _p(p)
-        if len(u) > PARTS_CHUNK:
-            # in chunks: the per-point pole blocks of 10^5 - 10^6 points are 0.1 - 1 GB of
-            # temporaries, and streaming them through memory took 2 - 4x longer than the
-            # same work on chunks that stay in cache (measured on the freeform fitted merge)
-            out = tuple(np.empty((len(u), 4)) for _ in range(3))
-            pts = np.column_stack((u, v))
-            for k in range(0, len(u), PARTS_CHUNK):
-                for o, r in zip(out, self._parts(pts[k : k + PARTS_CHUNK]), strict=True):
+    @property
+    def kernel_args(self) -> tuple[FloatArray, tuple, tuple]:  # type: ignore[type-arg]
+        """The surface tuple of :mod:`medax.geometry.nurbs_kernel`: homogeneous poles
+        (nu, nv, 4) and both directions' basis tuples."""
+        return (self._hom, self._ubasis.kernel_args, self._vbasis.kernel_args)
+
+    def _jet(self, p: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        a = np.atleast_2d(np.asarray(p, dtype=np.float64))
+        kernels.announce_compile()
+        if len(a) > PARTS_CHUNK:
+            # in chunks (the compiled jet keeps no per-point temporaries; the chunks only
+            # bound one call's run between interrupt checks)
+            out = tuple(np.empty((len(a), 3)) for _ in range(3))
+            for k in range(0, len(a), PARTS_CHUNK):
+                for o, r in zip(out, self._jet(a[k : k + PARTS_CHUNK]), strict=True):
                     o[k : k + PARTS_CHUNK] = r
             return out[0], out[1], out[2]
-        su, nu_, du_ = self._ubasis(u)
-        sv, nv_, dv_ = self._vbasis(v)
-        # the (pu+1, pv+1) homogeneous poles of each point's span, by one flat take
-        # (twice as fast as indexing with two index arrays): (n, pu+1, pv+1, 4)
-        nv = self._hom.shape[1]
-        base = (su - self.udeg) * nv + (sv - self.vdeg)
-        off = np.arange(self.udeg + 1)[:, None] * nv + np.arange(self.vdeg + 1)[None, :]
-        block = np.take(self._hom.reshape(-1, 4), base[:, None, None] + off, axis=0)
-        # contracted over v (values and derivatives together), then over u, by batched
-        # matmuls: a three-operand einsum loops naively (14 of the variable-radius box's
-        # 60 s), two-operand ones take twice as long as these
-        n = len(u)
-        along = np.matmul(np.stack((nv_, dv_), axis=1)[:, None], block)  # (n, pu+1, 2, 4)
-        r = np.matmul(np.stack((nu_, du_), axis=1), along.reshape(n, self.udeg + 1, 8))
-        h, hu, hv = r[:, 0, :4], r[:, 1, :4], r[:, 0, 4:]
-        return h, hu, hv
+        x, du, dv = jet_rows(self.kernel_args, np.ascontiguousarray(a[:, :2]))
+        return x, du, dv
 
     @property
     def bounds(self) -> tuple[float, float, float, float]:
@@ -456,15 +437,12 @@ class NurbsSurface(_Surface):
         return float(u[pu]), float(u[len(u) - pu - 1]), float(v[pv]), float(v[len(v) - pv - 1])
 
     def evaluate(self, p: FloatArray) -> FloatArray:
-        h, _, _ = self._parts(p)
-        return h[:, :3] / h[:, 3:]
+        return self._jet(p)[0]
 
     def jet(self, p: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Points, d/du and d/dv at ``p`` (n, 2): three (n, 3) arrays from one basis pass."""
-        h, hu, hv = self._parts(p)
-        w = h[:, 3:]
-        x = h[:, :3] / w
-        return x, (hu[:, :3] - hu[:, 3:] * x) / w, (hv[:, :3] - hv[:, 3:] * x) / w
+        """Points, d/du and d/dv at ``p`` (n, 2): three (n, 3) arrays, compiled
+        (:func:`medax.geometry.nurbs_kernel.jet_rows`)."""
+        return self._jet(p)
 
     def jacobian(self, p: FloatArray) -> FloatArray:
         _, du, dv = self.jet(p)
