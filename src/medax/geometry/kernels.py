@@ -17,8 +17,9 @@ same algorithms as compiled loops over the points, one call per query:
   but no global search table (rational B-splines: the homogeneous jet and the quotient
   rule in the kernel; a separate global search kernel for them cost 2.4 s more to compile
   for a few percent of a part's axis time);
-* ``crossing`` (:mod:`medax.geometry.crossing_kernel`, likewise) - the region's
-  side-crossing checks.
+* ``track_table`` and ``track_step_rows`` (:mod:`medax.geometry.track_kernel`) - the
+  ratio grid's node tracking (Newton steps from warm starts);
+* ``crossing`` (:mod:`medax.geometry.crossing_kernel`) - the region's side-crossing checks;
 * ``span_basis_rows`` (:mod:`medax.geometry.basis_kernel`) - B-spline basis values and
   derivatives, per span polynomials or Cox-de Boor; ``jet_rows`` and ``heights_newton``
   (:mod:`medax.geometry.nurbs_kernel`) - NURBS surface jets and the Newton of
@@ -46,6 +47,8 @@ from medax.geometry.basis_kernel import span_basis_rows
 from medax.geometry.crossing_kernel import crossing
 from medax.geometry.nurbs_kernel import heights_newton
 from medax.geometry.nurbs_kernel import jet_rows as nurbs_jet_rows
+from medax.geometry.table_kernel import table_jet1, table_span
+from medax.geometry.track_kernel import track_step_rows, track_table
 
 log = logging.getLogger(__name__)
 
@@ -60,44 +63,6 @@ SAFE_STEPS = 60
 
 # ---- jets ---------------------------------------------------------------------------------
 @njit(cache=True, error_model="numpy")
-def _span(inner: FloatArray, u: float) -> int:
-    """The span of stacked parameter ``u``: the number of ``inner`` breaks ``<= u`` (binary
-    search; a NaN ``u`` counts as above them all, as numpy's ``searchsorted`` has it)."""
-    lo = 0
-    hi = inner.size
-    while lo < hi:
-        mid = (lo + hi) >> 1
-        if inner[mid] <= u or u != u:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
-
-
-@njit(cache=True, error_model="numpy")
-def _jet1(rows: FloatArray, span: int, s: float, out: FloatArray) -> None:
-    """Into ``out`` (3, dim): value, first and second derivative of the piece ``span`` of
-    ``rows`` (degree + 1, dim, spans; value coefficients, highest power first) at local
-    parameter ``s``, by Horner's rule; the derivatives' coefficients ``p a_p`` and
-    ``(p - 1) p a_p`` are formed from the value's (the numbers :meth:`BSpline._pack` forms)."""
-    k = rows.shape[0] - 1
-    dim = rows.shape[1]
-    for d in range(dim):
-        for order in range(3):
-            top = k - order  # the highest power of this order
-            if top < 0:
-                out[order, d] = 0.0
-                continue
-            w = 0.0
-            for p in range(top + 1):
-                a = rows[p, d, span]  # coefficient p (0: highest power) of this order
-                for q in range(order):
-                    a *= k - p - q
-                w = a if p == 0 else w * s + a
-            out[order, d] = w
-
-
-@njit(cache=True, error_model="numpy")
 def jet_rows(
     inner: FloatArray, starts: FloatArray, rows: FloatArray, t: FloatArray, offset: FloatArray
 ) -> FloatArray:
@@ -110,8 +75,8 @@ def jet_rows(
     w = np.empty((3, dim))
     for i in range(n):
         u = t[i] + (offset[i] if offset.size else 0.0)
-        span = _span(inner, u)
-        _jet1(rows, span, t[i] - starts[span], w)
+        span = table_span(inner, u)
+        table_jet1(rows, span, t[i] - starts[span], w)
         for o in range(3):
             for d in range(dim):
                 out[o * dim + d, i] = w[o, d]
@@ -215,11 +180,11 @@ def _jet_table(
     last; into ``h`` (3, dim + 1)) by the quotient rule, in the same operations."""
     if t == t:
         t = min(max(t, 0.0), 1.0)
-    span = _span(inner, t)
+    span = table_span(inner, t)
     if not rational:
-        _jet1(rows, span, t - starts[span], w)
+        table_jet1(rows, span, t - starts[span], w)
         return
-    _jet1(rows, span, t - starts[span], h)
+    table_jet1(rows, span, t - starts[span], h)
     dim = w.shape[1]
     w0, w1, w2 = h[0, dim], h[1, dim], h[2, dim]
     for d in range(dim):
@@ -288,8 +253,8 @@ def _refine(
     new = s
     ds = 0.0
     for _ in range(QUICK_STEPS):
-        span = _span(inner, s + off)
-        _jet1(rows, span, s - starts[span], w)
+        span = table_span(inner, s + off)
+        table_jet1(rows, span, s - starts[span], w)
         g, dg = _g_dg(w, x)
         new = _clamp(s - g / dg, a, b)
         ds = new - s
@@ -301,8 +266,8 @@ def _refine(
     if not np.isfinite(s):
         s = 0.5 * (a + b)
     for it in range(SAFE_STEPS):
-        span = _span(inner, s + off)
-        _jet1(rows, span, s - starts[span], w)
+        span = table_span(inner, s + off)
+        table_jet1(rows, span, s - starts[span], w)
         g, dg = _g_dg(w, x)
         s, a, b, done, ds = _safe_step(g, dg, s, a, b, it == SAFE_STEPS - 1)
         if done:
@@ -336,8 +301,8 @@ def _corner(
     if i >= breaks.size or breaks[i] > hi:
         return t
     e = breaks[i]
-    span = _span(inner, e + off)
-    _jet1(rows, span, e - starts[span], w)
+    span = table_span(inner, e + off)
+    table_jet1(rows, span, e - starts[span], w)
     dc = 0.0
     df = 0.0
     for d in range(x.size):
@@ -600,11 +565,11 @@ def closest_bracketed(  # type: ignore[no-untyped-def]
         xi = x[i]
         off = 2.0 * curve[i]
         a, b = lo[i], hi[i]
-        span = _span(inner, a + off)
-        _jet1(rows, span, a - starts[span], w)
+        span = table_span(inner, a + off)
+        table_jet1(rows, span, a - starts[span], w)
         g_lo, _ = _g_dg(w, xi)
-        span = _span(inner, b + off)
-        _jet1(rows, span, b - starts[span], we)
+        span = table_span(inner, b + off)
+        table_jet1(rows, span, b - starts[span], we)
         g_hi, _ = _g_dg(we, xi)
         if g_lo < 0.0 and g_hi > 0.0:
             s = start[i]
@@ -676,109 +641,6 @@ def certify_rows(  # type: ignore[no-untyped-def]
         bound = b1 if b2 != b2 or b1 >= b2 else b2  # (fmax: inf - inf is no bound)
         ok[i] = bound >= distance[i] - slack
     return ok
-
-
-# ---- tracking: Newton steps from warm starts ----------------------------------------------
-@njit(cache=True, error_model="numpy")
-def _track1(
-    w: FloatArray, xs: FloatArray, i: int, t: float, tol: float, last: bool, foot: FloatArray
-) -> tuple[float, float, bool]:
-    """One tracking step (:func:`medax.geometry.curve.track_rows`) of point ``xs[:, i]``
-    (xs (dim, n)) from its foot ``t`` with the jet ``w`` (3, dim) there: a Newton step on
-    ``g = (C - x) . C'`` (a gradient step scaled by the speed where ``g' <= 0``), clamped to
-    ``[0, 1]``; into ``foot[:, i]`` the Taylor point of the step. Returns the new foot, the
-    curvature term ``|(C - x) . C''| / g'`` (inf unless settled; where ``g' <= 0``: 0 for a
-    foot held at an end, else inf) and whether the row is done (a step of at most ``tol``
-    that is a Newton step or held, or the ``last`` step)."""
-    dim = xs.shape[0]
-    c = w[0, 0] - xs[0, i]
-    g = c * w[1, 0]
-    speed2 = w[1, 0] * w[1, 0]
-    dg = c * w[2, 0]
-    for d in range(1, dim):
-        c = w[0, d] - xs[d, i]
-        g += c * w[1, d]
-        speed2 += w[1, d] * w[1, d]
-        dg += c * w[2, d]
-    dg += speed2
-    pos = dg > 0.0
-    den = dg if pos else speed2
-    if den < 1e-300:
-        den = 1e-300
-    new = t - g / den
-    if new == new:
-        new = min(max(new, 0.0), 1.0)
-    ds = new - t
-    zero = ds == 0.0
-    settled = abs(ds) <= tol and (pos or zero)
-    kap = abs(dg - speed2) / den
-    if not settled:
-        kap = np.inf
-    if not pos:
-        kap = 0.0 if zero and (new == 0.0 or new == 1.0) else np.inf
-    half = 0.5 * ds
-    for d in range(dim):
-        foot[d, i] = (w[2, d] * half + w[1, d]) * ds + w[0, d]
-    return new, kap, last or settled
-
-
-@njit(cache=True, error_model="numpy")
-def track_table(  # type: ignore[no-untyped-def]
-    inner: FloatArray,
-    starts: FloatArray,
-    rows: FloatArray,
-    offset: FloatArray,
-    xs: FloatArray,
-    t0: FloatArray,
-    tol: FloatArray,
-    iters: int,
-):
-    """:func:`medax.geometry.curve.track_rows` on a polynomial table (:func:`jet_rows`;
-    point ``i`` on curve ``offset[i] / 2``, empty ``offset``: curve 0): points ``xs``
-    (dim, n) from feet ``t0`` (n,, in [0, 1]), step tolerances ``tol`` (n,, or (1,) for
-    all), at most ``iters`` steps per row (:func:`_track1`). Feet (n,), foot points
-    (dim, n), curvature terms (n,)."""
-    n = t0.size
-    dim = xs.shape[0]
-    t_out = t0.copy()
-    foot = np.empty((dim, n))
-    kap = np.zeros(n)
-    w = np.empty((3, dim))
-    for i in range(n):
-        ti = t_out[i]
-        off = offset[i] if offset.size else 0.0
-        tl = tol[i] if tol.size > 1 else tol[0]
-        for it in range(iters):
-            span = _span(inner, ti + off)
-            _jet1(rows, span, ti - starts[span], w)
-            ti, kap[i], done = _track1(w, xs, i, ti, tl, it == iters - 1, foot)
-            if done:
-                break
-        t_out[i] = ti
-    return t_out, foot, kap
-
-
-@njit(cache=True, error_model="numpy")
-def track_step_rows(  # type: ignore[no-untyped-def]
-    jets: FloatArray, xs: FloatArray, t: FloatArray, tol: FloatArray, last: bool
-):
-    """One tracking step (:func:`_track1`) of every row, the jets ``jets`` (3 * dim, n)
-    evaluated by the caller (curves without a polynomial table): new feet (n,), foot points
-    (dim, n), curvature terms (n,), done (n,)."""
-    n = t.size
-    dim = xs.shape[0]
-    new = np.empty(n)
-    foot = np.empty((dim, n))
-    kap = np.empty(n)
-    done = np.empty(n, dtype=np.bool_)
-    w = np.empty((3, dim))
-    for i in range(n):
-        for o in range(3):
-            for d in range(dim):
-                w[o, d] = jets[o * dim + d, i]
-        tl = tol[i] if tol.size > 1 else tol[0]
-        new[i], kap[i], done[i] = _track1(w, xs, i, t[i], tl, last, foot)
-    return new, foot, kap, done
 
 
 # ---- the first-run compile message --------------------------------------------------------
