@@ -12,7 +12,7 @@ from medax.geometry.surface_heights import graph_heights
 from medax.geometry.surfaces import NurbsSurface
 
 
-def _knots(n: int, p: int, rng: np.random.Generator, double: bool) -> np.ndarray:
+def knot_vector(n: int, p: int, rng: np.random.Generator, double: bool) -> np.ndarray:
     inner = np.sort(rng.uniform(0.05, 0.95, n - p - 1))
     if double and p > 1 and inner.size >= 2:
         inner[1] = inner[0]  # a double knot
@@ -29,7 +29,7 @@ def _random_surface(pu: int, pv: int, seed: int, graph: bool = False) -> NurbsSu
     else:
         poles = rng.normal(size=(nu, nv, 3)) * 5.0
         weights = rng.uniform(0.3, 3.0, size=(nu, nv))
-    uk, vk = _knots(nu, pu, rng, True), _knots(nv, pv, rng, False)
+    uk, vk = knot_vector(nu, pu, rng, True), knot_vector(nv, pv, rng, False)
     return NurbsSurface(poles, pu, pv, uk, vk, weights)
 
 

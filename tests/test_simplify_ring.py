@@ -36,7 +36,7 @@ from medax.cad.simplify.pipeline import ACCEPT_SHARE, FIT_SHARE
 from medax.geometry.periodic_fit import PERIOD, PeriodicFit, fit_radial_height
 from medax.geometry.ring_heights import RingFrame, ray_points
 from medax.geometry.surfaces import NurbsSurface
-from medax.geometry.tensor_fit import _knots
+from medax.geometry.tensor_fit import knot_vector
 from truth import assert_same_solid
 
 pytestmark = pytest.mark.slow  # OCCT-heavy: module fixtures build and simplify parts
@@ -209,7 +209,7 @@ def test_periodic_surface_evaluates_as_the_fit():
     from medax.cad.simplify.ring import periodic_surface
 
     rng = np.random.default_rng(0)
-    ts = _knots(0.0, 2.0, [1.0], [True, True], 0.5)
+    ts = knot_vector(0.0, 2.0, [1.0], [True, True], 0.5)
     fit = PeriodicFit(12, ts, rng.normal(size=(12, ts.size - 4, 3)), 0.0)
     surf = periodic_surface(fit)
     th, s = rng.uniform(-1.0, 2 * PERIOD, 60), rng.uniform(0.0, 2.0, 60)

@@ -100,9 +100,9 @@ def test_banded_cholesky_matches_the_general_sparse_solve():
     from medax.geometry import tensor_fit as tf
 
     for nx, ny in ((40, 16), (16, 40)):
-        tx = tf._knots(0.9, 20.0, [R], [True, False], 20.0 / nx)
-        ty = tf._knots(0.9, 20.0, [R], [True, True], 20.0 / ny)
-        xs, ys = tf._samples(tx, tf.SAMPLES_PER_SPAN), tf._samples(ty, tf.SAMPLES_PER_SPAN)
+        tx = tf.knot_vector(0.9, 20.0, [R], [True, False], 20.0 / nx)
+        ty = tf.knot_vector(0.9, 20.0, [R], [True, True], 20.0 / ny)
+        xs, ys = tf.span_samples(tx, tf.SAMPLES_PER_SPAN), tf.span_samples(ty, tf.SAMPLES_PER_SPAN)
         z, ok, _ = _h(*np.meshgrid(xs, ys, indexing="ij"))
         bx = BSpline.design_matrix(xs, tx, tf.DEGREE).tocsr()
         by = BSpline.design_matrix(ys, ty, tf.DEGREE).tocsr()
@@ -156,7 +156,7 @@ def test_coefficient_count_is_that_of_the_knots():
         breaks = sorted(rng.uniform(0.05, 0.95, int(rng.integers(0, 4))).tolist())
         fine = rng.integers(0, 2, len(breaks) + 1).astype(bool).tolist()
         sp = float(rng.uniform(0.01, 0.5))
-        built = tf._knots(0.0, 1.0, breaks, fine, sp).size - tf.DEGREE - 1
+        built = tf.knot_vector(0.0, 1.0, breaks, fine, sp).size - tf.DEGREE - 1
         assert tf._coefficient_count(0.0, 1.0, breaks, fine, sp) == built
 
 

@@ -43,11 +43,11 @@ from medax.geometry.tensor_fit import (
     SAMPLES_PER_SPAN,
     HeightFn,
     _coefficient_count,
-    _curved,
-    _knots,
-    _samples,
+    curved_intervals,
+    knot_vector,
     refine_both,
     solve_masked,
+    span_samples,
 )
 
 PERIOD = 2.0 * np.pi
@@ -273,7 +273,9 @@ class PointFitter:
         self.sb = sorted(b for b in set(s_breaks) if s0 < b < s1)
         self.fine_s = [True] * (len(self.sb) + 1)
         zb = sorted(b for b in set(z_breaks) if z0 < b < z1)
-        self.zb, self.fine_z = _curved(z0, z1, zb, height, np.linspace(s0, s1, 41), 1, spacing)
+        self.zb, self.fine_z = curved_intervals(
+            z0, z1, zb, height, np.linspace(s0, s1, 41), 1, spacing
+        )
         self._fits: dict[tuple[float, float], PointFit | None] = {}
 
     def fit_at(self, ss: float, sz: float) -> PointFit | None:
@@ -292,16 +294,16 @@ class PointFitter:
         return refine_both(self.fit_at, self.spacing, tol, levels)
 
     def _fit_once(self, ss: float, sz: float) -> PointFit:
-        ts = _knots(self.s_range[0], self.s_range[1], self.sb, self.fine_s, ss)
-        tz = _knots(self.z_range[0], self.z_range[1], self.zb, self.fine_z, sz)
-        xs, zs = _samples(ts, SAMPLES_PER_SPAN), _samples(tz, SAMPLES_PER_SPAN)
+        ts = knot_vector(self.s_range[0], self.s_range[1], self.sb, self.fine_s, ss)
+        tz = knot_vector(self.z_range[0], self.z_range[1], self.zb, self.fine_z, sz)
+        xs, zs = span_samples(ts, SAMPLES_PER_SPAN), span_samples(tz, SAMPLES_PER_SPAN)
         pts, ok, _ = self.points(*np.meshgrid(xs, zs, indexing="ij"))
         bs = BSpline.design_matrix(xs, ts, DEGREE).tocsr()
         bz = BSpline.design_matrix(zs, tz, DEGREE).tocsr()
         # (the penalty continues the points linearly outside the face: no data there)
         coef = solve_masked(bs, bz, ok, np.where(ok[..., None], pts, 0.0))
         fit = PointFit(ts, tz, coef, 0.0, min(ss, sz))
-        sc, zc = _samples(ts, CHECK_PER_SPAN), _samples(tz, CHECK_PER_SPAN)
+        sc, zc = span_samples(ts, CHECK_PER_SPAN), span_samples(tz, CHECK_PER_SPAN)
         pc, okc, inside = self.points(*np.meshgrid(sc, zc, indexing="ij"))
         use = inside & okc
         if np.any(inside & ~okc):

@@ -29,10 +29,10 @@ from medax.geometry.tensor_fit import (
     MAX_COEFFICIENTS,
     SAMPLES_PER_SPAN,
     HeightFn,
-    _knots,
-    _samples,
     _solve_superlu,
+    knot_vector,
     refine_both,
+    span_samples,
 )
 
 PERIOD = 2.0 * np.pi
@@ -110,10 +110,10 @@ def _fit_once(
     step: float,
     zero_last: int | None = None,
 ) -> PeriodicFit:
-    ts = _knots(s_range[0], s_range[1], sb, fine, step)
+    ts = knot_vector(s_range[0], s_range[1], sb, fine, step)
     tt = np.unique(periodic_knots(n_theta)[DEGREE : n_theta + DEGREE + 1])
-    th = _samples(tt, SAMPLES_PER_SPAN)
-    ss = _samples(ts, SAMPLES_PER_SPAN)
+    th = span_samples(tt, SAMPLES_PER_SPAN)
+    ss = span_samples(ts, SAMPLES_PER_SPAN)
     z, ok, _ = h(*np.meshgrid(th, ss, indexing="ij"))
     bt = periodic_design(th, n_theta)
     bs = BSpline.design_matrix(ss, ts, DEGREE).tocsr()
@@ -132,7 +132,7 @@ def _fit_once(
             bt, bs, ok, z[..., zero_last], diff_x=cyclic, free_y=free
         )
     fit = PeriodicFit(n_theta, ts, coef, 0.0)
-    thc, sc = _samples(tt, CHECK_PER_SPAN), _samples(ts, CHECK_PER_SPAN)
+    thc, sc = span_samples(tt, CHECK_PER_SPAN), span_samples(ts, CHECK_PER_SPAN)
     zc, okc, inside = h(*np.meshgrid(thc, sc, indexing="ij"))
     if np.any(inside & ~okc):
         error = float("inf")  # data missing inside the face
@@ -178,7 +178,7 @@ def fit_radial_height(
 
     def fit_at(step_theta: float, step_s: float) -> PeriodicFit | None:
         n_theta = max(4, int(np.ceil(PERIOD * radius / step_theta - 1e-9)))
-        ns = _knots(s0, s1, sb, fine, step_s).size - DEGREE - 1
+        ns = knot_vector(s0, s1, sb, fine, step_s).size - DEGREE - 1
         if n_theta * ns > MAX_COEFFICIENTS:
             return None
         return _fit_once(s_range, sb, fine, h, n_theta, step_s, zero_last)

@@ -107,7 +107,7 @@ def greville(t: FloatArray) -> FloatArray:
 def _coefficient_count(
     lo: float, hi: float, breaks: Sequence[float], fine: Sequence[bool], sp_: float
 ) -> float:
-    """Coefficients of :func:`_knots` with the same arguments, counted without building the
+    """Coefficients of :func:`knot_vector` with the same arguments, counted without building the
     knots (inf for a spacing that is not positive: a degenerate piece's radius)."""
     if not sp_ > 0.0:
         return float("inf")
@@ -119,7 +119,7 @@ def _coefficient_count(
     return float(spans + DEGREE + (DEGREE - 2) * len(breaks))
 
 
-def _knots(
+def knot_vector(
     lo: float, hi: float, breaks: Sequence[float], fine: Sequence[bool], sp_: float
 ) -> FloatArray:
     """Clamped cubic knot vector on [lo, hi], double knots at ``breaks`` (sorted, inside),
@@ -135,7 +135,7 @@ def _knots(
     return np.array(t)
 
 
-def _samples(t: FloatArray, per_span: int) -> FloatArray:
+def span_samples(t: FloatArray, per_span: int) -> FloatArray:
     u = np.unique(t)
     off = (np.arange(per_span) + 0.5) / per_span
     return (u[:-1, None] + (u[1:] - u[:-1])[:, None] * off[None, :]).ravel()
@@ -147,7 +147,7 @@ def _second_diff(n: int) -> sp.spmatrix:
     return sp.diags([1.0, -2.0, 1.0], [0, 1, 2], shape=(n - 2, n), dtype=float)
 
 
-def _curved(
+def curved_intervals(
     lo: float,
     hi: float,
     breaks: Sequence[float],
@@ -252,8 +252,8 @@ class HeightFitter:
         yb = sorted(b for b in set(y_breaks) if y0 < b < y1)
         probe_y = np.linspace(y0, y1, 41)
         probe_x = np.linspace(x0, x1, 41)
-        self.xb, self.fine_x = _curved(x0, x1, xb, h, probe_y, 0, spacing)
-        self.yb, self.fine_y = _curved(y0, y1, yb, h, probe_x, 1, spacing)
+        self.xb, self.fine_x = curved_intervals(x0, x1, xb, h, probe_y, 0, spacing)
+        self.yb, self.fine_y = curved_intervals(y0, y1, yb, h, probe_x, 1, spacing)
         self._fits: dict[tuple[float, float], TensorFit | None] = {}
 
     def fit_at(self, sx: float, sy: float) -> TensorFit | None:
@@ -410,16 +410,16 @@ def _one_direction(
 def _fit_once(
     x_range, y_range, xb, yb, fine_x, fine_y, h: HeightFn, sx: float, sy: float
 ) -> TensorFit:  # type: ignore[no-untyped-def]
-    tx = _knots(x_range[0], x_range[1], xb, fine_x, sx)
-    ty = _knots(y_range[0], y_range[1], yb, fine_y, sy)
+    tx = knot_vector(x_range[0], x_range[1], xb, fine_x, sx)
+    ty = knot_vector(y_range[0], y_range[1], yb, fine_y, sy)
     step = min(sx, sy)
-    xs, ys = _samples(tx, SAMPLES_PER_SPAN), _samples(ty, SAMPLES_PER_SPAN)
+    xs, ys = span_samples(tx, SAMPLES_PER_SPAN), span_samples(ty, SAMPLES_PER_SPAN)
     z, ok, _ = h(*np.meshgrid(xs, ys, indexing="ij"))
     bx = BSpline.design_matrix(xs, tx, DEGREE).tocsr()
     by = BSpline.design_matrix(ys, ty, DEGREE).tocsr()
     coef = solve_masked(bx, by, ok, z)
     fit = TensorFit(tx, ty, coef, 0.0, step)
-    xc, yc = _samples(tx, CHECK_PER_SPAN), _samples(ty, CHECK_PER_SPAN)
+    xc, yc = span_samples(tx, CHECK_PER_SPAN), span_samples(ty, CHECK_PER_SPAN)
     zc, okc, inside = h(*np.meshgrid(xc, yc, indexing="ij"))
     diff = fit(xc, yc) - zc
     use = inside & okc

@@ -29,7 +29,7 @@ import numpy as np
 from matplotlib.path import Path
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
-from OCP.BRepTools import BRepTools, BRepTools_WireExplorer
+from OCP.BRepTools import BRepTools_WireExplorer
 from OCP.GeomAbs import (
     GeomAbs_BSplineSurface,
     GeomAbs_Cylinder,
@@ -37,14 +37,13 @@ from OCP.GeomAbs import (
     GeomAbs_Sphere,
     GeomAbs_Torus,
 )
-from OCP.TopAbs import TopAbs_REVERSED, TopAbs_WIRE
-from OCP.TopExp import TopExp_Explorer
+from OCP.TopAbs import TopAbs_REVERSED
 from OCP.TopoDS import TopoDS
 from scipy.interpolate import CubicSpline
 from scipy.spatial import cKDTree
 
 from medax.cad.face_region import bspline_embedding, surface_embedding
-from medax.cad.simplify.fitted import FittedSurface, _trimmed_bspline
+from medax.cad.simplify.fitted import FittedSurface, face_loops, trimmed_bspline
 from medax.cad.simplify.occ import (
     Array,
     edge_points,
@@ -67,7 +66,7 @@ from medax.geometry.cylinder_field import (
 from medax.geometry.periodic_fit import PeriodicFit, fit_radial_height, periodic_knots
 from medax.geometry.ring_heights import RingFrame, ray_points
 from medax.geometry.surfaces import NurbsSurface
-from medax.geometry.tensor_fit import CHECK_PER_SPAN, DEGREE, MAX_COEFFICIENTS, _samples
+from medax.geometry.tensor_fit import CHECK_PER_SPAN, DEGREE, MAX_COEFFICIENTS, span_samples
 
 #: Samples per boundary edge.
 EDGE_SAMPLES = 48
@@ -113,10 +112,6 @@ def _wire_sz(wire: Any, frame: CylinderFrame, periodic: bool) -> list[Array]:
     return [sz[k * EDGE_SAMPLES : (k + 1) * EDGE_SAMPLES] for k in range(len(parts))]
 
 
-def _polygon(edges: list[Array]) -> Path:
-    return Path(np.vstack([e[:-1] for e in edges]))
-
-
 def _member(face: Any, frame: CylinderFrame, periodic: bool, tol: float) -> _Member | str:
     ad = BRepAdaptor_Surface(face)
     kind = ad.GetType()
@@ -151,7 +146,7 @@ def _member(face: Any, frame: CylinderFrame, periodic: bool, tol: float) -> _Mem
                 return "a B-spline piece without a NURBS embedding"
             nurbs, box = emb, uv_bounds(face)
         else:
-            conv = _trimmed_bspline(face)
+            conv = trimmed_bspline(face)
             if conv is None:
                 return f"a {kind.name[7:].lower()} piece that does not convert to a B-spline"
             nurbs = bspline_embedding(conv)
@@ -159,20 +154,10 @@ def _member(face: Any, frame: CylinderFrame, periodic: bool, tol: float) -> _Mem
             box = (u0, u1, v0, v1)
         nurbs = replace(nurbs, extrapolate=True)  # continued like the analytic pieces
         head = ("nurbs", zero, zero, 0.0, 0.0)
-    outer_wire = BRepTools.OuterWire_s(face)
-    outer = _wire_sz(outer_wire, frame, periodic)
-    edges, inner = list(outer), []
-    exp = TopExp_Explorer(face, TopAbs_WIRE)
-    while exp.More():
-        w = exp.Current()
-        if not w.IsSame(outer_wire):
-            hole = _wire_sz(w, frame, periodic)
-            inner.append(_polygon(hole))
-            edges += hole
-        exp.Next()
-    if not outer:
+    samples, outer, inner, edges = face_loops(face, lambda w: _wire_sz(w, frame, periodic))
+    if not samples:
         return "a member without boundary edges"
-    return _Member(*head, nurbs, box, _polygon(outer), tuple(inner), tuple(edges))
+    return _Member(*head, nurbs, box, outer, inner, edges)
 
 
 def _coaxial(ad: Any, frame: CylinderFrame, tol: float) -> bool:
@@ -373,9 +358,9 @@ def _boundary_samples(ms: Sequence[_Member], step: float, period: float) -> tupl
 
 
 def _nurbs_radius(face: Any) -> float:
-    from medax.cad.simplify.fitted import _min_radius
+    from medax.cad.simplify.fitted import min_radius
 
-    return _min_radius(BRepAdaptor_Surface(face))
+    return min_radius(BRepAdaptor_Surface(face))
 
 
 def cylinder_surface(
@@ -441,12 +426,12 @@ def _periodic(
 ) -> PeriodicFit | None:
     """The periodic fit in ``(theta, z)`` (``theta`` from ``theta0``): z knot lines at the
     circles, one span in z where the offset is linear (see :class:`PointFitter`)."""
-    from medax.geometry.tensor_fit import _curved
+    from medax.geometry.tensor_fit import curved_intervals
 
     r = fld.frame.radius
     z0, z1 = fld.z_range
     zb = sorted(b for b in fld.z_breaks if z0 < b < z1)
-    zb, fine = _curved(z0, z1, zb, height, np.linspace(0.0, PERIOD * r, 41), 1, spacing)
+    zb, fine = curved_intervals(z0, z1, zb, height, np.linspace(0.0, PERIOD * r, 41), 1, spacing)
 
     def by_angle(th: Array, zz: Array) -> tuple[Array, np.ndarray, np.ndarray]:
         return points(np.asarray(th) * r, zz)
@@ -457,7 +442,7 @@ def _periodic(
 def _periodic_volume(fit: PeriodicFit, points: Any, fld: _Field) -> float:
     """:func:`signed_volume` of a periodic fit on its check grid (``u = theta``)."""
     tt = np.unique(periodic_knots(fit.n_theta)[DEGREE : fit.n_theta + DEGREE + 1])
-    th, zz = _samples(tt, CHECK_PER_SPAN), _samples(fit.ts, CHECK_PER_SPAN)
+    th, zz = span_samples(tt, CHECK_PER_SPAN), span_samples(fit.ts, CHECK_PER_SPAN)
     r = fld.frame.radius
     pts, ok, inside = points(*np.meshgrid(th * r, zz, indexing="ij"))
     wt = np.repeat(np.diff(tt) / CHECK_PER_SPAN, CHECK_PER_SPAN)

@@ -17,7 +17,7 @@ points sit at the Greville abscissae (so ``x`` and ``y`` are reproduced exactly)
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -57,8 +57,8 @@ from medax.geometry.tensor_fit import (
     MAX_COEFFICIENTS,
     HeightFitter,
     TensorFit,
-    _samples,
     greville,
+    span_samples,
 )
 
 #: Samples per edge for the projected member boundaries.
@@ -130,6 +130,25 @@ def _polygon(edges: list[Array]) -> Path:
     return Path(np.vstack([e[:-1] for e in edges]))
 
 
+def face_loops(
+    face: Any, project: Callable[[Any], list[Array]]
+) -> tuple[list[Array], Path, tuple[Path, ...], tuple[Array, ...]]:
+    """The outer wire's projected edge samples (``project(wire)``: one (k, 2) array per edge,
+    in order), its polygon, the holes' polygons and every edge's samples, of ``face``."""
+    outer_wire = BRepTools.OuterWire_s(face)
+    outer = project(outer_wire)
+    edges, inner = list(outer), []
+    exp = TopExp_Explorer(face, TopAbs_WIRE)
+    while exp.More():
+        w = exp.Current()
+        if not w.IsSame(outer_wire):
+            hole = project(w)
+            inner.append(_polygon(hole))
+            edges += hole
+        exp.Next()
+    return outer, _polygon(outer) if outer else Path(np.zeros((1, 2))), tuple(inner), tuple(edges)
+
+
 def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
     ad = BRepAdaptor_Surface(face)
     kind = ad.GetType()
@@ -156,36 +175,25 @@ def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
         if not isinstance(emb, NurbsSurface):
             return "a B-spline piece without a NURBS embedding"
         nurbs = replace(emb, extrapolate=True)  # continued like the analytic pieces
-        m = ("nurbs", np.zeros(3), np.zeros(3), _min_radius(ad))
+        m = ("nurbs", np.zeros(3), np.zeros(3), min_radius(ad))
     else:  # cone, revolution, extrusion, Bezier, offset: the face's piece as a B-spline
-        conv = _trimmed_bspline(face)
+        conv = trimmed_bspline(face)
         if conv is None:
             return f"a {kind.name[7:].lower()} piece that does not convert to a B-spline"
         nurbs = replace(bspline_embedding(conv), extrapolate=True)
-        m = ("nurbs", np.zeros(3), np.zeros(3), _min_radius(ad))
+        m = ("nurbs", np.zeros(3), np.zeros(3), min_radius(ad))
         u0, u1, v0, v1 = conv.Bounds()
         converted_box = (u0, u1, v0, v1)
-    outer_wire = BRepTools.OuterWire_s(face)
-    outer = _wire_edges(outer_wire, frame)
-    edges = list(outer)
-    inner = []
-    exp = TopExp_Explorer(face, TopAbs_WIRE)
-    while exp.More():
-        w = exp.Current()
-        if not w.IsSame(outer_wire):
-            hole = _wire_edges(w, frame)
-            inner.append(_polygon(hole))
-            edges += hole
-        exp.Next()
+    _, outer, inner, edges = face_loops(face, lambda w: _wire_edges(w, frame))
     free = nurbs is not None
     return _Member(
         m[0],
         m[1],
         m[2],
         m[3],
-        _polygon(outer),
-        tuple(inner),
-        tuple(edges),
+        outer,
+        inner,
+        edges,
         major,
         nurbs,
         converted_box or (uv_bounds(face) if free else (0.0, 0.0, 0.0, 0.0)),
@@ -193,7 +201,7 @@ def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
     )
 
 
-def _trimmed_bspline(face: Any) -> Any | None:
+def trimmed_bspline(face: Any) -> Any | None:
     """The B-spline of ``face``'s surface over the face's UV box (exact for the elementary
     and swept kinds; its own parameters), or None when OCCT's conversion fails."""
     from OCP.Geom import Geom_RectangularTrimmedSurface
@@ -207,7 +215,7 @@ def _trimmed_bspline(face: Any) -> Any | None:
         return None
 
 
-def _min_radius(ad: Any, n: int = 7) -> float:
+def min_radius(ad: Any, n: int = 7) -> float:
     """Smallest principal curvature radius at ``n x n`` samples of a face's surface
     (``BRepAdaptor_Surface``)."""
     from OCP.BRepLProp import BRepLProp_SLProps
@@ -634,7 +642,7 @@ def _culprits(setup: GraphSetup, fit: TensorFit, limit: float) -> frozenset[int]
     curved = [i for i, m in enumerate(setup.members) if m.kind != "plane"]
     if not curved:
         return frozenset()
-    xc, yc = _samples(fit.tx, CHECK_PER_SPAN), _samples(fit.ty, CHECK_PER_SPAN)
+    xc, yc = span_samples(fit.tx, CHECK_PER_SPAN), span_samples(fit.ty, CHECK_PER_SPAN)
     x, y = np.meshgrid(xc, yc, indexing="ij")
     z, ok, inside = setup.fitter.h(x, y)
     err = np.where(ok, np.abs(fit(xc, yc) - z), np.inf)

@@ -44,7 +44,7 @@ from medax.cad.simplify.occ import (
 from medax.geometry.periodic_fit import PERIOD, PeriodicFit, fit_radial_height, periodic_knots
 from medax.geometry.ring_heights import RingFrame, goes_round, ray_points
 from medax.geometry.surfaces import NurbsSurface
-from medax.geometry.tensor_fit import CHECK_PER_SPAN, DEGREE, _samples
+from medax.geometry.tensor_fit import CHECK_PER_SPAN, DEGREE, span_samples
 
 #: Samples per contact / medial edge.
 CURVE_SAMPLES = 720
@@ -354,7 +354,7 @@ def _volume_change(fit: PeriodicFit, h: Any, support: Any, inside_pt: Array, fra
     the check cells (the fit's derivatives by central differences), NaN when the outward
     side cannot be told."""
     tt = np.unique(periodic_knots(fit.n_theta)[DEGREE : fit.n_theta + DEGREE + 1])
-    th, sg = _samples(tt, CHECK_PER_SPAN), _samples(fit.ts, CHECK_PER_SPAN)
+    th, sg = span_samples(tt, CHECK_PER_SPAN), span_samples(fit.ts, CHECK_PER_SPAN)
     pts, ok, inside = h(*np.meshgrid(th, sg, indexing="ij"))
     p = fit(th, sg)
     e = 1e-6
