@@ -269,6 +269,21 @@ def test_area_change_keeps_the_fillets(monkeypatch):
     assert r.valid and r.volume_rel_change == 0.0 and r.area_rel_change == 0.0
 
 
+def test_search_stops_within_the_run_budget(monkeypatch):
+    """When one more attempt, as long as the first, would end past the run's budget, the
+    search starts none: the fillets are kept with that reason and the input is returned."""
+    from medax.cad.simplify import pipeline, validate
+
+    true_area = validate.area
+    monkeypatch.setattr(validate, "area", lambda s, nurbs=None: true_area(s, nurbs) * 1.00001)
+    monkeypatch.setattr(pipeline, "local_area_change", lambda *args: None)
+    monkeypatch.setattr(pipeline, "RUN_BUDGET", 0.0)
+    r = _run(P.box_vertical_fillets(40.0, 30.0, 20.0, 5.0))
+    assert not r.blends_removed and len(r.blends_kept) == 4
+    assert all("the time for finding the failing fillets ran out" in w for _, w in r.blends_kept)
+    assert r.valid and r.faces_after == r.faces_before
+
+
 @pytest.mark.parametrize("direction", [(0.5, 0.0, 0.866025403784329), (0.3, 0.4, 0.866)])
 def test_tilted_ring_fillet_across_the_seam(direction):
     """A quarter-torus fillet round a tilted cylinder's top: its v = 0 smooth edge projects

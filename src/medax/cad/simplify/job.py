@@ -47,6 +47,10 @@ FIT_SHARE, ACCEPT_SHARE = 0.1, 0.8
 FITTED_DEVIATION_SAMPLES = 12
 #: Seconds the search for failing fillets may take after the first rebuild failed.
 ISOLATION_BUDGET = 300.0
+#: Seconds the whole simplification may take before the search stops starting attempts
+#: (each as long as the first one is counted), so that a part with its reading and writing
+#: ends within 10 minutes.
+RUN_BUDGET = 480.0
 #: Riders tried one at a time as plain fillets on their kept base, at most (each try is a
 #: pass over the fitted faces).
 MAX_RIDER_TRIES = 8

@@ -38,6 +38,7 @@ from medax.cad.simplify.job import (
     FITTED_DEVIATION_SAMPLES,
     ISOLATION_BUDGET,
     MAX_RIDER_TRIES,
+    RUN_BUDGET,
     VOLUME_TOL,
     Attempt,
     Job,
@@ -114,7 +115,9 @@ def simplify(
         Receives one-line messages (the CLI prints them on stderr); default: logging.
     time_budget : float
         Seconds the search for the failing fillets may take when the rebuild with all of
-        them fails; fillets not tried by then are kept, with that reason.
+        them fails; fillets not tried by then are kept, with that reason. The search also
+        stops starting attempts when one more, as long as the first, would end after
+        ``RUN_BUDGET`` (480 s) of the whole run.
 
     Returns
     -------
@@ -174,11 +177,13 @@ def simplify(
     job.cylinder_field = True
     _readmit_riders(job, blends)
     specs, corners = job.specs, job.corners
+    t_first = time.perf_counter()
     first = attempt(specs) if specs else None
     result: Attempt | None
     if isinstance(first, str):
         say(f"rebuild with all fillets failed ({first}); isolating the failing fillets")
-        deadline = time.perf_counter() + time_budget
+        now = time.perf_counter()
+        deadline = min(now + time_budget, t0 + RUN_BUDGET - (now - t_first))
         together = [set(ch.members) for ch in job.chains]
         result, specs = isolate(specs, attempt, kept, say, deadline, first, together)
     else:
