@@ -31,26 +31,20 @@ from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepTools import BRepTools_WireExplorer
 from OCP.GeomAbs import (
-    GeomAbs_BSplineSurface,
     GeomAbs_Cylinder,
-    GeomAbs_Plane,
-    GeomAbs_Sphere,
-    GeomAbs_Torus,
 )
 from OCP.TopAbs import TopAbs_REVERSED
 from OCP.TopoDS import TopoDS
 from scipy.interpolate import CubicSpline
 from scipy.spatial import cKDTree
 
-from medax.cad.face_region import bspline_embedding, surface_embedding
-from medax.cad.simplify.fitted import FittedSurface, face_loops, trimmed_bspline
+from medax.cad.simplify.fitted import FittedSurface, face_loops, piece_surface
 from medax.cad.simplify.occ import (
     Array,
     edge_points,
     edges_of,
     face_inside_point,
     face_normal_at,
-    uv_bounds,
     xyz,
 )
 from medax.cad.simplify.ring import periodic_surface
@@ -113,51 +107,16 @@ def _wire_sz(wire: Any, frame: CylinderFrame, periodic: bool) -> list[Array]:
 
 
 def _member(face: Any, frame: CylinderFrame, periodic: bool, tol: float) -> _Member | str:
-    ad = BRepAdaptor_Surface(face)
-    kind = ad.GetType()
-    zero = np.zeros(3)
-    nurbs: NurbsSurface | None = None
-    box = (0.0, 0.0, 0.0, 0.0)
-    head: tuple[str, Array, Array, float, float]
-    if kind == GeomAbs_Plane:
-        ax = ad.Plane().Axis()
-        head = ("plane", xyz(ax.Location()), xyz(ax.Direction()), 0.0, 0.0)
-    elif kind == GeomAbs_Cylinder:
-        c = ad.Cylinder()
-        ax = c.Axis()
-        head = ("cylinder", xyz(ax.Location()), xyz(ax.Direction()), float(c.Radius()), 0.0)
-    elif kind == GeomAbs_Sphere:
-        sph = ad.Sphere()
-        head = ("sphere", xyz(sph.Location()), zero, float(sph.Radius()), 0.0)
-    elif kind == GeomAbs_Torus and _coaxial(ad, frame, tol):
-        t = ad.Torus()
-        ax = t.Axis()
-        head = (
-            "torus",
-            xyz(ax.Location()),
-            xyz(ax.Direction()),
-            float(t.MinorRadius()),
-            float(t.MajorRadius()),
-        )
-    else:  # B-splines, and every other kind through OCCT's B-spline of the face's piece
-        if kind == GeomAbs_BSplineSurface:
-            emb = surface_embedding(face)
-            if not isinstance(emb, NurbsSurface):
-                return "a B-spline piece without a NURBS embedding"
-            nurbs, box = emb, uv_bounds(face)
-        else:
-            conv = trimmed_bspline(face)
-            if conv is None:
-                return f"a {kind.name[7:].lower()} piece that does not convert to a B-spline"
-            nurbs = bspline_embedding(conv)
-            u0, u1, v0, v1 = conv.Bounds()
-            box = (u0, u1, v0, v1)
-        nurbs = replace(nurbs, extrapolate=True)  # continued like the analytic pieces
-        head = ("nurbs", zero, zero, 0.0, 0.0)
+    # (a torus off the frame's axis is taken as a NURBS piece)
+    pc = piece_surface(face, lambda ad: _coaxial(ad, frame, tol))
+    if isinstance(pc, str):
+        return pc
     samples, outer, inner, edges = face_loops(face, lambda w: _wire_sz(w, frame, periodic))
     if not samples:
         return "a member without boundary edges"
-    return _Member(*head, nurbs, box, outer, inner, edges)
+    return _Member(
+        pc.kind, pc.centre, pc.axis, pc.radius, pc.major, pc.nurbs, pc.uv_box, outer, inner, edges
+    )
 
 
 def _coaxial(ad: Any, frame: CylinderFrame, tol: float) -> bool:
@@ -297,8 +256,7 @@ def _field(support: Any, members: Sequence[Any], tol: float) -> _Field | str:
         if isinstance(m, str):
             return m
         ms.append(m)
-    curved = [m.radius for m in ms if m.kind in ("cylinder", "sphere", "torus")]
-    curved += [_nurbs_radius(f) for f, m in zip(members, ms, strict=True) if m.kind == "nurbs"]
+    curved = [m.radius for m in ms if m.kind != "plane"]
     curved = [r for r in curved if r > tol]
     if not curved:
         return "no curved piece to merge"
@@ -355,12 +313,6 @@ def _boundary_samples(ms: Sequence[_Member], step: float, period: float) -> tupl
                 pts.append(q + np.array([shift, 0.0]))
                 owner.append(np.full(len(q), i))
     return np.vstack(pts), np.concatenate(owner)
-
-
-def _nurbs_radius(face: Any) -> float:
-    from medax.cad.simplify.fitted import min_radius
-
-    return min_radius(BRepAdaptor_Surface(face))
 
 
 def cylinder_surface(

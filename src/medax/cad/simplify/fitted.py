@@ -149,54 +149,85 @@ def face_loops(
     return outer, _polygon(outer) if outer else Path(np.zeros((1, 2))), tuple(inner), tuple(edges)
 
 
-def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
+@dataclass(frozen=True)
+class Piece:
+    """The surface of a member face: ``kind`` ("plane" | "cylinder" | "sphere" | "torus" |
+    "nurbs"), a point ``centre`` (3,) and ``axis`` (3,) (the plane's normal, the cylinder's
+    or torus' axis; zeros for spheres and NURBS), ``radius`` (cylinder, sphere; the torus'
+    minor; a NURBS piece's smallest curvature radius), the torus' ``major`` radius, and for
+    NURBS pieces the numpy copy (continued past its domain) and its ``uv_box``."""
+
+    kind: str
+    centre: Array
+    axis: Array
+    radius: float
+    major: float = 0.0
+    nurbs: NurbsSurface | None = None
+    uv_box: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+
+
+def piece_surface(
+    face: Any, analytic_torus: Callable[[Any], bool] = lambda ad: True
+) -> Piece | str:
+    """The :class:`Piece` of ``face``: planes, cylinders, spheres and the tori for which
+    ``analytic_torus(adaptor)`` holds in closed form, every other kind as a NURBS copy (its
+    B-spline, or OCCT's B-spline of the face's piece: cones, revolutions, extrusions,
+    Bezier); the reason (str) when there is none."""
     ad = BRepAdaptor_Surface(face)
     kind = ad.GetType()
-    major = 0.0
-    nurbs: NurbsSurface | None = None
-    converted_box: tuple[float, float, float, float] | None = None
+    zero = np.zeros(3)
     if kind == GeomAbs_Plane:
         ax = ad.Plane().Axis()
-        m = ("plane", xyz(ax.Location()), xyz(ax.Direction()), 0.0)
-    elif kind == GeomAbs_Cylinder:
+        return Piece("plane", xyz(ax.Location()), xyz(ax.Direction()), 0.0)
+    if kind == GeomAbs_Cylinder:
         cyl = ad.Cylinder()
         ax = cyl.Axis()
-        m = ("cylinder", xyz(ax.Location()), xyz(ax.Direction()), float(cyl.Radius()))
-    elif kind == GeomAbs_Sphere:
+        return Piece("cylinder", xyz(ax.Location()), xyz(ax.Direction()), float(cyl.Radius()))
+    if kind == GeomAbs_Sphere:
         sph = ad.Sphere()
-        m = ("sphere", xyz(sph.Location()), np.zeros(3), float(sph.Radius()))
-    elif kind == GeomAbs_Torus:
+        return Piece("sphere", xyz(sph.Location()), zero, float(sph.Radius()))
+    if kind == GeomAbs_Torus and analytic_torus(ad):
         tor = ad.Torus()
         ax = tor.Axis()
-        m = ("torus", xyz(ax.Location()), xyz(ax.Direction()), float(tor.MinorRadius()))
-        major = float(tor.MajorRadius())
-    elif kind == GeomAbs_BSplineSurface:
+        return Piece(
+            "torus",
+            xyz(ax.Location()),
+            xyz(ax.Direction()),
+            float(tor.MinorRadius()),
+            float(tor.MajorRadius()),
+        )
+    if kind == GeomAbs_BSplineSurface:
         emb = surface_embedding(face)
         if not isinstance(emb, NurbsSurface):
             return "a B-spline piece without a NURBS embedding"
-        nurbs = replace(emb, extrapolate=True)  # continued like the analytic pieces
-        m = ("nurbs", np.zeros(3), np.zeros(3), min_radius(ad))
-    else:  # cone, revolution, extrusion, Bezier, offset: the face's piece as a B-spline
+        nurbs, box = emb, uv_bounds(face)
+    else:
         conv = trimmed_bspline(face)
         if conv is None:
             return f"a {kind.name[7:].lower()} piece that does not convert to a B-spline"
-        nurbs = replace(bspline_embedding(conv), extrapolate=True)
-        m = ("nurbs", np.zeros(3), np.zeros(3), min_radius(ad))
+        nurbs = bspline_embedding(conv)
         u0, u1, v0, v1 = conv.Bounds()
-        converted_box = (u0, u1, v0, v1)
+        box = (u0, u1, v0, v1)
+    # continued like the analytic pieces
+    return Piece("nurbs", zero, zero, min_radius(ad), 0.0, replace(nurbs, extrapolate=True), box)
+
+
+def _member(face: Any, frame: tuple[Array, Array, Array]) -> _Member | str:
+    pc = piece_surface(face)
+    if isinstance(pc, str):
+        return pc
     _, outer, inner, edges = face_loops(face, lambda w: _wire_edges(w, frame))
-    free = nurbs is not None
     return _Member(
-        m[0],
-        m[1],
-        m[2],
-        m[3],
+        pc.kind,
+        pc.centre,
+        pc.axis,
+        pc.radius,
         outer,
         inner,
         edges,
-        major,
-        nurbs,
-        converted_box or (uv_bounds(face) if free else (0.0, 0.0, 0.0, 0.0)),
+        pc.major,
+        pc.nurbs,
+        pc.uv_box,
         (frame[1], frame[2]),
     )
 
