@@ -22,6 +22,17 @@ def _near(m, p) -> bool:  # type: ignore[no-untyped-def]
     return bool(sum((a - b) ** 2 for a, b in zip(m, p, strict=True)) < 1e-12)
 
 
+def _filleted_union(a, b, mids, name: str):  # type: ignore[no-untyped-def]
+    """The union of solids ``a`` and ``b`` with the edges whose midpoints are ``mids``
+    filleted (r 1), classified, and simplified."""
+    fused = heal(BRepAlgoAPI_Fuse(a, b).Shape())
+    edges = catalogue._select(fused, lambda m: any(_near(m, p) for p in mids))
+    assert len(edges) == len(mids)
+    part = catalogue.fillet(fused, edges, 1.0, name)
+    cls = classify_solid(heal(part.shape))
+    return part, cls, simplify(cls.shape, specs_from_classification(cls))
+
+
 @pytest.fixture(scope="module")
 def stepped():
     """A box 10^3 on the corner of a box 10 x 10 x 10 below it (overlap 5 x 5): the concave
@@ -31,14 +42,7 @@ def stepped():
     filleted, r 1."""
     upper = BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), 10.0, 10.0, 10.0).Shape()
     lower = BRepPrimAPI_MakeBox(gp_Pnt(-5, -5, -10), 10.0, 10.0, 10.0).Shape()
-    fused = heal(BRepAlgoAPI_Fuse(upper, lower).Shape())
-    edges = catalogue._select(
-        fused, lambda m: _near(m, (2.5, 5.0, 0.0)) or _near(m, (-5.0, 5.0, -5.0))
-    )
-    assert len(edges) == 2
-    part = catalogue.fillet(fused, edges, 1.0, "stepped")
-    cls = classify_solid(heal(part.shape))
-    return part, cls, simplify(cls.shape, specs_from_classification(cls))
+    return _filleted_union(upper, lower, [(2.5, 5.0, 0.0), (-5.0, 5.0, -5.0)], "stepped")
 
 
 @pytest.mark.slow
@@ -91,14 +95,7 @@ def rib():
     too (r 1), on the same top face."""
     plate = BRepPrimAPI_MakeBox(40.0, 30.0, 5.0).Shape()
     rib_box = BRepPrimAPI_MakeBox(gp_Pnt(10, 14, 5), 20.0, 2.0, 10.0).Shape()
-    fused = heal(BRepAlgoAPI_Fuse(plate, rib_box).Shape())
-    edges = catalogue._select(
-        fused, lambda m: _near(m, (20.0, 14.0, 5.0)) or _near(m, (20.0, 0.0, 5.0))
-    )
-    assert len(edges) == 2
-    part = catalogue.fillet(fused, edges, 1.0, "rib")
-    cls = classify_solid(heal(part.shape))
-    return part, cls, simplify(cls.shape, specs_from_classification(cls))
+    return _filleted_union(plate, rib_box, [(20.0, 14.0, 5.0), (20.0, 0.0, 5.0)], "rib")
 
 
 @pytest.mark.slow
