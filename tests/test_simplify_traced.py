@@ -114,6 +114,48 @@ def test_traced_medial_edge_taken_to_the_iso_line_tolerance(slanted, monkeypatch
     assert max(gap) <= m.error * (1 + 1e-3) + 1e-13
 
 
+def test_traced_medial_edge_stops_at_the_pole_budget(slanted, monkeypatch):
+    """Once the error is within ``accept``, the nodes are not doubled past ``MAX_POLES``
+    (OCCT's splitter slows down steeply with the tool's poles); with no ``accept`` they are
+    doubled until ``tol`` (here out of reach) and the curve is refused with the most."""
+    import medax.cad.simplify.traced as traced
+
+    _, _, face, edges, m = slanted
+    calls = []
+    real = traced.traced_medial_edge
+
+    def spy(*args):  # type: ignore[no-untyped-def]
+        calls.append(args)
+        return real(*args)
+
+    import medax.cad.simplify.medial as medial
+
+    monkeypatch.setattr(medial, "traced_medial_edge", spy)
+    medial_curve(face, *edges)
+    (args,) = calls
+    rounds = []
+    measure = traced._measure
+
+    def count(*a):  # type: ignore[no-untyped-def]
+        rounds.append(a[-1])
+        return measure(*a)
+
+    monkeypatch.setattr(traced, "_measure", count)
+    monkeypatch.setattr(traced, "MAX_POLES", 0)  # every doubling is past the budget
+    tol = 1e-11 * m.radius  # out of reach with 24 or 48 nodes per span
+    got = real(*args[:5], tol, 1e-3 * m.radius)  # accept loose
+    assert not isinstance(got, str), got
+    assert rounds == [traced.NODES] and got[1] <= 1e-3 * m.radius
+    poles = BRep_Tool.Curve_s(got[0], 0.0, 0.0).NbPoles()
+    spans = traced._spans(BRep_Tool.Surface_s(face), args[2], *args[4])
+    assert poles <= len(spans) * traced.NODES + traced.DEGREE  # one round's nodes
+    rounds.clear()
+    monkeypatch.setattr(traced, "MAX_NODES", 2 * traced.NODES)
+    refused = real(*args[:5], tol, 0.0)
+    assert isinstance(refused, str), refused  # doubled to MAX_NODES, then refused
+    assert rounds == [traced.NODES, 2 * traced.NODES]
+
+
 def test_traced_medial_edge_splits_the_fillet_in_two(slanted):
     cls, spec, _, _, m = slanted
     split = split_along(cls.shape, [m.edge])
