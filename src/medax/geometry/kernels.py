@@ -151,7 +151,7 @@ def newton_rows(
     place, the done rows' foot points (Taylor from the jet) into ``foot`` (n, dim); returns
     which rows are done (n,)."""
     n, dim = x.shape
-    done = np.zeros(n, dtype=np.bool_)
+    done = np.empty(n, dtype=np.bool_)  # (every row set below)
     w = np.empty((3, dim))
     for i in range(n):
         for d in range(dim):
