@@ -12,10 +12,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from medax.geometry._jit import HELPER, KERNEL
 from medax.geometry._types import FloatArray
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**HELPER)
 def basis_point(  # type: ignore[no-untyped-def]
     kn: FloatArray,
     p: int,
@@ -59,7 +60,7 @@ def basis_point(  # type: ignore[no-untyped-def]
             ders[r] = p * acc
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(**HELPER)
 def find_span(kn: FloatArray, p: int, t: float) -> int:
     """The span ``s`` of ``t``: the last knot index with ``kn[s] <= t``, kept within the
     domain's spans ``p .. len(kn) - p - 2`` (``np.searchsorted(kn, t, "right") - 1``
@@ -79,21 +80,21 @@ def find_span(kn: FloatArray, p: int, t: float) -> int:
     return a
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(**HELPER, inline="always")
 def basis_at(  # type: ignore[no-untyped-def]
-    basis, t: float, ndu: FloatArray, left: FloatArray, right: FloatArray, values: FloatArray,
-    ders: FloatArray,
+    kn: FloatArray, coef: FloatArray, p: int, extrapolate: bool, t: float, ndu: FloatArray,
+    left: FloatArray, right: FloatArray, values: FloatArray, ders: FloatArray,
 ) -> int:  # fmt: skip
     """Span of ``t`` and the values and first derivatives (p+1,) of its non-zero basis
-    functions into ``values``, ``ders``. ``basis`` = (knots, coef, p, power, extrapolate,
-    lo, hi) (see :class:`medax.geometry.surfaces.SpanBasis`): ``t`` clamped to ``[lo, hi]``
-    unless ``extrapolate``; with ``power`` the span's polynomials ``coef[s]`` (p+1
-    functions, p+1 powers of the span's local coordinate), else :func:`basis_point`."""
-    kn, coef, p, power, extrapolate, lo, hi = basis
+    functions into ``values``, ``ders``, for the knots ``kn`` of degree ``p`` (see
+    :class:`medax.geometry.surfaces.SpanBasis`): ``t`` clamped to the domain
+    ``[kn[p], kn[-p-1]]`` unless ``extrapolate``; the span's polynomials ``coef[s]`` (p+1
+    functions, p+1 powers of the span's local coordinate; ``coef`` (spans, p+1, p+1)), or
+    where ``coef`` is empty (no spans) :func:`basis_point`."""
     if not extrapolate:
-        t = min(max(t, lo), hi)
+        t = min(max(t, kn[p]), kn[kn.size - 1 - p])
     s = find_span(kn, p, t)
-    if not power:
+    if coef.shape[0] == 0:
         basis_point(kn, p, t, s, ndu, left, right, values, ders)
         return s
     width = kn[s + 1] - kn[s]
@@ -110,11 +111,10 @@ def basis_at(  # type: ignore[no-untyped-def]
     return s
 
 
-@njit(cache=True, error_model="numpy")
-def span_basis_rows(basis, t: FloatArray):  # type: ignore[no-untyped-def]
+@njit(**KERNEL)
+def span_basis_rows(kn: FloatArray, coef: FloatArray, p: int, extrapolate: bool, t: FloatArray):  # type: ignore[no-untyped-def]
     """Spans (n,), values and first derivatives (n, p+1) at ``t`` (n,): :func:`basis_at`
     point by point."""
-    p = basis[2]
     n = t.size
     span = np.empty(n, dtype=np.int64)
     values = np.empty((n, p + 1))
@@ -123,5 +123,5 @@ def span_basis_rows(basis, t: FloatArray):  # type: ignore[no-untyped-def]
     left = np.zeros(p + 1)
     right = np.zeros(p + 1)
     for i in range(n):
-        span[i] = basis_at(basis, t[i], ndu, left, right, values[i], ders[i])
+        span[i] = basis_at(kn, coef, p, extrapolate, t[i], ndu, left, right, values[i], ders[i])
     return span, values, ders

@@ -14,13 +14,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from medax.geometry._jit import HELPER, KERNEL
 from medax.geometry._types import FloatArray
 
 #: segments per bounding box
 CHUNK = 16
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**HELPER)
 def _cross(a: FloatArray, i: int, b: FloatArray, j: int, tol: float) -> bool:
     """Whether segment ``a[i] a[i+1]`` properly crosses ``b[j] b[j+1]``: the products of
     the orientations ``(q - p) x (r - p)`` of each one's ends against the other's line are
@@ -34,7 +35,7 @@ def _cross(a: FloatArray, i: int, b: FloatArray, j: int, tol: float) -> bool:
     return o1 * o2 < -tol and o3 * o4 < -tol
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**HELPER)
 def _boxes(p: FloatArray) -> FloatArray:
     """Bounding boxes (chunks, 4: lo x, lo y, hi x, hi y) of the chunks of segments of
     polyline ``p`` (n, 2), n >= 2: chunk ``c`` holds segments ``c CHUNK ..`` (its points
@@ -59,7 +60,7 @@ def _boxes(p: FloatArray) -> FloatArray:
     return box
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**KERNEL)
 def crossing(a: FloatArray, b: FloatArray, eps: float, itself: bool) -> bool:
     """Whether polylines ``a`` (n, 2) and ``b`` (m, 2) properly cross (to ``eps``), or with
     ``itself`` (``b`` is ``a``) whether ``a`` crosses itself: segments that are not

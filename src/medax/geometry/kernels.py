@@ -42,11 +42,11 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from medax.geometry._jit import HELPER, KERNEL
 from medax.geometry._types import FloatArray
 from medax.geometry.basis_kernel import span_basis_rows
 from medax.geometry.crossing_kernel import crossing
 from medax.geometry.nurbs_kernel import heights_newton
-from medax.geometry.nurbs_kernel import jet_rows as nurbs_jet_rows
 from medax.geometry.table_kernel import table_jet1, table_span
 from medax.geometry.track_kernel import track_step_rows, track_table
 
@@ -62,7 +62,7 @@ SAFE_STEPS = 60
 
 
 # ---- jets ---------------------------------------------------------------------------------
-@njit(cache=True, error_model="numpy")
+@njit(**KERNEL)
 def jet_rows(
     inner: FloatArray, starts: FloatArray, rows: FloatArray, t: FloatArray, offset: FloatArray
 ) -> FloatArray:
@@ -84,7 +84,7 @@ def jet_rows(
 
 
 # ---- Newton steps -------------------------------------------------------------------------
-@njit(cache=True, error_model="numpy")
+@njit(**HELPER)
 def _g_dg(w: FloatArray, x: FloatArray) -> tuple[float, float]:
     """``g = (C - x) . C'`` and ``g' = C' . C' + (C - x) . C''`` from a jet ``w`` (3, dim)."""
     g = 0.0
@@ -98,7 +98,7 @@ def _g_dg(w: FloatArray, x: FloatArray) -> tuple[float, float]:
     return g, speed2 + curv
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**HELPER)
 def _clamp(v: float, lo: float, hi: float) -> float:
     """``min(max(v, lo), hi)`` with numpy's NaN propagation."""
     if v != v:
@@ -106,7 +106,7 @@ def _clamp(v: float, lo: float, hi: float) -> float:
     return min(max(v, lo), hi)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**HELPER)
 def _safe_step(
     g: float, dg: float, s: float, a: float, b: float, last: bool
 ) -> tuple[float, float, float, bool, float]:
@@ -133,7 +133,7 @@ def _safe_step(
     return new, aa, bb, done, ds
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**KERNEL)
 def newton_rows(
     c0: FloatArray,
     c1: FloatArray,
@@ -151,7 +151,7 @@ def newton_rows(
     place, the done rows' foot points (Taylor from the jet) into ``foot`` (n, dim); returns
     which rows are done (n,)."""
     n, dim = x.shape
-    done = np.zeros(n, dtype=np.bool_)
+    done = np.empty(n, dtype=np.bool_)  # (every row set below)
     w = np.empty((3, dim))
     for i in range(n):
         for d in range(dim):
@@ -164,7 +164,7 @@ def newton_rows(
     return done
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**HELPER)
 def _jet_table(
     inner: FloatArray,
     starts: FloatArray,
@@ -195,7 +195,7 @@ def _jet_table(
         w[2, d] = (h[2, d] - 2.0 * w1 * d1 - w2 * c) / w0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**KERNEL)
 def newton_table(  # type: ignore[no-untyped-def]
     inner: FloatArray,
     starts: FloatArray,
@@ -232,7 +232,7 @@ def newton_table(  # type: ignore[no-untyped-def]
     return t, foot
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**HELPER)
 def _refine(
     inner: FloatArray,
     starts: FloatArray,
@@ -278,7 +278,7 @@ def _refine(
 
 
 # ---- closest points on polynomial tables --------------------------------------------------
-@njit(cache=True, error_model="numpy")
+@njit(**HELPER)
 def _corner(
     inner: FloatArray,
     starts: FloatArray,
@@ -297,7 +297,14 @@ def _corner(
     (then written into ``foot``); returns the parameter."""
     if breaks.size == 0:
         return t
-    i = int(np.searchsorted(breaks, lo, side="left"))
+    i = 0  # np.searchsorted(breaks, lo, side="left"), by bisection (NaN above all)
+    j = breaks.size
+    while i < j:
+        mid = (i + j) >> 1
+        if breaks[mid] < lo or lo != lo:
+            i = mid + 1
+        else:
+            j = mid
     if i >= breaks.size or breaks[i] > hi:
         return t
     e = breaks[i]
@@ -315,7 +322,7 @@ def _corner(
     return t
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**HELPER)
 def _table_d2(ct: FloatArray, pp: FloatArray, x: FloatArray, i: int, d2: FloatArray) -> None:
     """Into ``d2`` (m,): ``|x_i - p_j|^2 - |x_i|^2`` for the table's samples ``p_j``
     (``ct`` (dim, m) their coordinates, ``pp`` (m,) their squared norms; the per-point
@@ -332,7 +339,7 @@ def _table_d2(ct: FloatArray, pp: FloatArray, x: FloatArray, i: int, d2: FloatAr
         d2[j] = pp[j] - 2.0 * d2[j]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**KERNEL)
 def candidates(ct: FloatArray, pp: FloatArray, bounds: np.ndarray, x: FloatArray, k: int):  # type: ignore[no-untyped-def]
     """Indices (n, curves, k) of the ``k`` nearest local minima of the sampled distance of
     each point ``x`` (n, dim; centred as the samples) on each curve; samples ``ct``
@@ -374,7 +381,7 @@ def candidates(ct: FloatArray, pp: FloatArray, bounds: np.ndarray, x: FloatArray
     return out
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**HELPER)
 def _bracket(  # type: ignore[no-untyped-def]
     ts: FloatArray,
     pts: FloatArray,
@@ -422,7 +429,7 @@ def _bracket(  # type: ignore[no-untyped-def]
     return ts[jb], ta, tb, s0, interior, j3[0], j3[2]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**KERNEL)
 def bracket_rows(  # type: ignore[no-untyped-def]
     ts: FloatArray, pts: FloatArray, slopes: FloatArray, x: FloatArray, cand: np.ndarray
 ):
@@ -432,7 +439,7 @@ def bracket_rows(  # type: ignore[no-untyped-def]
     ``ta``, ``tb`` (n,), starts (n,), whether to refine (n,), windows' first and last
     sample parameters (n,)."""
     n, dim = x.shape
-    hi_s = ts.size - 1
+    lo_s, hi_s = np.int64(0), ts.size - 1  # (a literal 0 would compile _bracket twice)
     t = np.empty(n)
     foot = np.empty((n, dim))
     ta = np.empty(n)
@@ -446,13 +453,13 @@ def bracket_rows(  # type: ignore[no-untyped-def]
     j3 = np.empty(3, dtype=np.int64)
     for i in range(n):
         t[i], ta[i], tb[i], s0[i], inside[i], j0, j2 = _bracket(
-            ts, pts, slopes, 0, hi_s, cand[i], x[i], foot[i], g3, d3, j3
+            ts, pts, slopes, lo_s, hi_s, cand[i], x[i], foot[i], g3, d3, j3
         )
         w_lo[i], w_hi[i] = ts[j0], ts[j2]
     return t, foot, ta, tb, s0, inside, w_lo, w_hi
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**KERNEL)
 def closest_search(  # type: ignore[no-untyped-def]
     ts: FloatArray,
     pts: FloatArray,
@@ -483,7 +490,10 @@ def closest_search(  # type: ignore[no-untyped-def]
     candidate kept (the first on ties)."""
     n, dim = x.shape
     nc = bounds.size - 1
-    xc = x - centre
+    xc = np.empty((n, dim))  # (x - centre, as a loop: an array expression compiles slowly)
+    for i in range(n):
+        for d in range(dim):
+            xc[i, d] = x[i, d] - centre[d]
     cand = candidates(ct, pp, bounds, xc, k)
     t_out = np.empty((n, nc))
     foot_out = np.empty((n, nc, dim))
@@ -520,7 +530,7 @@ def closest_search(  # type: ignore[no-untyped-def]
     return t_out, foot_out, dist_out
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**HELPER)
 def _iqi_start(
     t0: float, t1: float, t2: float, g3: FloatArray, ta: float, tb: float, ga: float, gb: float
 ) -> float:
@@ -539,7 +549,7 @@ def _iqi_start(
     return falsi
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**KERNEL)
 def closest_bracketed(  # type: ignore[no-untyped-def]
     inner: FloatArray,
     starts: FloatArray,
@@ -594,7 +604,7 @@ def closest_bracketed(  # type: ignore[no-untyped-def]
 
 
 # ---- certification -----------------------------------------------------------------------
-@njit(cache=True, error_model="numpy")
+@njit(**KERNEL)
 def certify_rows(  # type: ignore[no-untyped-def]
     ts: FloatArray,
     ct: FloatArray,
@@ -657,7 +667,6 @@ _COMPILED = (
     newton_table,
     crossing,
     span_basis_rows,
-    nurbs_jet_rows,
     heights_newton,
 )
 _announced = False
@@ -714,11 +723,8 @@ def warm_up() -> None:
     certify_rows(ts, pts.T.copy(), ts.copy(), x, t, t, 0.1, 0.01, 0.0, 0.0)
     crossing(pts, pts[::-1].copy(), 0.0, False)
     kn = np.array([0.0, 0.0, 1.0, 1.0])
-    for power in (True, False):  # the power basis and Cox-de Boor
-        basis = (kn, np.zeros((3, 2, 2)), 1, power, False, 0.0, 1.0)
-        span_basis_rows(basis, t)
-        surf = (np.ones((2, 2, 4)), basis, basis)
-        nurbs_jet_rows(surf, x)
-        heights_newton(
-            surf, np.eye(3), x, x, np.zeros(1, np.bool_), np.array([0.0, 1.0, 0.0, 1.0]), 0.1, 2
-        )
+    for coef in (np.zeros((3, 2, 2)), np.zeros((0, 2, 2))):  # power basis, Cox-de Boor
+        span_basis_rows(kn, coef, 1, False, t)
+        surf = (np.ones((2, 2, 4)), kn, coef, kn, coef, False)
+        box = np.array([0.0, 1.0, 0.0, 1.0])
+        heights_newton(*surf, np.eye(3), x, x, np.zeros(1, np.bool_), box, 0.1, 2)

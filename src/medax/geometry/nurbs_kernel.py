@@ -1,10 +1,15 @@
 """Compiled (numba) NURBS surface jets and the per-point Newton of
 :func:`medax.geometry.surface_heights.graph_heights`.
 
-A surface is passed as ``(hom, ubasis, vbasis)``: its homogeneous poles ``hom`` (nu, nv, 4)
-(``w x, w y, w z, w``) and each direction's basis tuple of
-:func:`medax.geometry.basis_kernel.basis_at` (see ``NurbsSurface.kernel_args``). Compiled
-with ``cache=True``, announced and warmed up with :mod:`medax.geometry.kernels`.
+A surface is passed as plain arguments ``hom, ukn, ucoef, vkn, vcoef, extrapolate``
+(``NurbsSurface.kernel_args``): its homogeneous poles ``hom`` (nu, nv, 4) (``w x, w y, w z,
+w``), each direction's knots and span polynomials of
+:func:`medax.geometry.basis_kernel.basis_at` (empty: Cox-de Boor; the degrees follow from
+the knot and pole counts) and whether it is continued past its domain (nested tuples of
+arrays and scalars compiled slowly). One compiled kernel, :func:`heights_newton`, with the
+jet inlined (a call per point took 40 % longer); :func:`jet_rows` is it without a
+Newton step. Compiled with ``cache=True``, announced and warmed up with
+:mod:`medax.geometry.kernels`.
 """
 
 from __future__ import annotations
@@ -14,14 +19,15 @@ import math
 import numpy as np
 from numba import njit
 
+from medax.geometry._jit import HELPER, KERNEL
 from medax.geometry._types import FloatArray
 from medax.geometry.basis_kernel import basis_at
 
 
-@njit(cache=True, error_model="numpy")
-def _work(surf):  # type: ignore[no-untyped-def]
-    """Work arrays of :func:`_jet1` for ``surf``."""
-    pu, pv = surf[1][2], surf[2][2]
+@njit(**HELPER)
+def _work(hom: FloatArray, ukn: FloatArray, vkn: FloatArray):  # type: ignore[no-untyped-def]
+    """Work arrays of :func:`_jet1` for the surface of ``hom``, ``ukn``, ``vkn``."""
+    pu, pv = ukn.size - hom.shape[0] - 1, vkn.size - hom.shape[1] - 1
     q = max(pu, pv) + 1
     return (
         np.zeros((q, q)), np.zeros(q), np.zeros(q),
@@ -30,16 +36,18 @@ def _work(surf):  # type: ignore[no-untyped-def]
     )  # fmt: skip
 
 
-@njit(cache=True, error_model="numpy", inline="always")
-def _jet1(surf, u: float, v: float, work, x: FloatArray, du: FloatArray, dv: FloatArray) -> None:  # type: ignore[no-untyped-def]
+@njit(**HELPER, inline="always")
+def _jet1(  # type: ignore[no-untyped-def]
+    hom: FloatArray, ukn: FloatArray, ucoef: FloatArray, vkn: FloatArray, vcoef: FloatArray,
+    extrapolate: bool, u: float, v: float, work, x: FloatArray, du: FloatArray, dv: FloatArray,
+) -> None:  # fmt: skip
     """The point ``x`` (3,) and its derivatives ``du``, ``dv`` (3,) at ``(u, v)``: the
     homogeneous sums over the (pu+1, pv+1) poles of the point's span (over v first, values
-    and derivatives together, then over u) and the quotient rule."""
-    hom, ub, vb = surf
+    and derivatives together, then over u) and the quotient rule; ``work``: :func:`_work`."""
     ndu, left, right, nu, dnu, nv, dnv, acc = work
-    pu, pv = ub[2], vb[2]
-    su = basis_at(ub, u, ndu, left, right, nu, dnu)
-    sv = basis_at(vb, v, ndu, left, right, nv, dnv)
+    pu, pv = nu.size - 1, nv.size - 1
+    su = basis_at(ukn, ucoef, pu, extrapolate, u, ndu, left, right, nu, dnu)
+    sv = basis_at(vkn, vcoef, pv, extrapolate, v, ndu, left, right, nv, dnv)
     for c in range(12):
         acc[c] = 0.0  # h (4), h_u (4), h_v (4)
     for a in range(pu + 1):
@@ -79,18 +87,26 @@ def _jet1(surf, u: float, v: float, work, x: FloatArray, du: FloatArray, dv: Flo
         dv[c] = (acc[8 + c] - acc[11] * x[c]) / w
 
 
-@njit(cache=True, error_model="numpy")
-def jet_rows(surf, uv: FloatArray):  # type: ignore[no-untyped-def]
-    """Points, d/du and d/dv (n, 3) each at ``uv`` (n, 2): :func:`_jet1` point by point."""
+def jet_rows(
+    hom: FloatArray, ukn: FloatArray, ucoef: FloatArray, vkn: FloatArray, vcoef: FloatArray,
+    extrapolate: bool, uv: FloatArray,
+) -> tuple[FloatArray, FloatArray, FloatArray]:  # fmt: skip
+    """Points, d/du and d/dv (n, 3) each at ``uv`` (n, 2; C-contiguous): :func:`_jet1`
+    point by point, as :func:`heights_newton` without a step (one compiled kernel for both:
+    a second one with the jet inlined took 1.2 s more to compile)."""
     n = uv.shape[0]
-    x, du, dv = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
-    work = _work(surf)
-    for i in range(n):
-        _jet1(surf, uv[i, 0], uv[i, 1], work, x[i], du[i], dv[i])
+    _, x, du, dv, _, _ = heights_newton(
+        hom, ukn, ucoef, vkn, vcoef, extrapolate, _NO_FRAME, uv, uv, np.zeros(n, np.bool_),
+        _NO_BOX, 0.0, 0,
+    )  # fmt: skip
     return x, du, dv
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+#: the plane and parameter box of :func:`jet_rows`' call (unused without a step)
+_NO_FRAME, _NO_BOX = np.eye(3), np.zeros(4)
+
+
+@njit(**HELPER)
 def _plane_jacobian(  # type: ignore[no-untyped-def]
     du: FloatArray, dv: FloatArray, ex: FloatArray, ey: FloatArray
 ):
@@ -102,10 +118,11 @@ def _plane_jacobian(  # type: ignore[no-untyped-def]
     return a, b, c, d
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**KERNEL)
 def heights_newton(  # type: ignore[no-untyped-def]
-    surf, frame: FloatArray, xy: FloatArray, uv: FloatArray, chain: np.ndarray, box: FloatArray,
-    tol: float, steps: int,
+    hom: FloatArray, ukn: FloatArray, ucoef: FloatArray, vkn: FloatArray, vcoef: FloatArray,
+    extrapolate: bool, frame: FloatArray, xy: FloatArray, uv: FloatArray, chain: np.ndarray,
+    box: FloatArray, tol: float, steps: int,
 ):  # fmt: skip
     """Newton on the in-plane coordinates, point by point: from ``uv`` (m, 2), or where
     ``chain`` (m,) from the previous point's solution moved by the inverse in-plane
@@ -121,7 +138,7 @@ def heights_newton(  # type: ignore[no-untyped-def]
     x, du, dv = np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 3))
     res = np.empty(m)
     normal = np.empty((m, 3))
-    work = _work(surf)
+    work = _work(hom, ukn, vkn)
     o, ex, ey = frame[0], frame[1], frame[2]
     for i in range(m):
         u, v = uv[i, 0], uv[i, 1]
@@ -135,7 +152,7 @@ def heights_newton(  # type: ignore[no-untyped-def]
             v = min(max(out[i - 1, 1] + (a * dy - c * dx) / det, box[2]), box[3])
         xi, dui, dvi = x[i], du[i], dv[i]
         for k in range(steps + 1):
-            _jet1(surf, u, v, work, xi, dui, dvi)
+            _jet1(hom, ukn, ucoef, vkn, vcoef, extrapolate, u, v, work, xi, dui, dvi)
             q0, q1, q2 = xi[0] - o[0], xi[1] - o[1], xi[2] - o[2]
             fx = q0 * ex[0] + q1 * ex[1] + q2 * ex[2] - xy[i, 0]
             fy = q0 * ey[0] + q1 * ey[1] + q2 * ey[2] - xy[i, 1]

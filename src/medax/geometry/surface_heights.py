@@ -62,7 +62,7 @@ def graph_heights(
     kernels.announce_compile()
     plane = np.array([o, ex, ey], dtype=np.float64)
     _, s, _, _, normal, res = heights_newton(
-        surf.kernel_args, plane, xy, start, chain, box, float(tol), NEWTON_STEPS
+        *surf.kernel_args, plane, xy, start, chain, box, float(tol), NEWTON_STEPS
     )
     again = np.flatnonzero((res > tol) & chain)
     if again.size:
@@ -71,7 +71,7 @@ def graph_heights(
         # (the rational B-spline of a round stored as a revolution left 6 of 369 points
         # unsolved from nearby starts)
         _, s2, _, _, normal2, res2 = heights_newton(
-            surf.kernel_args, plane, xy[again], grid.start(xy[again]),
+            *surf.kernel_args, plane, xy[again], grid.start(xy[again]),
             np.zeros(again.size, dtype=np.bool_), box, float(tol), NEWTON_STEPS,
         )  # fmt: skip
         better = res2 < res[again]

@@ -310,10 +310,9 @@ def basis_and_derivative(
     kn = np.ascontiguousarray(knots, dtype=np.float64)
     t = np.asarray(t, dtype=np.float64)
     p = int(degree)
-    n_ctrl = kn.size - 1 - p
     kernels.announce_compile()
-    basis = (kn, np.zeros((1, 1, 1)), p, False, bool(extrapolate), float(kn[p]), float(kn[n_ctrl]))
-    span, values, ders = span_basis_rows(basis, t.ravel())
+    no_polynomials = np.zeros((0, p + 1, p + 1))  # (Cox-de Boor)
+    span, values, ders = span_basis_rows(kn, no_polynomials, p, bool(extrapolate), t.ravel())
     return span.reshape(t.shape), values, ders
 
 
@@ -353,20 +352,22 @@ class SpanBasis:
         return cls(kn, p, extrapolate, coef, float(kn[p]), float(kn[n_ctrl]))
 
     @property
-    def kernel_args(self) -> tuple[FloatArray, FloatArray, int, bool, bool, float, float]:
-        """The basis tuple of :func:`medax.geometry.basis_kernel.basis_at`: the power basis
-        up to :data:`~medax.geometry.bspline.POWER_BASIS_MAX_DEGREE`, Cox-de Boor above
-        it (the power basis of a high degree loses digits: a degree-13 fillet blend had
-        1e-9 noise in its points, and Newton on them stalled there)."""
-        power = self.degree <= POWER_BASIS_MAX_DEGREE
-        return (self.knots, self.coef, self.degree, power, bool(self.extrapolate), self.lo, self.hi)
+    def kernel_args(self) -> tuple[FloatArray, FloatArray, int, bool]:
+        """The arguments ``kn, coef, p, extrapolate`` of
+        :func:`medax.geometry.basis_kernel.basis_at`: the power basis up to
+        :data:`~medax.geometry.bspline.POWER_BASIS_MAX_DEGREE`, Cox-de Boor above it (an
+        empty ``coef``; the power basis of a high degree loses digits: a degree-13 fillet
+        blend had 1e-9 noise in its points, and Newton on them stalled there)."""
+        p = self.degree
+        coef = self.coef if p <= POWER_BASIS_MAX_DEGREE else np.zeros((0, p + 1, p + 1))
+        return (self.knots, coef, p, bool(self.extrapolate))
 
     def __call__(self, t: FloatArray) -> tuple[np.ndarray, FloatArray, FloatArray]:
         """Span index (n,), values (n, p+1) and first derivatives (n, p+1) at ``t`` (n,),
         as :func:`basis_and_derivative` (compiled: ``basis_kernel.span_basis_rows``)."""
         kernels.announce_compile()
         t = np.asarray(t, dtype=np.float64).reshape(-1)
-        span, values, ders = span_basis_rows(self.kernel_args, t)
+        span, values, ders = span_basis_rows(*self.kernel_args, t)
         return span, values, ders
 
 
@@ -411,10 +412,15 @@ class NurbsSurface(_Surface):
         object.__setattr__(self, "_vbasis", SpanBasis.of(self.vknots, self.vdeg, self.extrapolate))
 
     @property
-    def kernel_args(self) -> tuple[FloatArray, tuple, tuple]:  # type: ignore[type-arg]
-        """The surface tuple of :mod:`medax.geometry.nurbs_kernel`: homogeneous poles
-        (nu, nv, 4) and both directions' basis tuples."""
-        return (self._hom, self._ubasis.kernel_args, self._vbasis.kernel_args)
+    def kernel_args(
+        self,
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, bool]:
+        """The surface arguments ``hom, ukn, ucoef, vkn, vcoef, extrapolate`` of
+        :mod:`medax.geometry.nurbs_kernel`: homogeneous poles (nu, nv, 4), both directions'
+        knots and span polynomials (:attr:`SpanBasis.kernel_args`)."""
+        ukn, ucoef, _, _ = self._ubasis.kernel_args
+        vkn, vcoef, _, _ = self._vbasis.kernel_args
+        return (self._hom, ukn, ucoef, vkn, vcoef, bool(self.extrapolate))
 
     def _jet(self, p: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         a = np.atleast_2d(np.asarray(p, dtype=np.float64))
@@ -427,7 +433,7 @@ class NurbsSurface(_Surface):
                 for o, r in zip(out, self._jet(a[k : k + PARTS_CHUNK]), strict=True):
                     o[k : k + PARTS_CHUNK] = r
             return out[0], out[1], out[2]
-        x, du, dv = jet_rows(self.kernel_args, np.ascontiguousarray(a[:, :2]))
+        x, du, dv = jet_rows(*self.kernel_args, np.ascontiguousarray(a[:, :2]))
         return x, du, dv
 
     @property

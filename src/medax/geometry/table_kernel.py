@@ -6,10 +6,11 @@ from __future__ import annotations
 
 from numba import njit
 
+from medax.geometry._jit import HELPER
 from medax.geometry._types import FloatArray
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**HELPER)
 def table_span(inner: FloatArray, u: float) -> int:
     """The span of stacked parameter ``u``: the number of ``inner`` breaks ``<= u`` (binary
     search; a NaN ``u`` counts as above them all, as numpy's ``searchsorted`` has it)."""
@@ -24,7 +25,7 @@ def table_span(inner: FloatArray, u: float) -> int:
     return lo
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**HELPER)
 def table_jet1(rows: FloatArray, span: int, s: float, out: FloatArray) -> None:
     """Into ``out`` (3, dim): value, first and second derivative of the piece ``span`` of
     ``rows`` (degree + 1, dim, spans; value coefficients, highest power first) at local

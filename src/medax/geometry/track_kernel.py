@@ -6,11 +6,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from medax.geometry._jit import HELPER, KERNEL
 from medax.geometry._types import FloatArray
 from medax.geometry.table_kernel import table_jet1, table_span
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**HELPER)
 def _track1(
     w: FloatArray, xs: FloatArray, i: int, t: float, tol: float, last: bool, foot: FloatArray
 ) -> tuple[float, float, bool]:
@@ -53,7 +54,7 @@ def _track1(
     return new, kap, last or settled
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**KERNEL)
 def track_table(  # type: ignore[no-untyped-def]
     inner: FloatArray,
     starts: FloatArray,
@@ -89,7 +90,7 @@ def track_table(  # type: ignore[no-untyped-def]
     return t_out, foot, kap
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**KERNEL)
 def track_step_rows(  # type: ignore[no-untyped-def]
     jets: FloatArray, xs: FloatArray, t: FloatArray, tol: FloatArray, last: bool
 ):
