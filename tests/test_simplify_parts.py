@@ -368,6 +368,30 @@ def test_local_measures_match_whole_solids(box4):
     assert L.local_area_change(big, old, L._area(old, 1e-9), 5e-6) is None
 
 
+def test_refusal_is_not_taken_from_the_adaptive_integrator_alone_on_bspline_faces(box4):
+    """A volume change above the tolerance that only the adaptive integrator finds, on a
+    B-spline face (seen: -6.3e-7 of the volume on a fitted face that Gauss-Kronrod and the
+    fit itself put at -5.7e-9), is not a refusal: that face takes Gauss-Kronrod, and the
+    change is the one two measures agree on (here none: the simplified box's faces as NURBS
+    copies, against the input's)."""
+    from medax.cad.simplify import local_measure as L
+    from medax.cad.simplify.validate import volumes
+
+    part, r = box4
+    old = list(faces_of(part.shape))
+    new = L._nurbs_faces(list(faces_of(r.shape)))
+    v_old = volumes(part.shape)[0]
+    shares = L.contributions(new, old, v_old, 1e-6)
+    true = L.local_volume_change(new, old, v_old, 1e-6, None, shares)
+    assert true is not None and abs(true) <= 1e-9
+    k = max(range(len(new)), key=lambda i: abs(shares[i]))  # a face with a share to spoil
+    assert L._bspline(new[k])
+    off = shares.copy()
+    off[k] += 5e-6  # the adaptive integrator 5e-6 off on that face
+    d = L.local_volume_change(new, old, v_old, 1e-6, None, off)
+    assert d is not None and abs(d - true) <= 1e-9
+
+
 def test_whole_solid_refusal_by_two_integrators(box4):
     """A whole solid changed by more than the tolerance is refused with the change both
     fast integrators find (a box 1.001x the size of a 40 x 30 x 20 one, and the scaled
