@@ -368,7 +368,9 @@ def test_local_measures_match_whole_solids(box4):
     assert L.local_area_change(big, old, L._area(old, 1e-9), 5e-6) is None
 
 
-def test_refusal_is_not_taken_from_the_adaptive_integrator_alone_on_bspline_faces(box4):
+def test_refusal_is_not_taken_from_the_adaptive_integrator_alone_on_bspline_faces(
+    box4, monkeypatch
+):
     """A volume change above the tolerance that only the adaptive integrator finds, on a
     B-spline face (seen: -6.3e-7 of the volume on a fitted face that Gauss-Kronrod and the
     fit itself put at -5.7e-9), is not a refusal: that face takes Gauss-Kronrod, and the
@@ -390,6 +392,20 @@ def test_refusal_is_not_taken_from_the_adaptive_integrator_alone_on_bspline_face
     off[k] += 5e-6  # the adaptive integrator 5e-6 off on that face
     d = L.local_volume_change(new, old, v_old, 1e-6, None, off)
     assert d is not None and abs(d - true) <= 1e-9
+    # the default integrator off there as well (otherwise): Gauss-Kronrod's value stands when the
+    # fits' own measure (``expected``) agrees with the total, else the whole solid decides
+    real = L._contribution
+    spoilt = new[k]
+
+    def default_off(face, origin, eps, gk=False):  # type: ignore[no-untyped-def]
+        bias = 2.5e-6 * v_old if eps is None and not gk and face.IsSame(spoilt) else 0.0
+        return real(face, origin, eps, gk) + bias
+
+    monkeypatch.setattr(L, "_contribution", default_off)
+    assert L.local_volume_change(new, old, v_old, 1e-6, None, off) is None
+    d = L.local_volume_change(new, old, v_old, 1e-6, true, off)
+    assert d is not None and abs(d - true) <= 1e-9
+    assert L.local_volume_change(new, old, v_old, 1e-6, true + 3e-6, off) is None
 
 
 def test_whole_solid_refusal_by_two_integrators(box4):
