@@ -286,3 +286,33 @@ def test_periodic_fit_of_a_boss_foot_with_its_fillet_half():
     on_torus = (rho - big - r) ** 2 + p[:, 2] ** 2 - r * r
     off = np.where(p[:, 2] < 0, np.abs(on_torus) / (2 * r), np.abs(rho - big))
     assert off.max() <= 2 * tol
+
+
+def test_second_passes_not_started_past_their_budget(monkeypatch):
+    """Past ``SECOND_PASS_BUDGET`` seconds of the run the cylinder field's pass (a second
+    pass over the fitted faces) is not started, and the progress says so; the result is
+    still a valid, validated solid (the 12-edge box, whose fillets need no second pass,
+    simplified all the same). Within it, the pass runs."""
+    from medax.cad.simplify import parts, pipeline
+
+    shape = parts.box_all_fillets(40.0, 30.0, 20.0, 4.0).shape  # six fitted faces
+    cls = classify_solid(shape)
+    specs = specs_from_classification(cls)
+    calls: list[int] = []
+    real = pipeline.cylinder_pass
+
+    def spy(*args):  # type: ignore[no-untyped-def]
+        calls.append(1)
+        return real(*args)
+
+    monkeypatch.setattr(pipeline, "cylinder_pass", spy)
+    said: list[str] = []
+    simplify(cls.shape, specs, progress=said.append)
+    assert calls and not any("not tried:" in m for m in said)
+    calls.clear()
+    said.clear()
+    monkeypatch.setattr(pipeline, "SECOND_PASS_BUDGET", -1.0)
+    r = simplify(cls.shape, specs, progress=said.append)
+    assert not calls and any(m.startswith("the cylinder field not tried:") for m in said)
+    assert r.valid and len(r.blends_removed) == len(specs.fillets) + len(specs.corners)
+    assert_same_solid(cls.shape, r)

@@ -51,6 +51,10 @@ ISOLATION_BUDGET = 300.0
 #: (each as long as the first one is counted), so that a part with its reading and writing
 #: ends within 10 minutes.
 RUN_BUDGET = 480.0
+#: Seconds of the run after which the second chances (the cylinder field's pass, riders
+#: tried as plain fillets) are no longer started: each is another pass over the fitted
+#: faces, and the first rebuild, and the search after it, need the rest of ``RUN_BUDGET``.
+SECOND_PASS_BUDGET = 0.4 * RUN_BUDGET
 #: Riders tried one at a time as plain fillets on their kept base, at most (each try is a
 #: pass over the fitted faces).
 MAX_RIDER_TRIES = 8

@@ -39,6 +39,7 @@ from medax.cad.simplify.job import (
     ISOLATION_BUDGET,
     MAX_RIDER_TRIES,
     RUN_BUDGET,
+    SECOND_PASS_BUDGET,
     VOLUME_TOL,
     Attempt,
     Job,
@@ -171,11 +172,18 @@ def simplify(
     if n_fit:
         fit_pass(job)
     one_sided(job, blends)
+
+    def late(what: str) -> bool:
+        used = time.perf_counter() - t0
+        if used > SECOND_PASS_BUDGET:
+            say(f"{what} not tried: {used:.0f} s of the run's {RUN_BUDGET:.0f} s used")
+        return used > SECOND_PASS_BUDGET
+
     # (after the fillets merged whole: a cylinder's newcomer must not take their place)
-    if n_fit and cylinder_pass(job, before_fit, corners_before):
+    if n_fit and not late("the cylinder field") and cylinder_pass(job, before_fit, corners_before):
         one_sided(job, blends)
     job.cylinder_field = True
-    _readmit_riders(job, blends)
+    _readmit_riders(job, blends, lambda: late("riders as plain fillets"))
     specs, corners = job.specs, job.corners
     t_first = time.perf_counter()
     first = attempt(specs) if specs else None
@@ -320,24 +328,26 @@ def _bridges(job: Job, blends: BlendInput) -> None:
             job.bridges[(spec.face, base)] = r[0]
 
 
-def _readmit_riders(job: Job, blends: BlendInput) -> None:
+def _readmit_riders(job: Job, blends: BlendInput, late: Callable[[], bool]) -> None:
     """Riders kept for want of a bridge (:func:`_bridges`) whose base fillet is kept anyway
     are tried as plain fillets: the base is then a supporting face like any other, and the
     rider's half on it merges into it (a torus round a kept cylindrical fillet: an exact
     revolution). When that costs as many fillets that went before as it gains (a fitted
     face that no longer fits with the new halves), nothing changes; all riders are tried
-    at once, then (when that does not pay) each alone."""
+    at once, then (when that does not pay) each alone, while not ``late()``."""
     by_face = {s.face: s for s in blends.fillets}
     back = {
         r: (base, m, why)
         for r, (base, m, why) in job.unbridged.items()
         if job.kept.get(r) == why and base not in job.specs and base not in job.whole
     }
-    if not back:
+    if not back or late():
         return
     if _try_riders(job, by_face, back):
         return
     for r in sorted(back)[:MAX_RIDER_TRIES]:  # all at once cost fillets: each on its own
+        if late():
+            return
         _try_riders(job, by_face, {r: back[r]})
 
 
