@@ -112,12 +112,12 @@ def local_volume_change(
         best[trusted] = ad[trusted]
     gap = np.abs(ad - best)
 
-    def budget() -> float:  # a tenth of a refusal, else of the tolerance
+    def allowed() -> float:  # a tenth of a refusal, else of the tolerance
         d = abs(float(best.sum()))
         return 0.1 * (d if d > tol else tol)
 
     for i in np.argsort(-gap).tolist():  # Gauss-Kronrod on the most disputed faces only
-        if gap.sum() <= budget() or gap[i] == 0.0:
+        if gap.sum() <= allowed() or gap[i] == 0.0:
             break
         (copy,) = _nurbs_faces([faces[i]])
         gk = sign[i] * _contribution(copy, origin, tol, gk=True) / before
@@ -128,9 +128,9 @@ def local_volume_change(
     # that agrees with it; or Gauss-Kronrod's where both are off (on fitted faces with many
     # knot spans) when the total agrees with the fits' own measure
     d = float(best.sum())
-    if gap.sum() <= budget():
+    if gap.sum() <= allowed():
         return d
-    if expected is not None and np.isfinite(expected) and abs(d - expected) <= budget():
+    if expected is not None and np.isfinite(expected) and abs(d - expected) <= allowed():
         return d
     return None
 
