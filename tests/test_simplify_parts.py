@@ -284,6 +284,39 @@ def test_search_stops_within_the_run_budget(monkeypatch):
     assert r.valid and r.faces_after == r.faces_before
 
 
+def test_face_the_healing_splits_is_blamed_on_its_fillets(monkeypatch):
+    """A new face that the healing (``ShapeFix``) does not keep as one face fails with a
+    reason naming its group, blamed on that group's fillets (a typed failure, not OCCT's
+    cast error from deep inside the rebuild); here every merged face comes back from the
+    healing as a compound, so every fillet is kept with that reason and the input is
+    returned."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+    from OCP.GeomAbs import GeomAbs_Plane
+    from OCP.TopoDS import TopoDS_Compound
+
+    from medax.cad.simplify import rebuild
+
+    real = rebuild._through
+
+    def through(contexts, shape):  # type: ignore[no-untyped-def]
+        out = real(contexts, shape)
+        face = shape.ShapeType() == TopAbs_FACE
+        if face and BRepAdaptor_Surface(shape).GetType() != GeomAbs_Plane:  # a merged face
+            comp = TopoDS_Compound()
+            BRep_Builder().MakeCompound(comp)
+            BRep_Builder().Add(comp, out)
+            return comp
+        return out
+
+    monkeypatch.setattr(rebuild, "_through", through)
+    r = _run(P.box_vertical_fillets(40.0, 30.0, 20.0, 5.0))
+    kept = dict(r.blends_kept)
+    assert not r.blends_removed and len(kept) == 4
+    assert all("the healed solid does not keep it as one face" in w for w in kept.values())
+    assert r.valid and r.faces_after == r.faces_before
+
+
 @pytest.mark.parametrize("direction", [(0.5, 0.0, 0.866025403784329), (0.3, 0.4, 0.866)])
 def test_tilted_ring_fillet_across_the_seam(direction):
     """A quarter-torus fillet round a tilted cylinder's top: its v = 0 smooth edge projects

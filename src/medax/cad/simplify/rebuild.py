@@ -22,11 +22,11 @@ from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
 from OCP.GeomProjLib import GeomProjLib
 from OCP.gp import gp_Pnt
 from OCP.ShapeFix import ShapeFix_Shape
-from OCP.TopAbs import TopAbs_REVERSED
+from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shell, TopoDS_Solid, TopoDS_Wire
 
-from medax.cad.simplify.groups import Group
+from medax.cad.simplify.groups import Group, GroupError
 from medax.cad.simplify.occ import (
     edge_curve,
     edge_ends,
@@ -435,7 +435,17 @@ def build_solid(
                 BRepLib.SameParameter_s(e, tol)
             except Exception as err:
                 log.info("SameParameter failed on an edge: %s", err)
-    return result, [TopoDS.Face(_through(history, f)) for f in faces]
+    out = []
+    for g, f in zip(groups, faces, strict=True):
+        healed = _through(history, f)
+        if healed.IsNull() or healed.ShapeType() != TopAbs_FACE:
+            # the healing split the new face in several, or removed it: blame its fillets
+            raise GroupError(
+                f"group of face {g.members[0]}: the healed solid does not keep it as one face",
+                {split.origin[k] for k in g.members},
+            )
+        out.append(TopoDS.Face(healed))
+    return result, out
 
 
 def _fixed(shape: Any, tol: float) -> tuple[Any, Any]:
