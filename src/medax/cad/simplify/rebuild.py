@@ -233,22 +233,28 @@ class _BoundaryOnFace:
 def _loose_boundary(
     edge: Any, c: Any, f: float, l: float, old: Sequence[Any], tol: float
 ) -> _BoundaryOnFace | None:
-    """The edge as the first face of ``old`` with a pcurve for it places it, when that
-    boundary lies farther than ``tol`` from the 3-D curve ``c`` on ``[f, l]`` but within the
-    edge's own tolerance (a loose input edge; else None)."""
+    """The edge as the face of ``old`` it bounds places it, when that boundary lies
+    farther than ``tol`` from the 3-D curve ``c`` on ``[f, l]`` but within the edge's own
+    tolerance (a loose input edge; else None). Only faces that have the edge in their
+    boundary count: OCCT finds a pcurve by the surface, and a face sharing its surface
+    with another face the edge bounds returns that one (seen 1.0 off the edge)."""
     if not BRep_Tool.Tolerance_s(edge) > tol:
         return None
     for face in old:
+        if not any(edge.IsSame(e) for e in edges_of(face)):
+            continue
         pc = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
         if pc is None:
             continue
         a, b = BRep_Tool.Range_s(edge, face)
         if abs(a - f) > 1e-9 * (1 + abs(f)) or abs(b - l) > 1e-9 * (1 + abs(l)):
-            return None  # not on the 3-D curve's parameter
+            continue  # not on the 3-D curve's parameter
         on = _BoundaryOnFace(edge, face, c)
         far = max(on.Value(float(t)).Distance(c.Value(float(t))) for t in np.linspace(f, l, 9))
-        # (beyond the edge's own tolerance the two do not describe one boundary)
-        return on if tol < far <= BRep_Tool.Tolerance_s(edge) else None
+        # (beyond the edge's own tolerance the two do not describe one boundary; that
+        # tolerance is OCCT's own sampled measure of the same distance: 5 % slack)
+        if tol < far <= 1.05 * BRep_Tool.Tolerance_s(edge):
+            return on
     return None
 
 
