@@ -495,3 +495,81 @@ def test_loose_boundary_is_read_from_the_face_that_places_it_loosely():
     assert on is not None
     t = 0.5 * (f + l)
     assert abs(on.Value(t).Distance(c.Value(t)) - 5e-3) <= 1e-9
+
+
+def test_whole_solid_volumes_once_each_and_equal_to_occt():
+    """The whole-solid integrals :func:`volume_change` shares between its steps are OCCT's
+    own calls (bit for bit) on the simplified 12-fillet box (six fitted faces), which keeps
+    the closed-form volume of the rounded box; asked again, they are not recomputed."""
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+
+    from medax.cad.simplify import validate as V
+
+    a, b, c, rad = 40.0, 30.0, 20.0, 4.0
+    r = _run(P.box_all_fillets(a, b, c, rad))
+    assert r.faces_after == 6 and r.valid
+    x, y, z = a - 2 * rad, b - 2 * rad, c - 2 * rad
+    exact = x * y * z + 2 * rad * (x * y + y * z + x * z) + math.pi * rad**2 * (x + y + z)
+    exact += 4.0 / 3.0 * math.pi * rad**3
+    p = GProp_GProps()
+    BRepGProp.VolumeProperties_s(r.shape, p, 1e-8)
+    vols = V._Volumes(r.shape)
+    assert vols.adaptive(False, 1e-8) == p.Mass()
+    assert abs(vols.adaptive(False, 1e-8) - exact) <= 1e-6 * exact
+    assert V.volumes(r.shape, False, 1e-8, eps_gk=1e-2)[1] == p.Mass()
+    calls = []
+
+    class Counting:
+        @staticmethod
+        def VolumeProperties_s(shape, props, eps):  # noqa: N802 (OCCT's name)
+            calls.append(eps)
+            return BRepGProp.VolumeProperties_s(shape, props, eps)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(V, "BRepGProp", Counting)
+        assert vols.adaptive(False, 1e-8) == p.Mass() and calls == []
+        fresh = V._Volumes(r.shape)
+        assert fresh.adaptive(False, 1e-8) == fresh.adaptive(False, 1e-8) == p.Mass()
+        assert calls == [1e-8]
+
+
+def test_volume_change_asks_each_integral_once(monkeypatch):
+    """Down its longest route (fitted faces, the fits' measure and Gauss-Kronrod to ``tol``
+    not settling it) :func:`volume_change` integrates each (method, copy, accuracy) once and
+    answers as before: the adaptive integral to ``tol / 100`` was computed three times."""
+    from medax.cad.simplify import validate as V
+
+    before, tol = 1000.0, 1e-6
+    # default 0, adaptive 2e-6 (the fast ones disagree), GK to tol 5e-7 with adaptive 2e-6
+    # (no), then to 1e-10 both within tol: the answer is Gauss-Kronrod's 3e-7
+    value = {("ad", 1e-8): 2e-6, ("gk", 1e-6): 5e-7, ("gk", 1e-10): 3e-7, ("ad", 1e-10): 4e-7}
+    calls: list[tuple[str, float]] = []
+
+    class Props:
+        mass = 0.0
+
+        def Mass(self) -> float:  # noqa: N802
+            return self.mass
+
+    class Fake:
+        @staticmethod
+        def VolumeProperties_s(shape, props, eps=None):  # noqa: N802
+            key = ("def", 0.0) if eps is None else ("ad", eps)
+            calls.append(key)
+            props.mass = before * (1 + value.get(key, 0.0))
+
+        @staticmethod
+        def VolumePropertiesGK_s(shape, props, eps):  # noqa: N802
+            calls.append(("gk", eps))
+            props.mass = before * (1 + value[("gk", eps)])
+
+    monkeypatch.setattr(V, "BRepGProp", Fake)
+    monkeypatch.setattr(V, "GProp_GProps", Props)
+    monkeypatch.setattr(V, "_has_bspline_faces", lambda s: True)
+    monkeypatch.setattr(V, "_has_swept_faces", lambda s: False)
+    dv, why = V.volume_change(object(), before, tol, expected=0.0)
+    assert why == "" and abs(dv - 3e-7) <= 1e-15
+    assert sorted(calls) == sorted(
+        [("def", 0.0), ("ad", 1e-8), ("gk", 1e-6), ("gk", 1e-10), ("ad", 1e-10)]
+    )
