@@ -99,13 +99,15 @@ def _fitted_pcurve(
     for a, b in zip(breaks[:-1], breaks[1:], strict=True):
         ts = np.linspace(a, b, 25)
         pts, pars = Array1_gp_Pnt2d(1, ts.size), Array1_double(1, ts.size)
+        if grid is not None:  # the grid's feet of the span's samples, in one call
+            xyzs = np.array([xyz(c.Value(float(t))) for t in ts])
+            feet, gaps = grid.project_many(xyzs)
         for i, t in enumerate(ts):
             if grid is not None:
-                if prev_uv is None:
-                    grid.Perform(c.Value(float(t)))
-                    u, v = grid.LowerDistanceParameters()
+                if prev_uv is None or gaps[i] <= 100 * tol:
+                    u, v = float(feet[i, 0]), float(feet[i, 1])
                 else:  # from the previous sample's foot, unless the grid's is nearer
-                    (u, v), _ = grid.project_near(xyz(c.Value(float(t))), prev_uv, 100 * tol)
+                    (u, v), _ = grid.project_near(xyzs[i], prev_uv, 100 * tol)
             else:
                 proj.Init(c.Value(float(t)), surf, *bounds)
                 if proj.NbPoints() == 0:
