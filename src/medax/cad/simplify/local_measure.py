@@ -97,8 +97,8 @@ def local_volume_change(
     ad = contributions(new, old, before, tol) if shares is None else shares
     d_ad = float(ad.sum())
     refusal = abs(d_ad) > tol
-    agree = 0.1 * (abs(d_ad) if refusal else tol)  # (the budget of the adaptive sum)
-    if expected is not None and np.isfinite(expected) and abs(d_ad - expected) <= agree:
+    budget = 0.1 * (abs(d_ad) if refusal else tol)
+    if expected is not None and np.isfinite(expected) and abs(d_ad - expected) <= budget:
         return d_ad  # (a refusal too: the fits measured the same change themselves)
     dflt = sign * np.array([_contribution(f, origin, None) for f in faces]) / before
     best = dflt.copy()
