@@ -98,10 +98,10 @@ def test_traced_medial_edge_taken_to_the_iso_line_tolerance(slanted, monkeypatch
     monkeypatch.setattr(medial, "traced_medial_edge", spy)
     m = medial_curve(face, *edges, rel_tol=1e-11)
     (args,) = calls
-    accept = args[-1]
+    accept = args[6]  # (face, edges, k, cross, along, tol, accept, early)
     assert not isinstance(m, str), m
     assert m.iso == TRACED and 1e-11 * m.radius < m.error <= accept
-    refused = traced.traced_medial_edge(*args[:-1], 0.5 * m.error)
+    refused = traced.traced_medial_edge(*args[:6], 0.5 * m.error)
     assert isinstance(refused, str) and refused.startswith("traced medial curve error")
     ad = BRepAdaptor_Curve(m.edge)
     ts = np.linspace(ad.FirstParameter(), ad.LastParameter(), 41)
@@ -143,7 +143,7 @@ def test_traced_medial_edge_stops_at_the_pole_budget(slanted, monkeypatch):
     monkeypatch.setattr(traced, "_measure", count)
     monkeypatch.setattr(traced, "MAX_POLES", 0)  # every doubling is past the budget
     tol = 1e-11 * m.radius  # out of reach with 24 or 48 nodes per span
-    got = real(*args[:5], tol, 1e-3 * m.radius)  # accept loose
+    got = real(*args[:5], tol, 1e-3 * m.radius, 1e-3 * m.radius)  # accept, early loose
     assert not isinstance(got, str), got
     assert rounds == [traced.NODES] and got[1] <= 1e-3 * m.radius
     poles = BRep_Tool.Curve_s(got[0], 0.0, 0.0).NbPoles()
@@ -151,7 +151,7 @@ def test_traced_medial_edge_stops_at_the_pole_budget(slanted, monkeypatch):
     assert poles <= len(spans) * traced.NODES + traced.DEGREE  # one round's nodes
     rounds.clear()
     monkeypatch.setattr(traced, "MAX_NODES", 2 * traced.NODES)
-    refused = real(*args[:5], tol, 0.0)
+    refused = real(*args[:5], tol, 0.0, 1e-3 * m.radius)
     assert isinstance(refused, str), refused  # doubled to MAX_NODES, then refused
     assert rounds == [traced.NODES, 2 * traced.NODES]
 

@@ -194,7 +194,7 @@ def medial_curve(
         # slanted cylinder): the medial curve traced per cross-section, to rel_tol x radius,
         # or (with the most nodes) to the tolerance an iso-line is accepted with
         traced = traced_medial_edge(
-            face, (edge1, edge2), k, cross, (lo, hi), rel_tol * radius, accept
+            face, (edge1, edge2), k, cross, (lo, hi), rel_tol * radius, accept, tol
         )
         if isinstance(traced, str):
             return f"mid iso-line not equidistant ({err:.2e} > {rel_tol:g} x radius), {traced}"

@@ -44,9 +44,10 @@ from medax.geometry.surfaces import NurbsSurface
 #: to MAX_NODES while the measured error is above the tolerance.
 NODES, MAX_NODES = 24, 384
 #: Poles of the traced curve beyond which the nodes are no longer doubled once the error is
-#: within the tolerance an iso-line is accepted with: OCCT's splitter, which takes the curve
-#: as a tool, slows down steeply with its poles (a 62 mm medial curve over 15 knot spans of
-#: its blend: 721 poles 1.7 s, 1441 poles 10 s, 5761 poles past 5 minutes).
+#: within the construction's tolerance (and the one an iso-line is accepted with): OCCT's
+#: splitter, which takes the curve as a tool, slows down steeply with its poles (a 62 mm
+#: medial curve over 15 knot spans of its blend: 721 poles 1.7 s, 1441 poles 10 s, 5761
+#: poles past 5 minutes).
 MAX_POLES = 512
 #: Degree of the interpolating splines (quintic: the error falls as h^6; cubic splines
 #: needed 384 nodes per span for 2e-9 on the slanted boss, whose blend is of degree 13).
@@ -172,6 +173,7 @@ def traced_medial_edge(
     along: tuple[float, float],
     tol: float,
     accept: float = 0.0,
+    early: float = 0.0,
 ) -> tuple[Any, float] | str:
     """The traced medial edge of the B-spline blend ``face`` between smooth ``edges`` (on
     the iso-lines ``cross`` of parameter ``k``), over ``along`` = (lo, hi) of the other
@@ -179,7 +181,8 @@ def traced_medial_edge(
     larger of the equidistance and the distance from the surface, length unit), or the
     reason when the error stays above ``tol``, or above ``accept`` (length unit, when larger)
     with the most nodes. The nodes are doubled until the error is within ``tol``, or within
-    ``accept`` when doubling would take the curve past ``MAX_POLES``."""
+    ``early`` (and ``accept``: the construction's tolerance, so the split edge lies on the
+    blend to it) when doubling would take the curve past ``MAX_POLES``."""
     surf = BRep_Tool.Surface_s(face)
     curves = [edge_curve(e) for e in edges]
     if not isinstance(surf, Geom_BSplineSurface) or not all(
@@ -210,7 +213,7 @@ def traced_medial_edge(
             c3[-1] = c3[0]
         space, plane = BSpline(t3, c3, DEGREE), BSpline(t2, c2, DEGREE)
         err = _measure(surf, k, edges, curves, space, plane, spans, n)
-        if err <= tol or (err <= accept and len(spans) * 2 * n > MAX_POLES):
+        if err <= tol or (err <= min(accept, early) and len(spans) * 2 * n > MAX_POLES):
             break
         n *= 2
     if err > max(tol, accept):
