@@ -142,19 +142,18 @@ class _Volumes:
 
     def adaptive(self, nurbs: bool, eps: float) -> float:
         """``BRepGProp.VolumeProperties`` to ``eps`` relative (per face)."""
-        key = ("adaptive", nurbs, eps)
-        if key not in self._done:
-            props = GProp_GProps()
-            BRepGProp.VolumeProperties_s(self.target(nurbs), props, eps)
-            self._done[key] = float(props.Mass())
-        return self._done[key]
+        return self._integral(False, nurbs, eps)
 
     def gk(self, nurbs: bool, eps: float) -> float:
         """``BRepGProp.VolumePropertiesGK`` to ``eps`` relative."""
-        key = ("gk", nurbs, eps)
+        return self._integral(True, nurbs, eps)
+
+    def _integral(self, gk: bool, nurbs: bool, eps: float) -> float:
+        key = ("gk" if gk else "adaptive", nurbs, eps)
         if key not in self._done:
             props = GProp_GProps()
-            BRepGProp.VolumePropertiesGK_s(self.target(nurbs), props, eps)
+            run = BRepGProp.VolumePropertiesGK_s if gk else BRepGProp.VolumeProperties_s
+            run(self.target(nurbs), props, eps)
             self._done[key] = float(props.Mass())
         return self._done[key]
 
