@@ -573,3 +573,34 @@ def test_volume_change_asks_each_integral_once(monkeypatch):
     assert sorted(calls) == sorted(
         [("def", 0.0), ("ad", 1e-8), ("gk", 1e-6), ("gk", 1e-10), ("ad", 1e-10)]
     )
+
+
+def test_rebuild_changes_in_place_do_not_reach_the_working_solid(monkeypatch):
+    """The healing changes the edges it fixes in place; each split is made on a fresh copy
+    of the working solid's topology, so what one attempt's rebuild does to the edges it
+    keeps (here: every edge's tolerance raised to 0.5 in place) never reaches the working
+    solid that the next attempts and the input's measures start from."""
+    from OCP.BRep import BRep_Builder, BRep_Tool
+    from OCP.TopoDS import TopoDS
+
+    from medax.cad.simplify import job as J
+    from medax.cad.simplify import rebuild
+    from medax.cad.simplify.occ import edges_of
+
+    jobs: list = []
+    real_init, real_fixed = J.Job.__init__, rebuild._fixed
+
+    def init(self, *args, **kw):  # type: ignore[no-untyped-def]
+        real_init(self, *args, **kw)
+        jobs.append(self)
+
+    def fixed(shape, tol):  # type: ignore[no-untyped-def]
+        for e in edges_of(shape):
+            BRep_Builder().UpdateEdge(TopoDS.Edge(e), 0.5)
+        return real_fixed(shape, tol)
+
+    monkeypatch.setattr(J.Job, "__init__", init)
+    monkeypatch.setattr(rebuild, "_fixed", fixed)
+    _run(P.box_vertical_fillets(40.0, 30.0, 20.0, 5.0))
+    (job,) = jobs
+    assert max(BRep_Tool.Tolerance_s(TopoDS.Edge(e)) for e in edges_of(job.work)) < 1e-3

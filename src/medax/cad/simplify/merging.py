@@ -9,6 +9,7 @@ from dataclasses import replace
 from typing import Any
 
 from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 from OCP.GeomAbs import GeomAbs_Cylinder, GeomAbs_Plane
 from OCP.TopoDS import TopoDS
 
@@ -274,7 +275,11 @@ def split_job(
     if last is not None and same and all(a.IsSame(b) for a, b in zip(last[0], tools, strict=True)):
         split = last[1]
     else:
-        split = split_along(job.work, tools)
+        # on a fresh copy of the topology (the geometry shared): the rebuild updates the
+        # pcurves and flags of the edges it keeps, which would otherwise change the working
+        # solid's own faces (seen: its volume 17582 -> -11797 after one rebuild of a loose
+        # input, so the next measures and attempts started from a broken solid)
+        split = split_along(BRepBuilderAPI_Copy(job.work, False, False).Shape(), tools)
     if keep:
         job.last_split = (tools, split)
     groups = build_groups(
