@@ -275,10 +275,11 @@ def split_job(
     if last is not None and same and all(a.IsSame(b) for a, b in zip(last[0], tools, strict=True)):
         split = last[1]
     else:
-        # on a fresh copy of the topology (the geometry shared): the rebuild updates the
-        # pcurves and flags of the edges it keeps, which would otherwise change the working
-        # solid's own faces (seen: its volume 17582 -> -11797 after one rebuild of a loose
-        # input, so the next measures and attempts started from a broken solid)
+        # on a fresh copy of the topology (the geometry shared): the healing in a rebuild
+        # (``ShapeFix_Shape``) changes the edges it keeps in place, which would otherwise
+        # change the working solid's own faces (seen: its volume 17582 -> -11797 after one
+        # rebuild of a loose input, so the next measures and attempts started from a broken
+        # solid; the split's own pieces are still changed so)
         split = split_along(BRepBuilderAPI_Copy(job.work, False, False).Shape(), tools)
     if keep:
         job.last_split = (tools, split)
