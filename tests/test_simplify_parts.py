@@ -575,6 +575,21 @@ def test_volume_change_asks_each_integral_once(monkeypatch):
     )
 
 
+def test_fillets_ending_on_a_cylinder_wall_across_its_seam():
+    """Four fillets end on a cylinder's face, rebuilt on its own surface (the same handle),
+    so its kept edges share their pcurves with the split's piece; the healing moved seven
+    of them by one period in place, and the piece, measured after the rebuild, put a
+    change of 4e-2 and 2e-1 on the volume (every fillet refused before the pieces were
+    copied first).
+    All four go; the solid is checked by OCCT and BRepExtrema."""
+    import medax.cad.parts as catalogue
+
+    part = catalogue.block_on_cylinder()
+    _, r = classified_and_simplified(part.shape)
+    assert (r.faces_before, r.faces_after) == (12, 8) and not r.blends_kept
+    assert_same_solid(part.shape, r, 6, 6, volume_tol=1e-9, deviation_tol=1e-7)
+
+
 def test_rebuild_changes_in_place_do_not_reach_the_working_solid(monkeypatch):
     """The healing changes the edges it fixes in place; each split is made on a fresh copy
     of the working solid's topology, so what one attempt's rebuild does to the edges it

@@ -315,6 +315,21 @@ def oblique_end_fillet(radius: float = 2.0) -> BuiltPart:
     return fillet(_solid(body), _select(body, top_front), radius, "oblique_end_fillet")
 
 
+def block_on_cylinder(radius: float = 2.0) -> BuiltPart:
+    """A cylinder (r = 20, 30 high, its seam at +x) with a 25 x 10 x 10 block fused onto
+    its side across the seam, the block's four edges that run out from the wall filleted:
+    each fillet ends on the cylinder's face, which the simplification rebuilds on its own
+    surface (12 faces, four cylinder blends)."""
+    cyl = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 20.0, 30.0)
+    block = BRepPrimAPI_MakeBox(gp_Pnt(15.0, -5.0, 10.0), 25.0, 10.0, 10.0).Shape()
+    body = BRepAlgoAPI_Fuse(cyl.Shape(), block).Shape()
+
+    def runs_out(m: np.ndarray) -> bool:
+        return 21.0 < m[0] < 39.0 and abs(abs(m[1]) - 5.0) < 1e-6 and abs(m[2] - 15.0) > 4.0
+
+    return fillet(_solid(body), _select(body, runs_out), radius, "block_on_cylinder")
+
+
 def tilted_cylinder(
     direction: tuple[float, float, float] = (0.5, 0.0, 0.866025403784329), radius: float = 3.0
 ) -> BuiltPart:

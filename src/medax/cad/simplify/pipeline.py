@@ -417,6 +417,7 @@ def _attempt(job: Job, sel: dict[int, FilletSpec]) -> Attempt | str:
                 used[g.support] = ms.surface
         expected = fitted_dv / job.vol_ref if fit_err > 0 else None
         job.say(f"rebuilding: {len(groups)} faces")
+        pieces = _pieces_before(split, groups)
         shape, faces = build_solid(split, groups, used, job.btol)
     except GroupError as err:  # traced to faces: blame their fillets (a corner's, its own)
         blamed = {f for c in err.faces if c in csel for f in csel[c].fillets}
@@ -426,7 +427,7 @@ def _attempt(job: Job, sel: dict[int, FilletSpec]) -> Attempt | str:
     except Exception as err:  # OCCT Standard_Failure subclasses, translated here
         return f"OCCT failed while rebuilding ({type(err).__name__}: {err})"
     try:
-        checked = _validated(job, split, groups, faces, shape, surfaces, expected, sel)
+        checked = _validated(job, split, groups, faces, shape, surfaces, expected, sel, pieces)
     except Exception as err:  # OCCT failures while measuring: the solid is not accepted
         return f"OCCT failed while validating ({type(err).__name__}: {err})"
     if isinstance(checked, str):
@@ -449,6 +450,21 @@ def _attempt(job: Job, sel: dict[int, FilletSpec]) -> Attempt | str:
     )
 
 
+def _pieces_before(split: Any, groups: list[Group]) -> dict[int, Any]:
+    """The split's pieces of the changed groups (split face index -> face), copied with
+    their geometry before the rebuild. A merged face on a support's own surface shares
+    that surface's handle, so its edges share their pcurves with the old pieces, and the
+    healing of the rebuild changes them in place (seen: on a cylinder, five pcurves moved
+    by one period, and the old piece's share of the volume went 18913 -> -11256); the
+    checks compare the new faces with these copies."""
+    return {
+        k: TopoDS.Face(BRepBuilderAPI_Copy(split.face_map.FindKey(k + 1), True, False).Shape())
+        for g in groups
+        if not g.untouched
+        for k in g.members
+    }
+
+
 def _fillets_of(split: Any, groups: list[Group], sel: dict[int, FilletSpec]) -> set[int]:
     """The fillets of ``sel`` with a half (or the whole) in one of ``groups``."""
     return {split.origin[k] for g in groups for k in g.halves} & set(sel)
@@ -463,12 +479,14 @@ def _validated(
     surfaces: dict[int, MergedSurface | str],
     expected: float | None,
     sel: dict[int, FilletSpec],
+    pieces: dict[int, Any],
 ) -> tuple[float, float, float, dict[int, str], float] | str:
     """The checks of a rebuilt ``shape`` with the fillets ``sel``: (relative volume change,
     relative area change, largest deviation, surface kind per group, the input's volume the
     change is relative to), or the reason it fails
     (a :class:`.search.Failure` naming the fillets of the new faces that failed their own
-    check: validity, free edges, deviation; volume and area are the whole solid's)."""
+    check: validity, free edges, deviation; volume and area are the whole solid's).
+    ``pieces``: the changed groups' split pieces as they were before the rebuild."""
     diag, tol = job.diag, job.tol
     job.say("validating (analyzer, shell, volume, area, deviation both ways)")
     merged = [(g, f) for g, f in zip(groups, faces, strict=True) if g.support is not None]
@@ -493,7 +511,7 @@ def _validated(
         ms = surfaces[g.support]
         kinds[g.id] = FITTED if isinstance(ms, str) else ms.kind
         n = FITTED_DEVIATION_SAMPLES if isinstance(ms, str) else DEVIATION_SAMPLES
-        old = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
+        old = [pieces[k] for k in g.members]
         d = max(deviation(old, face, n=n, enough=1e-3 * tol * diag))
         if d > tol * diag:
             far.append(g)
@@ -506,7 +524,7 @@ def _validated(
     # volume and area: on the changed faces when that settles it, else on the whole solid
     changed = [(g, f) for g, f in zip(groups, faces, strict=True) if not g.untouched]
     new = [f for _, f in changed]
-    old = [TopoDS.Face(split.face_map.FindKey(k + 1)) for g, _ in changed for k in g.members]
+    old = [pieces[k] for g, _ in changed for k in g.members]
     shares = contributions(new, old, job.vol_ref, VOLUME_TOL)
     owner = list(range(len(changed))) + [i for i, (g, _) in enumerate(changed) for _ in g.members]
     per_group = np.bincount(owner, weights=shares, minlength=len(changed))
