@@ -24,7 +24,6 @@ from typing import Any
 
 import numpy as np
 from OCP.BRep import BRep_Tool
-from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.GC import GC_MakeArcOfCircle, GC_MakeSegment
 from OCP.Geom import (
     Geom_SurfaceOfRevolution,
@@ -33,6 +32,7 @@ from OCP.GeomAbs import GeomAbs_Cone, GeomAbs_Cylinder, GeomAbs_Plane, GeomAbs_T
 from OCP.GeomConvert import GeomConvert, GeomConvert_CompCurveToBSplineCurve
 from OCP.gp import gp_Ax1, gp_Dir
 
+from medax.cad.simplify.canonical import canonical_adaptor
 from medax.cad.simplify.medial import Medial
 from medax.cad.simplify.occ import Array, edge_points, edges_of, pnt, xyz
 
@@ -246,8 +246,8 @@ def merged_surface(support: Any, halves: list[Half], tol: float) -> MergedSurfac
 
     ``tol`` is the length tolerance of the geometric tests (e.g. 1e-7 x the part diagonal).
     """
-    sad = BRepAdaptor_Surface(support)
-    hads = [BRepAdaptor_Surface(f) for h in halves for f in (h.face, *h.chain)]
+    sad = canonical_adaptor(support, tol)
+    hads = [canonical_adaptor(f, tol) for h in halves for f in (h.face, *h.chain)]
     kinds = {a.GetType() for a in hads}
     if kinds == {GeomAbs_Cylinder} and sad.GetType() == GeomAbs_Plane:
         return _extrusion(support, halves, hads, tol)
@@ -264,7 +264,7 @@ def _extrusion(support: Any, halves: list[Half], hads: list[Any], tol: float) ->
     d = dirs[0]
     if any(np.linalg.norm(np.cross(d, e)) > 1e-9 for e in dirs[1:]):
         return "fillets along non-parallel edges of one plane: no extrusion (not supported)"
-    sad = BRepAdaptor_Surface(support)
+    sad = canonical_adaptor(support, tol)
     pts = _boundary_samples(support)
     o = pts[0]
 
@@ -344,7 +344,7 @@ def _revolution(support: Any, halves: list[Half], hads: list[Any], tol: float) -
         off = (c2 - c) - ((c2 - c) @ a) * a
         if np.linalg.norm(np.cross(a, a2)) > 1e-9 or np.linalg.norm(off) > tol:
             return "fillet halves on different axes: no revolution (not supported)"
-    sad = BRepAdaptor_Surface(support)
+    sad = canonical_adaptor(support, tol)
     sk = sad.GetType()
     if sk == GeomAbs_Plane:
         if np.linalg.norm(np.cross(xyz(sad.Plane().Axis().Direction()), a)) > 1e-9:
