@@ -98,7 +98,10 @@ def _extruded(ad: Any, tol: float) -> Any | None:
 def _converted(face: Any, tol: float) -> Any | None:
     u0, u1, v0, v1 = BRepTools.UVBounds_s(face)
     conv = GeomConvert_SurfToAnaSurf(BRep_Tool.Surface_s(face))
-    out = conv.ConvertToAnalytical(tol, u0, u1, v0, v1)
+    try:
+        out = conv.ConvertToAnalytical(tol, u0, u1, v0, v1)
+    except Exception:  # OCCT's Standard_Failure (seen: a null adaptor inside the converter)
+        return None
     if out is None or conv.Gap() > tol:
         return None
     return out
