@@ -30,6 +30,7 @@ from medax.cad.simplify.job import (
 )
 from medax.cad.simplify.medial import TRACED
 from medax.cad.simplify.ring import NOT_A_RING, ring_surface
+from medax.cad.simplify.rounded import rounded_surface
 from medax.cad.simplify.search import halves_of, riders
 from medax.cad.simplify.specs import BlendInput, CornerSpec, FilletSpec
 from medax.cad.simplify.split import split_along
@@ -213,7 +214,11 @@ def fitted_surface(job: Job, split: Any, g: Group, probe: bool = False) -> Fitte
             # planes and cylinders), else the height field over a plane, or over the
             # cylinder (any blend halves on any part of it)
             ring = ring_surface(support, members, fit_tol, job.btol, probe, accept)
-            if isinstance(ring, str) and not ring_kind(support):
+            # a rounded box's face (cylinder strips, sphere corners) has an exact surface
+            exact = rounded_surface(support, members, job.btol) if isinstance(ring, str) else ring
+            if isinstance(exact, FittedSurface):
+                job.cache[key] = exact
+            elif isinstance(ring, str) and not ring_kind(support):
                 # (the probe's setup and fit serve the full fit of the same group)
                 skey = key[1:]
                 if skey not in job.setups:
