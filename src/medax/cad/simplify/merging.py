@@ -201,7 +201,8 @@ def fitted_surface(job: Job, split: Any, g: Group, probe: bool = False) -> Fitte
     """The fitted surface of group ``g`` (cached by its support and its members' origins);
     with ``probe`` the cheap height-field check only (see :func:`graph_surface`)."""
     assert g.support is not None
-    key = (int(probe), g.support, *sorted(split.origin[k] for k in g.members))
+    origins = sorted(split.origin[k] for k in g.members)
+    key = (int(probe), g.support, *origins)
     if job.cylinder_field and ring_kind(job.face(g.support)):
         key = (-1, *key)  # (the first pass's ring refusal is no answer now)
     if key not in job.cache:
@@ -215,7 +216,13 @@ def fitted_surface(job: Job, split: Any, g: Group, probe: bool = False) -> Fitte
             # cylinder (any blend halves on any part of it)
             ring = ring_surface(support, members, fit_tol, job.btol, probe, accept)
             # a rounded box's face (cylinder strips, sphere corners) has an exact surface
-            exact = rounded_surface(support, members, job.btol) if isinstance(ring, str) else ring
+            # (made once for the probe and the full fit: key -2)
+            exact = ring
+            if isinstance(ring, str):
+                rkey = (-2, g.support, *origins)
+                if rkey not in job.cache:
+                    job.cache[rkey] = rounded_surface(support, members, job.btol)
+                exact = job.cache[rkey]
             if isinstance(exact, FittedSurface):
                 job.cache[key] = exact
             elif isinstance(ring, str) and not ring_kind(support):
