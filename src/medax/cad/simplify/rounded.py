@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -39,6 +40,8 @@ from OCP.GeomAbs import GeomAbs_Cylinder, GeomAbs_Plane, GeomAbs_Sphere
 from medax.cad.simplify.fitted import FittedSurface
 from medax.cad.simplify.occ import Array, edge_points, edges_of, xyz
 
+#: The surface kind of a merged face on this route (the face groups' ``surface``).
+ROUNDED = "rounded"
 #: The arcs run past the farthest member sample by this angle (rad), as the exact routes'
 #: half-arcs run past the medial curve (:data:`.surfaces.MEDIAL_OVERSHOOT`).
 OVERSHOOT = 0.05
@@ -50,10 +53,16 @@ FREE_END = 0.1
 EDGE_SAMPLES, FACE_SAMPLES = 9, 5
 
 
-def rounded_surface(plane_face: Any, members: Sequence[Any], tol: float) -> FittedSurface | str:
+@dataclass(frozen=True)
+class RoundedSurface(FittedSurface):
+    """A :class:`.fitted.FittedSurface` that is exact (this route's): the face is validated
+    as the exact surfaces are, and its kind is :data:`ROUNDED`."""
+
+
+def rounded_surface(plane_face: Any, members: Sequence[Any], tol: float) -> RoundedSurface | str:
     """The exact surface of the merged face made of ``members`` (faces of the split solid:
     pieces of the plane of ``plane_face``, cylinder halves, sphere corner pieces), as a
-    :class:`.fitted.FittedSurface` with its measured ``error`` (largest distance of the
+    :class:`RoundedSurface` with its measured ``error`` (largest distance of the
     members' samples and of the B-spline's own samples from the closed form, length unit)
     and no volume change; the reason (str) when the members are not such a face or a
     sample is farther than ``tol`` (length unit)."""
@@ -171,7 +180,7 @@ def rounded_surface(plane_face: Any, members: Sequence[Any], tol: float) -> Fitt
     err = max(err, _surface_error(surface, frame, (kx, ky), strips, ext, limits, r, rho))
     if not err <= tol:
         return f"the pieces are {err:.1e} off a rounded box's face (sphere corners, equal radii)"
-    return FittedSurface(surface, err, 0.0, 0.0)
+    return RoundedSurface(surface, err, 0.0, 0.0)
 
 
 def _profile(
