@@ -133,6 +133,34 @@ def test_box12_exact_surfaces(box12):
     assert abs(r.volume_after - exact) <= 1e-9 * exact
 
 
+def _rounded_box_volume(a: float, b: float, c: float, r: float) -> float:
+    """Steiner's formula: a box ``a x b x c`` with all edges rounded by ``r``."""
+    x, y, z = a - 2 * r, b - 2 * r, c - 2 * r
+    return (
+        x * y * z
+        + 2 * r * (x * y + y * z + z * x)
+        + math.pi * r**2 * (x + y + z)
+        + 4 / 3 * (math.pi * r**3)
+    )
+
+
+def test_pocket_concave_rounded_faces():
+    """Concave strips and sphere corners (a filleted pocket): the floor and the four walls
+    merge onto exact rounded-box surfaces, the solid is the input to rounding (whole-solid
+    distances both ways) and keeps the closed-form volume (the pocket mirrored across the
+    top is a rounded box)."""
+    from truth import assert_same_solid
+
+    part = P.pocket_fillets(60.0, 50.0, 20.0, 12.0, 3.0)
+    r = simplify(part.shape, specs_from_blend_faces(part.shape, part.blends))
+    assert (r.faces_before, r.faces_after) == (23, 11) and not r.blends_kept
+    kinds = [g["surface"] for g in r.report()["face_groups"]]
+    assert kinds.count("rounded") == 5 and set(kinds) == {"rounded", "original"}
+    assert_same_solid(part.shape, r, volume_tol=1e-9, deviation_tol=1e-9)
+    exact = 60.0 * 50.0 * 20.0 - _rounded_box_volume(40.0, 30.0, 24.0, 3.0) / 2
+    assert abs(r.volume_after - exact) <= 1e-9 * exact
+
+
 def _faces_by_kind(shape):
     from OCP.BRepAdaptor import BRepAdaptor_Surface
 
