@@ -30,6 +30,7 @@ from medax.cad.simplify.job import (
 )
 from medax.cad.simplify.medial import TRACED
 from medax.cad.simplify.ring import NOT_A_RING, ring_surface
+from medax.cad.simplify.rounded import rounded_surface
 from medax.cad.simplify.search import halves_of, riders
 from medax.cad.simplify.specs import BlendInput, CornerSpec, FilletSpec
 from medax.cad.simplify.split import split_along
@@ -200,7 +201,8 @@ def fitted_surface(job: Job, split: Any, g: Group, probe: bool = False) -> Fitte
     """The fitted surface of group ``g`` (cached by its support and its members' origins);
     with ``probe`` the cheap height-field check only (see :func:`graph_surface`)."""
     assert g.support is not None
-    key = (int(probe), g.support, *sorted(split.origin[k] for k in g.members))
+    origins = sorted(split.origin[k] for k in g.members)
+    key = (int(probe), g.support, *origins)
     if job.cylinder_field and ring_kind(job.face(g.support)):
         key = (-1, *key)  # (the first pass's ring refusal is no answer now)
     if key not in job.cache:
@@ -213,7 +215,17 @@ def fitted_surface(job: Job, split: Any, g: Group, probe: bool = False) -> Fitte
             # planes and cylinders), else the height field over a plane, or over the
             # cylinder (any blend halves on any part of it)
             ring = ring_surface(support, members, fit_tol, job.btol, probe, accept)
-            if isinstance(ring, str) and not ring_kind(support):
+            # a rounded box's face (cylinder strips, sphere corners) has an exact surface
+            # (made once for the probe and the full fit: key -2)
+            exact = ring
+            if isinstance(ring, str):
+                rkey = (-2, g.support, *origins)
+                if rkey not in job.cache:
+                    job.cache[rkey] = rounded_surface(support, members, job.btol)
+                exact = job.cache[rkey]
+            if isinstance(exact, FittedSurface):
+                job.cache[key] = exact
+            elif isinstance(ring, str) and not ring_kind(support):
                 # (the probe's setup and fit serve the full fit of the same group)
                 skey = key[1:]
                 if skey not in job.setups:

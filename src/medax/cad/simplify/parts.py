@@ -88,6 +88,30 @@ def box_all_fillets(a: float = 40.0, b: float = 30.0, h: float = 20.0, r: float 
     return fillet(box, _edges_where(box, lambda p: True), r, "box with 12 filleted edges")
 
 
+def pocket_fillets(
+    a: float = 60.0, b: float = 50.0, h: float = 20.0, depth: float = 12.0, r: float = 3.0
+) -> BuiltPart:
+    """Block ``a x b x h`` with a pocket ``(a - 20) x (b - 20)`` and ``depth`` deep cut into its
+    top, the pocket's 4 floor and 4 vertical edges filleted (concave: 8 cylinders and 4
+    sphere corners; 23 faces). Mirrored across the top, the pocket is a box
+    ``(a - 20) x (b - 20) x 2 depth`` with all edges rounded: its volume is half of that."""
+    from OCP.gp import gp_Pnt as _P
+
+    block = BRepPrimAPI_MakeBox(a, b, h).Shape()
+    pocket = BRepPrimAPI_MakeBox(_P(10.0, 10.0, h - depth), a - 20.0, b - 20.0, depth + 1.0)
+    shape = unify(BRepAlgoAPI_Cut(block, pocket.Shape()).Shape())
+
+    def inner(p: Any) -> bool:
+        import numpy as np
+
+        x, y, z = p[:, 0], p[:, 1], p[:, 2]
+        eps = 1e-9
+        inside = (x > 10 - eps) & (x < a - 10 + eps) & (y > 10 - eps) & (y < b - 10 + eps)
+        return bool(np.all(inside) and not np.all(z > h - eps))
+
+    return fillet(shape, _edges_where(shape, inner), r, "block with a filleted pocket")
+
+
 def plate_with_boss(r: float = 3.0, hole: bool = True) -> BuiltPart:
     """Plate 80x60x10 with a boss (radius 12, height 15) whose root edge is filleted.
 

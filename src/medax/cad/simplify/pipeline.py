@@ -64,6 +64,7 @@ from medax.cad.simplify.mitre import mitre_keeps, mitre_pairs
 from medax.cad.simplify.occ import count, diagonal, shape_map
 from medax.cad.simplify.rebuild import build_solid
 from medax.cad.simplify.result import DEVIATION_SAMPLES, FaceGroup, SimplifyResult
+from medax.cad.simplify.rounded import ROUNDED, RoundedSurface
 from medax.cad.simplify.search import Failure, isolate, volume_blame
 from medax.cad.simplify.specs import BlendInput, FilletSpec
 from medax.cad.simplify.surfaces import MergedSurface
@@ -411,6 +412,8 @@ def _attempt(job: Job, sel: dict[int, FilletSpec]) -> Attempt | str:
                 if isinstance(fs, str):
                     return Failure(f"face {g.support}: {fs}", _fillets_of(split, [g], sel))
                 used[g.support] = fs.surface
+                if isinstance(fs, RoundedSurface):  # exact: checked as the exact ones are
+                    surfaces[g.support] = MergedSurface(fs.surface, ROUNDED, None)
                 fit_err = max(fit_err, fs.error)
                 fitted_dv += fs.volume_change
             else:
