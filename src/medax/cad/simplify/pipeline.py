@@ -46,6 +46,7 @@ from medax.cad.simplify.job import (
 )
 from medax.cad.simplify.local_measure import (
     contributions,
+    group_key,
     local_area_change,
     local_volume_change,
 )
@@ -494,7 +495,13 @@ def _validated(
         kinds[g.id] = FITTED if isinstance(ms, str) else ms.kind
         n = FITTED_DEVIATION_SAMPLES if isinstance(ms, str) else DEVIATION_SAMPLES
         old = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
-        d = max(deviation(old, face, n=n, enough=1e-3 * tol * diag))
+        # (a group rebuilt as in an attempt before: its faces' geometry is the key)
+        d = max(
+            job.measures.get(
+                ("deviation", n, 1e-3 * tol * diag, group_key([face, *old])),
+                lambda old=old, face=face, n=n: deviation(old, face, n=n, enough=1e-3 * tol * diag),
+            )
+        )
         if d > tol * diag:
             far.append(g)
         dev = max(dev, d)
