@@ -1,10 +1,9 @@
 """The changed groups' measures kept from one attempt to the next (truth: the same
-integrals computed again without the cache, closed-form volumes of a scaled box, and a
+measures computed again without the cache, copies and scaled copies of faces, and a
 search forced on a part built with OCCT whose result must not depend on the cache)."""
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy, BRepBuilderAPI_Transform
 from OCP.gp import gp_Pnt, gp_Trsf
@@ -14,7 +13,6 @@ from medax.cad.simplify import parts as P
 from medax.cad.simplify import pipeline, simplify, specs_from_blend_faces
 from medax.cad.simplify.occ import faces_of
 from medax.cad.simplify.search import Failure
-from medax.cad.simplify.validate import volumes
 
 
 @pytest.fixture(scope="module")
@@ -29,45 +27,31 @@ def _scaled(shape, s: float):
     return BRepBuilderAPI_Transform(shape, t, True).Shape()
 
 
-def test_group_origins_and_cached_integrals(box4):
-    """A closed set of faces measured from any one point gives the same change (here the
-    box scaled by 1.001: 1.001^3 - 1); points that differ within it do not (the origins
-    are used); a second measure through the cache computes nothing and returns the same
-    bits."""
-    part, r = box4
-    old = list(faces_of(part.shape))
-    big = list(faces_of(_scaled(r.shape, 1.001)))
-    v_old = volumes(part.shape)[0]
-    true = 1.001**3 - 1.0
-    faces = [*big, *old]
-    far = np.tile([100.0, -50.0, 30.0], (len(faces), 1))
-    assert L.group_origins([faces]).shape == (len(faces), 3)
-    assert np.allclose(L.group_origins([faces]), L._centre(faces))
-    shares = L.contributions(big, old, v_old, 1e-6, far)
-    assert abs(shares.sum() - true) <= 1e-9
-    split = far.copy()
-    split[: len(big) // 2] = 0.0  # half the new faces from another point: no closed set
-    assert abs(L.contributions(big, old, v_old, 1e-6, split).sum() - true) > 1e-3
-    cache = L.Measures()
-    d1 = L.local_volume_change(big, old, v_old, 1e-6, None, None, far, cache)
-    assert d1 is not None and abs(d1 - true) <= 1e-9
-    stored, hits = len(cache.values), cache.hits
-    d2 = L.local_volume_change(big, old, v_old, 1e-6, None, None, far, cache)
-    assert d2 == d1 and len(cache.values) == stored and cache.hits > hits
-    assert d1 == L.local_volume_change(big, old, v_old, 1e-6, None, None, far)
-
-
-def test_face_key_is_the_geometry(box4):
-    """A copy of a face has its key; the face scaled, or measured from another point, does
-    not."""
+def test_group_key_is_the_geometry(box4):
+    """A copy of a group of faces has its key; the group with one face scaled by 1e-6, or
+    in another order, does not."""
     _, r = box4
-    face = next(iter(faces_of(r.shape)))
-    o = np.array([1.0, 2.0, 3.0])
-    same = next(iter(faces_of(BRepBuilderAPI_Copy(face).Shape())))
-    moved = next(iter(faces_of(_scaled(face, 1.000001))))
-    assert L.face_key(face, o) == L.face_key(same, o)
-    assert L.face_key(face, o) != L.face_key(moved, o)
-    assert L.face_key(face, o) != L.face_key(face, o + 1e-9)
+    faces = list(faces_of(r.shape))[:3]
+    copies = [next(iter(faces_of(BRepBuilderAPI_Copy(f).Shape()))) for f in faces]
+    moved = next(iter(faces_of(_scaled(faces[1], 1.000001))))
+    key = L.group_key(faces)
+    assert len(key) == 3 and key == L.group_key(copies)
+    assert key != L.group_key([faces[0], moved, faces[2]])
+    assert key != L.group_key([faces[1], faces[0], faces[2]])
+    o = L._centre(faces)
+    assert L.face_key(faces[0], o) == key[0] and L.face_key(faces[0], o + 1e-9) != key[0]
+
+
+def test_measures_compute_once():
+    cache, calls = L.Measures(), []
+
+    def compute() -> float:
+        calls.append(1)
+        return 2.5
+
+    assert cache.get(("a", 1), compute) == 2.5 and cache.get(("a", 1), compute) == 2.5
+    assert cache.get(("a", 2), compute) == 2.5
+    assert len(calls) == 2 and cache.hits == 1
 
 
 def test_search_reuses_the_measures_without_changing_the_result(box4, monkeypatch):
@@ -97,3 +81,56 @@ def test_search_reuses_the_measures_without_changing_the_result(box4, monkeypatc
         r.volume_after,
         r.max_deviation,
     )
+
+
+def test_fit_measure_confirms_a_fitted_group_without_gauss_kronrod(box4, monkeypatch):
+    """The default integrator 2.5e-6 off on a B-spline face (as on fitted faces of many
+    knot spans): without a second measure that face takes Gauss-Kronrod; with its group's
+    own fit measure agreeing with the adaptive share (1e-9 apart) it does not, and the
+    change is the same; a fit measure further off than the default integrator confirms
+    nothing."""
+    import numpy as np
+
+    from medax.cad.simplify.validate import volumes
+
+    part, r = box4
+    old = list(faces_of(part.shape))
+    new = L._nurbs_faces(list(faces_of(r.shape)))
+    v_old = volumes(part.shape)[0]
+    shares = L.contributions(new, old, v_old, 1e-6)
+    true = L.local_volume_change(new, old, v_old, 1e-6, None, shares)
+    assert true is not None and abs(true) <= 1e-9
+    k = int(np.argmax(np.abs(shares[: len(new)])))
+    spoilt, real, gk_on = new[k], L._contribution, []
+
+    def default_off(face, origin, eps, gk=False):  # type: ignore[no-untyped-def]
+        if gk:
+            gk_on.append(face)
+        bias = 2.5e-6 * v_old if eps is None and not gk and face.IsSame(spoilt) else 0.0
+        return real(face, origin, eps, gk) + bias
+
+    def spoilt_measured() -> bool:
+        return any(f.IsSame(spoilt) for f in gk_on)
+
+    monkeypatch.setattr(L, "_contribution", default_off)
+    d = L.local_volume_change(new, old, v_old, 1e-6, None, shares)
+    assert d is not None and abs(d - true) <= 1e-9 and spoilt_measured()
+    gk_on.clear()
+    d = L.local_volume_change(new, old, v_old, 1e-6, None, shares, [([k], shares[k] + 1e-9)])
+    assert d is not None and abs(d - true) <= 1e-8 and not spoilt_measured()
+    d = L.local_volume_change(new, old, v_old, 1e-6, None, shares, [([k], shares[k] + 5e-6)])
+    assert d is not None and abs(d - true) <= 1e-9 and spoilt_measured()
+
+
+def test_areas_through_the_cache_are_the_same_bits(box4):
+    """The area change summed face by face through the cache equals OCCT's sum over the
+    compound to the bit, and a second measure computes nothing."""
+    part, r = box4
+    old, new = list(faces_of(part.shape)), list(faces_of(r.shape))
+    plain = L.area_delta(new, old, 1e-8)
+    cache = L.Measures()
+    assert L.area_delta(new, old, 1e-8, cache) == plain
+    stored, hits = len(cache.values), cache.hits
+    assert L.area_delta(new, old, 1e-8, cache) == plain
+    assert len(cache.values) == stored and cache.hits == hits + len(new) + len(old)
+    assert abs(plain - (L._area(new, 1e-8) - L._area(old, 1e-8))) == 0.0
