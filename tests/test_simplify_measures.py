@@ -83,45 +83,6 @@ def test_search_reuses_the_measures_without_changing_the_result(box4, monkeypatc
     )
 
 
-def test_fit_measure_confirms_a_fitted_group_without_gauss_kronrod(box4, monkeypatch):
-    """The default integrator 2.5e-6 off on a B-spline face (as on fitted faces of many
-    knot spans): without a second measure that face takes Gauss-Kronrod; with its group's
-    own fit measure agreeing with the adaptive share (1e-9 apart) it does not, and the
-    change is the same; a fit measure further off than the default integrator confirms
-    nothing."""
-    import numpy as np
-
-    from medax.cad.simplify.validate import volumes
-
-    part, r = box4
-    old = list(faces_of(part.shape))
-    new = L._nurbs_faces(list(faces_of(r.shape)))
-    v_old = volumes(part.shape)[0]
-    shares = L.contributions(new, old, v_old, 1e-6)
-    true = L.local_volume_change(new, old, v_old, 1e-6, None, shares)
-    assert true is not None and abs(true) <= 1e-9
-    k = int(np.argmax(np.abs(shares[: len(new)])))
-    spoilt, real, gk_on = new[k], L._contribution, []
-
-    def default_off(face, origin, eps, gk=False):  # type: ignore[no-untyped-def]
-        if gk:
-            gk_on.append(face)
-        bias = 2.5e-6 * v_old if eps is None and not gk and face.IsSame(spoilt) else 0.0
-        return real(face, origin, eps, gk) + bias
-
-    def spoilt_measured() -> bool:
-        return any(f.IsSame(spoilt) for f in gk_on)
-
-    monkeypatch.setattr(L, "_contribution", default_off)
-    d = L.local_volume_change(new, old, v_old, 1e-6, None, shares)
-    assert d is not None and abs(d - true) <= 1e-9 and spoilt_measured()
-    gk_on.clear()
-    d = L.local_volume_change(new, old, v_old, 1e-6, None, shares, [([k], shares[k] + 1e-9)])
-    assert d is not None and abs(d - true) <= 1e-8 and not spoilt_measured()
-    d = L.local_volume_change(new, old, v_old, 1e-6, None, shares, [([k], shares[k] + 5e-6)])
-    assert d is not None and abs(d - true) <= 1e-9 and spoilt_measured()
-
-
 def test_areas_through_the_cache_are_the_same_bits(box4):
     """The area change summed face by face through the cache equals OCCT's sum over the
     compound to the bit, and a second measure computes nothing."""

@@ -127,7 +127,6 @@ def local_volume_change(
     tol: float,
     expected: float | None = None,
     shares: np.ndarray | None = None,
-    fits: Sequence[tuple[Sequence[int], float]] = (),
 ) -> float | None:
     """Relative volume change, when two measures settle it; None otherwise (measure the
     whole solid).
@@ -144,15 +143,7 @@ def local_volume_change(
     closer of the other two, or, where both are off (fitted faces with many knot spans), by
     ``expected`` agreeing with the total. A refusal needs the second measure only on faces
     of extrusion or revolution and on B-spline faces (elsewhere the adaptive integrator is
-    trusted: a refusal keeps fillets, it never accepts a changed shape).
-
-    ``fits``: (indices into ``new + old``, relative change) of the groups on fitted
-    surfaces, the change their fit measured itself. Where that agrees with the group's
-    adaptive share better than the default integrator does, the share stands confirmed
-    without Gauss-Kronrod, the two measures' difference counted against the budget (up to
-    half of it)
-    (Gauss-Kronrod on the fitted faces of many knot spans was ~40 s of CPU per attempt on a
-    555-face part, agreeing with the adaptive integrator to 1e-9 of the volume)."""
+    trusted: a refusal keeps fillets, it never accepts a changed shape)."""
     faces = [*new, *old]
     sign = np.array([1.0] * len(new) + [-1.0] * len(old))
     origin = pnt(_centre(faces))
@@ -173,20 +164,13 @@ def local_volume_change(
         trusted = np.array([not _swept(f) and not _bspline(f) for f in faces])
         best[trusted] = ad[trusted]
     gap = np.abs(ad - best)
-    by_fits = 0.0  # the disagreement of the fits' measures with the shares they confirm
-    for idx, change in fits:
-        ix = np.asarray(idx, dtype=int)
-        off = abs(float(ad[ix].sum()) - change)
-        if np.isfinite(change) and off < float(gap[ix].sum()) and by_fits + off <= 0.5 * budget:
-            best[ix], gap[ix] = ad[ix], 0.0
-            by_fits += off
 
     def allowed() -> float:  # a tenth of a refusal, else of the tolerance
         d = abs(float(best.sum()))
         return 0.1 * (d if d > tol else tol)
 
     for i in np.argsort(-gap).tolist():  # Gauss-Kronrod on the most disputed faces only
-        if gap.sum() + by_fits <= allowed() or gap[i] == 0.0:
+        if gap.sum() <= allowed() or gap[i] == 0.0:
             break
         (copy,) = _nurbs_faces([faces[i]])
         gk = sign[i] * _contribution(copy, origin, tol, gk=True) / before
@@ -197,7 +181,7 @@ def local_volume_change(
     # that agrees with it; or Gauss-Kronrod's where both are off (on fitted faces with many
     # knot spans) when the total agrees with the fits' own measure
     d = float(best.sum())
-    if gap.sum() + by_fits <= allowed():
+    if gap.sum() <= allowed():
         return d
     if expected is not None and np.isfinite(expected) and abs(d - expected) <= allowed():
         return d

@@ -403,7 +403,6 @@ def _attempt(job: Job, sel: dict[int, FilletSpec]) -> Attempt | str:
         split, groups = split_job(job, sel, csel)
         used: dict[int, Any] = {}
         fitted_dv = 0.0
-        by_fit: dict[int, float] = {}  # group id -> the fit's own volume change (relative)
         for g in groups:
             if g.support is None:
                 continue
@@ -415,7 +414,6 @@ def _attempt(job: Job, sel: dict[int, FilletSpec]) -> Attempt | str:
                 used[g.support] = fs.surface
                 fit_err = max(fit_err, fs.error)
                 fitted_dv += fs.volume_change
-                by_fit[g.id] = fs.volume_change / job.vol_ref
             else:
                 used[g.support] = ms.surface
         expected = fitted_dv / job.vol_ref if fit_err > 0 else None
@@ -429,7 +427,7 @@ def _attempt(job: Job, sel: dict[int, FilletSpec]) -> Attempt | str:
     except Exception as err:  # OCCT Standard_Failure subclasses, translated here
         return f"OCCT failed while rebuilding ({type(err).__name__}: {err})"
     try:
-        checked = _validated(job, split, groups, faces, shape, surfaces, expected, sel, by_fit)
+        checked = _validated(job, split, groups, faces, shape, surfaces, expected, sel)
     except Exception as err:  # OCCT failures while measuring: the solid is not accepted
         return f"OCCT failed while validating ({type(err).__name__}: {err})"
     if isinstance(checked, str):
@@ -466,15 +464,12 @@ def _validated(
     surfaces: dict[int, MergedSurface | str],
     expected: float | None,
     sel: dict[int, FilletSpec],
-    by_fit: dict[int, float] | None = None,
 ) -> tuple[float, float, float, dict[int, str], float] | str:
     """The checks of a rebuilt ``shape`` with the fillets ``sel``: (relative volume change,
     relative area change, largest deviation, surface kind per group, the input's volume the
     change is relative to), or the reason it fails
     (a :class:`.search.Failure` naming the fillets of the new faces that failed their own
-    check: validity, free edges, deviation; volume and area are the whole solid's).
-    ``by_fit``: group id -> the relative volume change its fit measured itself (a second
-    measure of that group's share, :func:`.local_measure.local_volume_change`)."""
+    check: validity, free edges, deviation; volume and area are the whole solid's)."""
     diag, tol = job.diag, job.tol
     job.say("validating (analyzer, shell, volume, area, deviation both ways)")
     merged = [(g, f) for g, f in zip(groups, faces, strict=True) if g.support is not None]
@@ -533,14 +528,7 @@ def _validated(
             why += f"; {float(per_group[picked].sum()):.1e} of it on the faces of fillets {names}"
         return Failure(why, fillets)
 
-    # each fitted group's faces (indices into ``new + old``) and its fit's own measure
-    firsts = np.cumsum([0] + [len(g.members) for g, _ in changed]) + len(changed)
-    fits = [
-        ([i, *range(firsts[i], firsts[i + 1])], (by_fit or {})[g.id])
-        for i, (g, _) in enumerate(changed)
-        if g.id in (by_fit or {})
-    ]
-    dv_local = local_volume_change(new, old, job.vol_ref, VOLUME_TOL, expected, shares, fits)
+    dv_local = local_volume_change(new, old, job.vol_ref, VOLUME_TOL, expected, shares)
     base = job.vol_ref  # the volume the change is relative to
     if dv_local is None:
         base = job.vol0
