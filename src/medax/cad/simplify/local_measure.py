@@ -16,6 +16,7 @@ measures on a group that a later attempt rebuilds the same way is kept (a
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -244,7 +245,7 @@ def _area(faces: Sequence[Any], eps: float, cache: Measures | None = None) -> fl
         total = 0.0
         for f in faces:
             key = ("area", eps, *face_key(f, _ZERO))
-            total += float(cache.get(key, lambda f=f: _area([f], eps)))
+            total += float(cache.get(key, partial(_area, [f], eps)))
         return total
     props = GProp_GProps()
     BRepGProp.SurfaceProperties_s(compound(faces), props, eps, False)

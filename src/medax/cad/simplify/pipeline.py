@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -499,7 +500,7 @@ def _validated(
         d = max(
             job.measures.get(
                 ("deviation", n, 1e-3 * tol * diag, group_key([face, *old])),
-                lambda old=old, face=face, n=n: deviation(old, face, n=n, enough=1e-3 * tol * diag),
+                partial(deviation, old, face, n=n, enough=1e-3 * tol * diag),
             )
         )
         if d > tol * diag:
