@@ -18,6 +18,7 @@ from medax.cad.simplify.fitted import (
     GraphSetup,
 )
 from medax.cad.simplify.groups import Group
+from medax.cad.simplify.local_measure import Measures
 from medax.cad.simplify.medial import Medial
 from medax.cad.simplify.specs import CornerSpec, FilletSpec
 from medax.cad.simplify.surfaces import MergedSurface
@@ -121,6 +122,9 @@ class Job:
     # :func:`cylinder_pass`), and the fillets a failing face drops first then
     cylinder_field: bool = False
     prefer: set[int] = field(default_factory=set)
+    # the integrals and deviations of the changed groups, kept from one attempt to the next
+    # (keyed by the faces' geometry: :func:`.local_measure.face_key`)
+    measures: Measures = field(default_factory=Measures)
 
     @property
     def vol0(self) -> float:

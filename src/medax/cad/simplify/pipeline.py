@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -47,6 +48,7 @@ from medax.cad.simplify.job import (
 )
 from medax.cad.simplify.local_measure import (
     contributions,
+    group_key,
     local_area_change,
     local_volume_change,
 )
@@ -516,7 +518,13 @@ def _validated(
         kinds[g.id] = FITTED if isinstance(ms, str) else ms.kind
         n = FITTED_DEVIATION_SAMPLES if isinstance(ms, str) else DEVIATION_SAMPLES
         old = [pieces[k] for k in g.members]
-        d = max(deviation(old, face, n=n, enough=1e-3 * tol * diag))
+        # (a group rebuilt as in an attempt before: its faces' geometry is the key)
+        d = max(
+            job.measures.get(
+                ("deviation", n, 1e-3 * tol * diag, group_key([face, *old])),
+                partial(deviation, old, face, n=n, enough=1e-3 * tol * diag),
+            )
+        )
         if d > tol * diag:
             far.append(g)
         dev = max(dev, d)
@@ -558,7 +566,7 @@ def _validated(
         dv = dv_local
     if job.area0 is None:
         job.area0 = area(job.work)
-    da_local = local_area_change(new, old, job.area0, AREA_TOL)
+    da_local = local_area_change(new, old, job.area0, AREA_TOL, job.measures)
     if da_local is None:
         da, why = area_change(shape, job.area0, AREA_TOL)
         if why:
