@@ -35,6 +35,18 @@ def test_offset_top_face_encloses_delta_times_area(delta):
     assert gap_volume(new, [old]) == pytest.approx(delta * 200.0, rel=1e-9)
 
 
+def test_points_past_the_old_faces_take_the_nearest_surface():
+    """The new top face runs 1e-3 past the old one's edge, where a far old face (10 below,
+    wider) has a foot inside: those points measure from the old top's plane, continued."""
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox as Box
+
+    delta = 1e-3
+    old = _top(Box(10.0, 20.0, 30.0).Shape(), 30.0)
+    far = _top(Box(gp_Pnt(-5.0, -5.0, 10.0), 30.0, 30.0, 10.0).Shape(), 20.0)
+    new = _top(Box(10.001, 20.0, 30.0 + delta).Shape(), 30.0 + delta)
+    assert gap_volume(new, [old, far]) == pytest.approx(delta * 10.001 * 20.0, rel=1e-9)
+
+
 def test_grown_cylinder_encloses_the_annulus():
     """A cylinder's side grown from r = 10 to 10.001: the annulus pi (r1^2 - r0^2) h, to
     the gap's second order (delta / 2r relative)."""

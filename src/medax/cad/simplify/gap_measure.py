@@ -57,9 +57,10 @@ def gap_volume(new: Any, old: Sequence[Any]) -> float | None:
                 nearest[i], near[i] = dist[i], q
             if dist[i] < best[i] and cls.Perform(gp_Pnt2d(u, v)) != TopAbs_OUT:
                 best[i], foot[i] = dist[i], q
-    # a point whose feet all fall outside the old faces (along the boundary, where the
-    # new face runs a little past them) takes the nearest old surface, continued
-    outside = ~np.isfinite(best) & np.isfinite(nearest)
+    # a point whose feet fall outside the old faces along their boundary (where the new
+    # face runs a little past them) takes the nearest old surface, continued, when no foot
+    # inside is as near (seen: 2.2 mm away on a far piece, against 1e-5 just outside)
+    outside = np.isfinite(nearest) & ~(best <= 2.0 * nearest)
     foot[outside] = near[outside]
     found = np.isfinite(best) | outside
     if weights[~found].sum() > MISSED_SHARE * weights.sum():
