@@ -36,11 +36,11 @@ DEFLECTION = 2e-3
 MISSED_SHARE = 1e-3
 
 
-def gap_volume(new: Any, old: Sequence[Any]) -> float | None:
-    """Volume (length cubed) between face ``new`` and the faces ``old`` it replaces,
-    positive where ``new`` lies outside them (along its outward normal, as oriented in its
-    solid); None when more than ``MISSED_SHARE`` of its area finds no foot on their
-    surfaces."""
+def gap_volume(new: Any, old: Sequence[Any]) -> tuple[float, float] | None:
+    """(volume, area): the volume (length cubed) between face ``new`` and the faces ``old``
+    it replaces, positive where ``new`` lies outside them (along its outward normal, as
+    oriented in its solid), and the area of ``new`` (length squared, the quadrature's);
+    None when more than ``MISSED_SHARE`` of its area finds no foot on their surfaces."""
     pts, normals, weights = _quadrature(new)
     foot = np.full_like(pts, np.nan)
     best = np.full(len(pts), np.inf)
@@ -66,7 +66,7 @@ def gap_volume(new: Any, old: Sequence[Any]) -> float | None:
     if weights[~found].sum() > MISSED_SHARE * weights.sum():
         return None
     gap = np.einsum("ij,ij->i", pts[found] - foot[found], normals[found])
-    return float(gap @ weights[found])
+    return float(gap @ weights[found]), float(weights.sum())
 
 
 def _quadrature(face: Any) -> tuple[Array, Array, Array]:
