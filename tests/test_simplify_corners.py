@@ -331,7 +331,7 @@ def box12_file(box12, tmp_path_factory):
     from medax.cad.reader import read_part
     from medax.cad.simplify.step_out import write_step
 
-    _, r = box12
+    _, r, _ = box12
     path = write_step(r.shape, tmp_path_factory.mktemp("box12") / "box12.step")
     a, b, c = A - 2 * R, B - 2 * R, H - 2 * R
     exact = (
@@ -347,7 +347,7 @@ def test_box12_report_gives_the_default_integrator_on_the_file(box12, box12_file
     """The result's ``default_volume_rel_change`` is what OCCT's default integrator gives on
     the file as written and read back (the input's default measure is exact here), so the
     report tells a FreeCAD/CadQuery user the volume they will see."""
-    _, r = box12
+    _, r, _ = box12
     back, exact = box12_file
     on_file = _default_volume(back) / exact - 1.0
     assert abs(_default_volume(box12[0].shape) / exact - 1.0) <= 1e-9
