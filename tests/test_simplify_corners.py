@@ -51,13 +51,7 @@ def test_box12_every_blend_absorbed(box12):
 
 def test_box12_volume_matches_closed_form(box12):
     _, r, _ = box12
-    a, b, c = A - 2 * R, B - 2 * R, H - 2 * R
-    exact = (
-        a * b * c
-        + 2 * R * (a * b + b * c + c * a)
-        + math.pi * R**2 * (a + b + c)
-        + 4 / 3 * math.pi * R**3
-    )
+    exact = _rounded_box_volume(A, B, H, R)
     assert abs(r.volume_before - exact) <= 1e-9 * exact
     assert abs(r.volume_after - exact) <= 1e-6 * exact
     assert abs(r.volume_rel_change) <= 1e-6
@@ -123,13 +117,7 @@ def test_box12_exact_surfaces(box12):
         assert (s.NbUPoles(), s.NbVPoles(), s.UDegree(), s.VDegree()) == (8, 8, 3, 3)
         assert s.IsURational() and s.IsVRational()
         assert s.IsCNu(1) and s.IsCNv(1)
-    a, b, c = A - 2 * R, B - 2 * R, H - 2 * R
-    exact = (
-        a * b * c
-        + 2 * R * (a * b + b * c + c * a)
-        + math.pi * R**2 * (a + b + c)
-        + 4 / 3 * math.pi * R**3
-    )
+    exact = _rounded_box_volume(A, B, H, R)
     assert abs(r.volume_after - exact) <= 1e-9 * exact
 
 
@@ -333,13 +321,7 @@ def box12_file(box12, tmp_path_factory):
 
     _, r, _ = box12
     path = write_step(r.shape, tmp_path_factory.mktemp("box12") / "box12.step")
-    a, b, c = A - 2 * R, B - 2 * R, H - 2 * R
-    exact = (
-        a * b * c
-        + 2 * R * (a * b + b * c + c * a)
-        + math.pi * R**2 * (a + b + c)
-        + 4 / 3 * math.pi * R**3
-    )
+    exact = _rounded_box_volume(A, B, H, R)
     return read_part(path, unify=False).solids[0], exact
 
 
