@@ -31,7 +31,7 @@ from medax.cad.simplify.occ import Array, uv_bounds
 from medax.cad.simplify.validate import _edge_tolerance, _project
 
 #: Linear deflection of the quadrature's triangulation, relative to the face's extent.
-DEFLECTION = 2e-3
+DEFLECTION = 5e-3
 #: Largest share of the new face's area whose points may have no foot on an old face.
 MISSED_SHARE = 1e-3
 

@@ -605,20 +605,20 @@ def _gap_settled(
     budget = 0.1 * VOLUME_TOL
     if abs(float(per_group[fitted].sum()) - expected) <= budget:
         return None
-    merged = [i for i, (g, _) in enumerate(changed) if g.support is not None]
     gaps = np.zeros(len(changed))
-    bound = 0.0  # the exact groups' change bounded by their deviations: sum of d x area
-    for i in merged:
+    areas = np.zeros(len(changed))
+    rest = [i for i in range(len(changed)) if i not in set(fitted)]
+    merged = [i for i in rest if changed[i][0].support is not None]
+    for i in [*fitted, *merged]:  # the fitted groups first: most attempts end there
         g, face = changed[i]
         measured = gap_volume(face, [pieces[k] for k in g.members])
         if measured is None:
             return None
-        gaps[i] = measured[0] / job.vol_ref
-        if i not in fitted:
-            bound += devs.get(g.id, np.inf) * measured[1] / job.vol_ref
-    rest = [i for i in range(len(changed)) if i not in set(fitted)]
-    if abs(float(gaps[fitted].sum()) - expected) > budget:
-        return None
+        gaps[i], areas[i] = measured[0] / job.vol_ref, measured[1]
+        if i == fitted[-1] and abs(float(gaps[fitted].sum()) - expected) > budget:
+            return None
+    # the exact groups' change bounded by their deviations: sum of d x area
+    bound = sum(devs.get(changed[i][0].id, np.inf) * areas[i] for i in merged) / job.vol_ref
     agree = abs(float(gaps[rest].sum() - per_group[rest].sum())) <= budget
     if not agree and bound > budget:
         # the adaptive integrator is off on some exact faces too (swept ones as built):
