@@ -17,8 +17,10 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+from OCP.Bnd import Bnd_Box
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepBndLib import BRepBndLib
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
 from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec
@@ -27,13 +29,23 @@ from OCP.TopAbs import TopAbs_OUT, TopAbs_REVERSED
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS
 
-from medax.cad.simplify.occ import Array, uv_bounds
+from medax.cad.simplify.occ import Array, uv_bounds, xyz
 from medax.cad.simplify.validate import _edge_tolerance, _project
 
 #: Linear deflection of the quadrature's triangulation, relative to the face's extent.
 DEFLECTION = 5e-3
 #: Largest share of the new face's area whose points may have no foot on an old face.
 MISSED_SHARE = 1e-3
+#: An old face is searched for the points within this share of the new face's extent of
+#: its bounding box (the gap is at most the deviation tolerance, far less).
+NEAR_SHARE = 1e-2
+
+
+def _box(face: Any, margin: float) -> tuple[Array, Array]:
+    """Corners (3,) and (3,) of ``face``'s bounding box enlarged by ``margin``."""
+    box = Bnd_Box()
+    BRepBndLib.Add_s(face, box)
+    return xyz(box.CornerMin()) - margin, xyz(box.CornerMax()) + margin
 
 
 def gap_volume(new: Any, old: Sequence[Any]) -> tuple[float, float] | None:
@@ -46,8 +58,14 @@ def gap_volume(new: Any, old: Sequence[Any]) -> tuple[float, float] | None:
     best = np.full(len(pts), np.inf)
     near = np.full_like(pts, np.nan)  # the nearest foot on any old surface, inside or not
     nearest = np.full(len(pts), np.inf)
+    margin = NEAR_SHARE * float(np.ptp(pts, axis=0).max()) if len(pts) else 0.0
     for face in old:
-        uv, dist = _project(face, pts)
+        lo, hi = _box(face, margin)
+        rows = np.flatnonzero(np.all((pts >= lo) & (pts <= hi), axis=1))
+        if rows.size == 0:
+            continue
+        uv, dist = np.zeros((len(pts), 2)), np.full(len(pts), np.inf)
+        uv[rows], dist[rows] = _project(face, pts[rows])
         cls = IntTools_FClass2d(face, _edge_tolerance(face))
         surf = BRepAdaptor_Surface(face)
         for i in np.flatnonzero((dist < best) | (dist < nearest)).tolist():
