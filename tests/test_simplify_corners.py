@@ -347,3 +347,22 @@ def test_box12_written_file_default_integrator_within_1e6(box12_file):
     within 1e-6 of the input's exact volume."""
     back, exact = box12_file
     assert abs(_default_volume(back) / exact - 1.0) <= 1e-6
+
+
+def test_rounded_route_not_taken_on_loose_edges():
+    """Where the pieces' edges lie farther off their faces than the fit tolerance (a loose
+    input), the rounded-box closed form is not taken: the fitted route merges them, and
+    the solid is checked as before."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
+    from OCP.TopoDS import TopoDS
+
+    from medax.cad.simplify.occ import edges_of
+
+    part = P.box_all_fillets(A, B, H, R)
+    shape = BRepBuilderAPI_Copy(part.shape).Shape()
+    for e in edges_of(shape):
+        BRep_Builder().UpdateEdge(TopoDS.Edge(e), 1e-3)  # ~20x the fit tolerance, 5.4e-5
+    r = simplify(shape, specs_from_blend_faces(shape, part.blends))
+    assert (r.faces_before, r.faces_after) == (26, 6) and not r.blends_kept
+    assert {g.surface for g in r.face_groups if g.halves} == {"fitted"}
