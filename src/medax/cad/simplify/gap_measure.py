@@ -23,14 +23,16 @@ from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBndLib import BRepBndLib
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
-from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec
+from OCP.gp import gp_Pnt2d
 from OCP.IntTools import IntTools_FClass2d
 from OCP.TopAbs import TopAbs_OUT, TopAbs_REVERSED
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS
 
+from medax.cad.face_region import exact_embedding
 from medax.cad.simplify.occ import Array, uv_bounds, xyz
 from medax.cad.simplify.validate import _edge_tolerance, _project
+from medax.errors import CadError
 
 #: Linear deflection of the quadrature's triangulation, relative to the face's extent.
 DEFLECTION = 5e-3
@@ -53,7 +55,10 @@ def gap_volume(new: Any, old: Sequence[Any]) -> tuple[float, float] | None:
     it replaces, positive where ``new`` lies outside them (along its outward normal, as
     oriented in its solid), and the area of ``new`` (length squared, the quadrature's);
     None when more than ``MISSED_SHARE`` of its area finds no foot on their surfaces."""
-    pts, normals, weights = _quadrature(new)
+    try:
+        pts, normals, weights = _quadrature(new)
+    except CadError:  # a surface with no numpy copy in OCCT's parameters: not measured
+        return None
     foot = np.full_like(pts, np.nan)
     best = np.full(len(pts), np.inf)
     near = np.full_like(pts, np.nan)  # the nearest foot on any old surface, inside or not
@@ -109,13 +114,10 @@ def _quadrature(face: Any) -> tuple[Array, Array, Array]:
     area_uv = 0.5 * np.abs((b - a)[:, 0] * (c - a)[:, 1] - (c - a)[:, 0] * (b - a)[:, 1])
     mids = np.concatenate([0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a)])
     share = np.tile(area_uv / 3.0, 3)
-    pts = np.empty((len(mids), 3))
-    cross = np.empty((len(mids), 3))
-    p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
-    for i, (u, v) in enumerate(mids.tolist()):  # OCCT's evaluator, one point per call
-        surf.D1(u, v, p, du, dv)
-        pts[i] = p.XYZ().Coord()
-        cross[i] = du.Crossed(dv).XYZ().Coord()
+    emb = exact_embedding(face)  # (OCCT's parameters, so the triangulation's apply)
+    pts = emb.evaluate(mids)
+    d = emb.jacobian(mids)
+    cross = np.cross(d[:, :, 0], d[:, :, 1])
     jac = np.linalg.norm(cross, axis=1)
     normals = cross / np.where(jac > 0.0, jac, 1.0)[:, None]
     if face.Orientation() == TopAbs_REVERSED:

@@ -609,13 +609,14 @@ def _gap_settled(
     areas = np.zeros(len(changed))
     rest = [i for i in range(len(changed)) if i not in set(fitted)]
     merged = [i for i in rest if changed[i][0].support is not None]
-    for i in [*fitted, *merged]:  # the fitted groups first: most attempts end there
-        g, face = changed[i]
-        measured = gap_volume(face, [pieces[k] for k in g.members])
-        if measured is None:
-            return None
-        gaps[i], areas[i] = measured[0] / job.vol_ref, measured[1]
-        if i == fitted[-1] and abs(float(gaps[fitted].sum()) - expected) > budget:
+    for part in (fitted, merged):  # the fitted groups first: most attempts end there
+        for i in part:
+            g, face = changed[i]
+            measured = gap_volume(face, [pieces[k] for k in g.members])
+            if measured is None:
+                return None
+            gaps[i], areas[i] = measured[0] / job.vol_ref, measured[1]
+        if part is fitted and abs(float(gaps[fitted].sum()) - expected) > budget:
             return None
     # the exact groups' change bounded by their deviations: sum of d x area
     bound = sum(devs.get(changed[i][0].id, np.inf) * areas[i] for i in merged) / job.vol_ref

@@ -250,21 +250,20 @@ def merged_surface(support: Any, halves: list[Half], tol: float) -> MergedSurfac
     hads = [canonical_adaptor(f, tol) for h in halves for f in (h.face, *h.chain)]
     kinds = {a.GetType() for a in hads}
     if kinds == {GeomAbs_Cylinder} and sad.GetType() == GeomAbs_Plane:
-        return _extrusion(support, halves, hads, tol)
+        return _extrusion(support, sad, halves, hads, tol)
     if kinds == {GeomAbs_Cylinder} and sad.GetType() == GeomAbs_Cylinder:
         # a cylinder on a parallel axis (the end face of a chain of fillets, :mod:`.chains`)
-        return _extrusion(support, halves, hads, tol)
+        return _extrusion(support, sad, halves, hads, tol)
     if kinds <= {GeomAbs_Torus, GeomAbs_Cylinder} and GeomAbs_Torus in kinds:
-        return _revolution(support, halves, hads, tol)
+        return _revolution(support, sad, halves, hads, tol)
     return "no exact surface for this face and its fillet halves (fitting not implemented)"
 
 
-def _extrusion(support: Any, halves: list[Half], hads: list[Any], tol: float) -> Any:
+def _extrusion(support: Any, sad: Any, halves: list[Half], hads: list[Any], tol: float) -> Any:
     dirs = [_axis(a)[1] for a in hads]
     d = dirs[0]
     if any(np.linalg.norm(np.cross(d, e)) > 1e-9 for e in dirs[1:]):
         return "fillets along non-parallel edges of one plane: no extrusion (not supported)"
-    sad = canonical_adaptor(support, tol)
     pts = _boundary_samples(support)
     o = pts[0]
 
@@ -337,14 +336,13 @@ def extruded_bspline(profile: Any, d: Array, a0: float, a1: float) -> Any:
     )
 
 
-def _revolution(support: Any, halves: list[Half], hads: list[Any], tol: float) -> Any:
+def _revolution(support: Any, sad: Any, halves: list[Half], hads: list[Any], tol: float) -> Any:
     axes = [_axis(a) for a in hads]
     c, a = axes[0]
     for c2, a2 in axes[1:]:
         off = (c2 - c) - ((c2 - c) @ a) * a
         if np.linalg.norm(np.cross(a, a2)) > 1e-9 or np.linalg.norm(off) > tol:
             return "fillet halves on different axes: no revolution (not supported)"
-    sad = canonical_adaptor(support, tol)
     sk = sad.GetType()
     if sk == GeomAbs_Plane:
         if np.linalg.norm(np.cross(xyz(sad.Plane().Axis().Direction()), a)) > 1e-9:
