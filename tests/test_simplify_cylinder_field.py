@@ -316,3 +316,35 @@ def test_second_passes_not_started_past_their_budget(monkeypatch):
     assert not calls and any(m.startswith("the cylinder field not tried:") for m in said)
     assert r.valid and len(r.blends_removed) == len(specs.fillets) + len(specs.corners)
     assert_same_solid(cls.shape, r)
+
+
+def test_budgets_count_cpu_time_not_wall_time(monkeypatch):
+    """The run's budgets are CPU seconds: on a machine so loaded that every look at the wall
+    clock finds another 1000 s gone, the cylinder field's pass still runs and the result is
+    the one of an idle machine."""
+    import time
+    import types
+
+    from medax.cad.simplify import parts, pipeline
+
+    shape = parts.box_all_fillets(40.0, 30.0, 20.0, 4.0).shape
+    cls = classify_solid(shape)
+    specs = specs_from_classification(cls)
+    calls: list[int] = []
+    real = pipeline.cylinder_pass
+
+    def spy(*args):  # type: ignore[no-untyped-def]
+        calls.append(1)
+        return real(*args)
+
+    wall = iter(range(0, 10**9, 1000))
+    loaded = types.SimpleNamespace(
+        perf_counter=lambda: float(next(wall)), process_time=time.process_time
+    )
+    monkeypatch.setattr(pipeline, "cylinder_pass", spy)
+    monkeypatch.setattr(pipeline, "time", loaded)
+    said: list[str] = []
+    r = simplify(cls.shape, specs, progress=said.append)
+    assert calls and not any("not tried:" in m for m in said)
+    assert r.valid and len(r.blends_removed) == len(specs.fillets) + len(specs.corners)
+    assert r.time_s >= 1000.0 and 0.0 < r.cpu_s < r.time_s

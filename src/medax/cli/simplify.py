@@ -195,6 +195,7 @@ def _combine(reports: list[dict[str, Any]]) -> dict[str, Any]:
         "max_deviation": worst_dev["max_deviation"],
         "face_groups": [dict(g, solid=k) for k, r in enumerate(reports) for g in r["face_groups"]],
         "time_s": sum(r["time_s"] for r in reports),
+        "cpu_s": sum(r["cpu_s"] for r in reports),
         "notes": [f"{len(reports)} solids: face indices are per solid (see 'solids')"],
         "solids": reports,
     }

@@ -46,13 +46,16 @@ BUILD_TOL = tolerances.BUILD_TOL
 FIT_SHARE, ACCEPT_SHARE = 0.1, 0.8
 #: Deviation samples per face (n x n) for groups on a fitted surface.
 FITTED_DEVIATION_SAMPLES = 12
-#: Seconds the search for failing fillets may take after the first rebuild failed.
+#: The budgets below are CPU seconds of this process (``time.process_time``), not wall
+#: time, so that what is removed does not depend on the machine's load; on an idle machine
+#: the two are the same.
+#: CPU seconds the search for failing fillets may take after the first rebuild failed.
 ISOLATION_BUDGET = 300.0
-#: Seconds the whole simplification may take before the search stops starting attempts
+#: CPU seconds the whole simplification may take before the search stops starting attempts
 #: (each as long as the first one is counted), so that a part with its reading and writing
-#: ends within 10 minutes.
+#: ends within 10 minutes on an idle machine.
 RUN_BUDGET = 480.0
-#: Seconds of the run after which the second chances (the cylinder field's pass, riders
+#: CPU seconds of the run after which the second chances (the cylinder field's pass, riders
 #: tried as plain fillets) are no longer started: each is another pass over the fitted
 #: faces, and the first rebuild, and the search after it, need the rest of ``RUN_BUDGET``.
 SECOND_PASS_BUDGET = 0.4 * RUN_BUDGET

@@ -62,6 +62,8 @@ class SimplifyResult:
         What each face of the result came from.
     time_s : float
         Wall time of the run, s.
+    cpu_s : float
+        CPU time of the run (this process, all threads), s: what the budgets count.
     """
 
     shape: Any
@@ -76,6 +78,7 @@ class SimplifyResult:
     diagonal: float
     face_groups: list[FaceGroup]
     time_s: float
+    cpu_s: float = 0.0
     medial_error: float = 0.0
     fit_error: float = 0.0
     fit_volume_rel_change: float = 0.0
@@ -150,4 +153,5 @@ class SimplifyResult:
             ],
             "notes": self.notes,
             "time_s": self.time_s,
+            "cpu_s": self.cpu_s,
         }

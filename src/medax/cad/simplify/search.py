@@ -145,7 +145,7 @@ def isolate(
         if not group:
             return
         fillets = [f for u in group for f in u]
-        if time.perf_counter() > deadline:
+        if time.process_time() > deadline:
             for f in fillets:
                 kept[f] = "not tried alone: the time for finding the failing fillets ran out"
             return
