@@ -95,6 +95,64 @@ def _defeature(shape: Any, faces: list[int]) -> dict[str, Any]:
     }
 
 
+def round_trip_changes(
+    shape: Any, stem: Path, file_volumes: tuple[float, float], input_volumes: tuple[float, float]
+) -> dict[str, float]:
+    """The written file (its volumes by the default integrator and by Gauss-Kronrod on a
+    NURBS copy, ``file_volumes``) against the input ``shape`` (``input_volumes``, the same
+    two) written and read back the same way (STEP to ``stem.input.step``, the same
+    reader), measured by the same two: on inputs whose edges lie loosely on their faces the
+    round trip alone moves the integrals (the reader recomputes what the file does not
+    carry), so the file is compared with the input as the file format holds it."""
+    from medax.cad.reader import read_part
+    from medax.cad.simplify.step_out import write_step
+
+    path = stem.with_name(stem.name + ".input.step")
+    write_step(shape, path)
+    rt = read_part(path, unify=False).solids[0]
+    path.unlink()
+    v_rt, n_rt = _volume_default(rt), _volume_nurbs(rt)
+    return {
+        "file_dv_default_rt": file_volumes[0] / v_rt - 1.0,
+        "file_dv_nurbs_rt": file_volumes[1] / n_rt - 1.0,
+        "input_rt_dv_default": v_rt / input_volumes[0] - 1.0,
+        "input_rt_dv_nurbs": n_rt / input_volumes[1] - 1.0,
+    }
+
+
+def round_trip_child(part: str, out_dir: str) -> list[dict[str, float]]:
+    """The round-trip fields (:func:`round_trip_changes`) of each solid of ``part`` whose
+    written file is in ``out_dir`` (records made before the fields existed)."""
+    from medax.cad.classify import classify_file
+    from medax.cad.reader import read_part
+
+    out = []
+    for k, cls in enumerate(classify_file(part)):
+        stem = Path(out_dir) / f"{Path(part).stem}.{k}"
+        back = read_part(stem.with_suffix(".step"), unify=False).solids[0]
+        files = (_volume_default(back), _volume_nurbs(back))
+        inputs = (_volume_default(cls.shape), _volume_nurbs(cls.shape))
+        out.append(round_trip_changes(cls.shape, stem, files, inputs))
+    return out
+
+
+def add_round_trip(part: Path, rec: dict[str, Any], out_dir: Path, timeout: float) -> None:
+    """Fill the round-trip fields into ``rec``'s solids (in a child process)."""
+    try:
+        p = subprocess.run(
+            [sys.executable, __file__, "--round-trip-child", str(part), str(out_dir)],
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+        )
+    except subprocess.TimeoutExpired:
+        return
+    lines = [ln for ln in p.stdout.splitlines() if ln.startswith("[")]
+    if p.returncode == 0 and lines:
+        for s, extra in zip(rec["solids"], json.loads(lines[-1]), strict=False):
+            s.update(extra)
+
+
 def child(part: str, out_dir: str) -> dict[str, Any]:
     """Run one part (in the child process); its record."""
     from OCP.BRepCheck import BRepCheck_Analyzer
@@ -147,6 +205,8 @@ def child(part: str, out_dir: str) -> dict[str, Any]:
         # and the input's own error, so that neither is taken for the other
         s["file_dv_default_exact"] = (v_out - n_in) / n_in
         s["input_dv_default"] = (v_in - n_in) / n_in
+        stem = Path(out_dir) / f"{Path(part).stem}.{k}"
+        s.update(round_trip_changes(cls.shape, stem, (v_out, n_out), (v_in, n_in)))
         s["defeaturing"] = _defeature(cls.shape, sorted(r.blends_removed))
         solids.append(s)
     rec["solids"] = solids
@@ -212,19 +272,19 @@ def markdown(records: list[dict[str, Any]]) -> None:
     """Print the table as Markdown (the one in ``docs/benchmarks.md``)."""
     print(
         "| part | faces | found | removed | valid | dV file (default) | dV file (NURBS, GK) "
-        "| deviation | CPU time | defeaturing |"
+        "| the same against the input's round trip | deviation | CPU time | defeaturing |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for rec in records:
         if rec["status"] != "done":
             for s in rec.get("solids", []):  # simplified, the file checks not finished
                 print(
                     f"| {rec['part']} | {s['faces_before']} -> {s['faces_after']} "
-                    f"| {s['found']} | {s['removed']} | {rec['status']} | | | "
+                    f"| {s['found']} | {s['removed']} | {rec['status']} | | | | "
                     f"{s['deviation_rel']:.1e} | {rec['job_cpu_s']:.0f} s | |"
                 )
             if not rec.get("solids"):
-                print(f"| {rec['part']} | {rec['status'][:70]} | | | | | | | | |")
+                print(f"| {rec['part']} | {rec['status'][:70]} | | | | | | | | | |")
             continue
         for s in rec["solids"]:
             d = s["defeaturing"]
@@ -234,11 +294,16 @@ def markdown(records: list[dict[str, Any]]) -> None:
                 if d["status"] == "done"
                 else d["status"]
             )
+            rt = (
+                f"{s['file_dv_default_rt']:+.1e}, {s['file_dv_nurbs_rt']:+.1e}"
+                if "file_dv_nurbs_rt" in s
+                else ""
+            )
             ok = "yes" if s["file_valid"] and s["file_shells"] == s.get("input_shells", 1) else "NO"
             print(
                 f"| {rec['part']} | {s['faces_before']} -> {s['faces_after']} | {s['found']} "
                 f"| {s['removed']} | {ok} "
-                f"| {s['file_dv_default']:+.1e} | {s['file_dv_nurbs']:+.1e} "
+                f"| {s['file_dv_default']:+.1e} | {s['file_dv_nurbs']:+.1e} | {rt} "
                 f"| {s['deviation_rel']:.1e} | {rec['job_cpu_s']:.0f} s | {dfe} |"
             )
 
@@ -277,6 +342,9 @@ def main(argv: list[str]) -> int:
     if argv[:1] == ["--child"]:
         print(json.dumps(child(argv[1], argv[2])))
         return 0
+    if argv[:1] == ["--round-trip-child"]:
+        print(json.dumps(round_trip_child(argv[1], argv[2])))
+        return 0
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("inputs", nargs="+", help="part files or folders")
     ap.add_argument("--timeout", type=float, default=600.0, help="CPU seconds per part (600)")
@@ -292,6 +360,11 @@ def main(argv: list[str]) -> int:
     )
     ap.add_argument("--records", default="corpus-records", help="folder of per-part records")
     ap.add_argument("--again", action="store_true", help="rerun parts that have a record")
+    ap.add_argument(
+        "--add-round-trip",
+        action="store_true",
+        help="fill the input's round-trip comparison into finished records that lack it",
+    )
     ap.add_argument("--markdown", action="store_true", help="also print the table as Markdown")
     args = ap.parse_args(argv)
     parts: list[Path] = []
@@ -303,7 +376,14 @@ def main(argv: list[str]) -> int:
     for i, part in enumerate(parts):
         path = rec_dir / f"{part.name}.json"
         if path.exists() and not args.again:
-            records.append(json.loads(path.read_text()))
+            rec = json.loads(path.read_text())
+            solids = rec.get("solids", [])
+            if args.add_round_trip and rec["status"] == "done" and solids:
+                if "file_dv_nurbs_rt" not in solids[0]:
+                    print(f"[{i + 1}/{len(parts)}] {part.name}: round trip", file=sys.stderr)
+                    add_round_trip(part, rec, rec_dir, args.check_timeout)
+                    path.write_text(json.dumps(rec) + "\n")
+            records.append(rec)
             continue
         print(f"[{i + 1}/{len(parts)}] {part.name}", file=sys.stderr, flush=True)
         rec = run_part(part, rec_dir, args.timeout, args.check_timeout, args.wall_factor)
