@@ -51,6 +51,20 @@ def test_isolation_keeps_exactly_the_failing_fillets(bad):
     assert len(calls) <= 2 + 2 * max(len(bad), 1) * math.ceil(math.log2(12))
 
 
+def test_isolation_says_what_each_attempt_did():
+    """Each attempt of several fillets is reported: how many went, or why they failed."""
+    specs = _chain(8)
+
+    def attempt(sel):
+        return "fillet 5 fails" if 5 in sel else ("ok", frozenset(sel))
+
+    said: list[str] = []
+    isolate(specs, attempt, {}, said.append, math.inf, "fillet 5 fails")
+    assert said[0].startswith("4 more fillets go (4 of 8 so far)")
+    assert "4 fillets tried with the 4 accepted failed: fillet 5 fails" in said
+    assert "fillet 5 kept: fillet 5 fails" in said and said[-1].endswith("(7 of 8 so far)")
+
+
 def test_isolation_traced_failures_are_not_bisected():
     """A failure traced to its fillets (a new face that failed its own check): the others
     go in one attempt, the traced ones are tried on their own."""

@@ -154,9 +154,14 @@ def isolate(
         if not isinstance(r, str):
             accepted.update({f: specs[f] for f in fillets})
             best = r
+            say(f"{len(fillets)} more fillets go ({len(accepted)} of {len(order)} so far)")
             return
         hit: frozenset[int] = getattr(r, "blamed", frozenset()) & set(fillets)
         blamed = [u for u in group if set(u) & hit]
+        if len(group) > 1 and known is None:
+            traced = f", traced to {len(hit)} of them" if hit else ""
+            n, m = len(fillets), len(accepted)
+            say(f"{n} fillets tried with the {m} accepted failed{traced}: {r}")
         if len(group) == 1:
             keep(group[0], r)
         elif blamed and len(blamed) < len(group):
