@@ -76,8 +76,8 @@ def test_fitted_faces_measured_from_the_gap_when_the_integrators_are_off(monkeyp
 
     real = P.contributions
 
-    def off(new, old, before, tol):  # type: ignore[no-untyped-def]
-        shares = real(new, old, before, tol)
+    def off(new, old, before, tol, *points):  # type: ignore[no-untyped-def]
+        shares = real(new, old, before, tol, *points)
         bad = [BRepAdaptor_Surface(f).GetType() == GeomAbs_BSplineSurface for f in new]
         return shares + np.array(bad + [False] * len(old)) * 3e-6
 

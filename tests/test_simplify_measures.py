@@ -95,3 +95,35 @@ def test_areas_through_the_cache_are_the_same_bits(box4):
     assert L.area_delta(new, old, 1e-8, cache) == plain
     assert len(cache.values) == stored and cache.hits == hits + len(new) + len(old)
     assert abs(plain - (L._area(new, 1e-8) - L._area(old, 1e-8))) == 0.0
+
+
+def test_component_origins_are_the_centres_of_connected_sets():
+    """Faces that share edges get one point, the centre of their set; a separate set gets
+    its own. A closed set's contributions from its point sum to its volume (the point
+    cancels), and measured again through the cache they cost nothing and keep their bits."""
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+
+    a = list(faces_of(BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), 2.0, 3.0, 4.0).Shape()))
+    b = list(faces_of(BRepPrimAPI_MakeBox(gp_Pnt(10, 0, 0), 1.0, 1.0, 1.0).Shape()))
+    new = a + b
+    o = L.component_origins(new, [[] for _ in new])
+    assert o.shape == (12, 3)
+    assert (o[:6] == [1.0, 1.5, 2.0]).all() and (o[6:] == [10.5, 0.5, 0.5]).all()
+    cache = L.Measures()
+    shares = L.contributions(new, [], 1.0, 1e-6, o, cache)
+    assert shares[:6].sum() == pytest.approx(24.0, rel=1e-12)
+    assert shares[6:].sum() == pytest.approx(1.0, rel=1e-12)
+    calls: list[float | None] = []
+    real = L._contribution
+
+    def counted(face, origin, eps, gk=False):  # type: ignore[no-untyped-def]
+        calls.append(eps)
+        return real(face, origin, eps, gk)
+
+    L._contribution, saved = counted, L._contribution
+    try:
+        again = L.contributions(new, [], 1.0, 1e-6, o, cache)
+    finally:
+        L._contribution = saved
+    assert (again == shares).all()
+    assert calls == [None] * 12  # the keys' default integrals only, no adaptive integral

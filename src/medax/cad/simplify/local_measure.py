@@ -35,7 +35,15 @@ from OCP.GeomAbs import (
 )
 from OCP.GProp import GProp_GProps
 
-from medax.cad.simplify.occ import compound, faces_of, pnt, vertex_point, vertices_of
+from medax.cad.simplify.occ import (
+    ShapeMap,
+    compound,
+    edges_of,
+    faces_of,
+    pnt,
+    vertex_point,
+    vertices_of,
+)
 
 
 def volume_delta(
@@ -109,16 +117,84 @@ def group_key(faces: Sequence[Any]) -> tuple[Any, ...]:
     return tuple(face_key(f, o) for f in faces)
 
 
-def contributions(new: Sequence[Any], old: Sequence[Any], before: float, tol: float) -> np.ndarray:
+def contributions(
+    new: Sequence[Any],
+    old: Sequence[Any],
+    before: float,
+    tol: float,
+    origins: np.ndarray | None = None,
+    cache: Measures | None = None,
+) -> np.ndarray:
     """Each face's signed share of the volume change relative to ``before``, shape
-    ``(len(new) + len(old),)``: the new faces' contributions, then minus the old ones', all
-    from one common point, by the adaptive integrator to ``tol / 100`` relative. The shares
-    of a new face and the old faces it replaces sum to that group's own change (they form a
-    closed surface, so the common point cancels)."""
+    ``(len(new) + len(old),)``: the new faces' contributions, then minus the old ones', by
+    the adaptive integrator to ``tol / 100`` relative, each from its point in ``origins``
+    (``(len(new) + len(old), 3)``; default: one common point, the faces' centre). Faces
+    that together bound the same region before and after (a connected set of changed
+    faces) must share a point: their shares then sum to their own change, the point
+    cancels. ``cache``: each face's value kept by its geometry and point."""
     faces = [*new, *old]
     sign = np.array([1.0] * len(new) + [-1.0] * len(old))
-    origin = pnt(_centre(faces))
-    return sign * np.array([_contribution(f, origin, 1e-2 * tol) for f in faces]) / before
+    o = _origins(faces, origins)
+    eps = 1e-2 * tol
+    return (
+        sign
+        * np.array([_measured(f, o[i], eps, False, cache) for i, f in enumerate(faces)])
+        / before
+    )
+
+
+def component_origins(new: Sequence[Any], old: Sequence[Sequence[Any]]) -> np.ndarray:
+    """Each face's point for :func:`contributions`, ``(len(new) + sum of len(old[i]), 3)``
+    in the order ``new``, then each group's old faces: the centre of its connected set of
+    changed groups (new faces ``new[i]`` sharing an edge; ``old[i]``: the faces group ``i``
+    replaces). Such a set bounds the same region before and after, so its change does not
+    depend on the point, and a set the next attempt rebuilds as before is measured from
+    the same point (its faces' contributions are kept, :class:`Measures`)."""
+    edges = ShapeMap()
+    parent = list(range(len(new)))
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    first: dict[int, int] = {}  # edge index -> the first group seen with it
+    for i, face in enumerate(new):
+        for e in edges_of(face):
+            k = edges.Add(e)
+            j = first.setdefault(k, i)
+            parent[root(i)] = root(j)
+    comp = [root(i) for i in range(len(new))]
+    centre = {
+        c: _centre([f for i in range(len(new)) if comp[i] == c for f in (new[i], *old[i])])
+        for c in set(comp)
+    }
+    rows = [centre[comp[i]] for i in range(len(new))]
+    rows += [centre[comp[i]] for i in range(len(new)) for _ in old[i]]
+    return np.array(rows, dtype=np.float64).reshape(-1, 3)
+
+
+def _origins(faces: Sequence[Any], origins: np.ndarray | None) -> np.ndarray:
+    """Each face's point, ``(len(faces), 3)``: ``origins``, else the faces' centre."""
+    if origins is not None:
+        return np.asarray(origins, dtype=np.float64)
+    return np.tile(_centre(faces), (len(faces), 1))
+
+
+def _measured(
+    face: Any, origin: np.ndarray, eps: float | None, gk: bool, cache: Measures | None
+) -> float:
+    """:func:`_contribution` of ``face`` from ``origin`` (3,) (with ``gk`` on its B-spline
+    copy), through ``cache`` when given."""
+
+    def compute() -> float:
+        f = _nurbs_faces([face])[0] if gk else face
+        return _contribution(f, pnt(origin), eps, gk)
+
+    if cache is None or (eps is None and not gk):  # (the default integral is the key's own)
+        return compute()
+    return float(cache.get(("volume", eps, gk, *face_key(face, origin)), compute))
 
 
 def local_volume_change(
@@ -128,6 +204,8 @@ def local_volume_change(
     tol: float,
     expected: float | None = None,
     shares: np.ndarray | None = None,
+    origins: np.ndarray | None = None,
+    cache: Measures | None = None,
 ) -> float | None:
     """Relative volume change, when two measures settle it; None otherwise (measure the
     whole solid).
@@ -144,17 +222,19 @@ def local_volume_change(
     closer of the other two, or, where both are off (fitted faces with many knot spans), by
     ``expected`` agreeing with the total. A refusal needs the second measure only on faces
     of extrusion or revolution and on B-spline faces (elsewhere the adaptive integrator is
-    trusted: a refusal keeps fillets, it never accepts a changed shape)."""
+    trusted: a refusal keeps fillets, it never accepts a changed shape). ``origins`` and
+    ``cache``: as in :func:`contributions` (``shares`` measured from the same points)."""
     faces = [*new, *old]
     sign = np.array([1.0] * len(new) + [-1.0] * len(old))
-    origin = pnt(_centre(faces))
-    ad = contributions(new, old, before, tol) if shares is None else shares
+    o = _origins(faces, origins)
+    ad = contributions(new, old, before, tol, o, cache) if shares is None else shares
     d_ad = float(ad.sum())
     refusal = abs(d_ad) > tol
     budget = 0.1 * (abs(d_ad) if refusal else tol)
     if expected is not None and np.isfinite(expected) and abs(d_ad - expected) <= budget:
         return d_ad  # (a refusal too: the fits measured the same change themselves)
-    dflt = sign * np.array([_contribution(f, origin, None) for f in faces]) / before
+    dflt = sign * np.array([_measured(f, o[i], None, False, cache) for i, f in enumerate(faces)])
+    dflt /= before
     best = dflt.copy()
     if refusal:
         # refusing needs one trusted measure: the adaptive integrator's on analytic faces;
@@ -173,8 +253,7 @@ def local_volume_change(
     for i in np.argsort(-gap).tolist():  # Gauss-Kronrod on the most disputed faces only
         if gap.sum() <= allowed() or gap[i] == 0.0:
             break
-        (copy,) = _nurbs_faces([faces[i]])
-        gk = sign[i] * _contribution(copy, origin, tol, gk=True) / before
+        gk = sign[i] * _measured(faces[i], o[i], tol, True, cache) / before
         # the face's value is Gauss-Kronrod's, confirmed by the closer of the other two
         best[i], gap[i] = gk, min(abs(gk - ad[i]), abs(gk - dflt[i]))
     # the confirmed value of each face: the default integrator's (exact on the merged faces

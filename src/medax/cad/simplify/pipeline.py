@@ -47,6 +47,7 @@ from medax.cad.simplify.job import (
     Job,
 )
 from medax.cad.simplify.local_measure import (
+    component_origins,
     contributions,
     group_key,
     local_area_change,
@@ -541,7 +542,8 @@ def _validated(
     changed = [(g, f) for g, f in zip(groups, faces, strict=True) if not g.untouched]
     new = [f for _, f in changed]
     old = [pieces[k] for g, _ in changed for k in g.members]
-    shares = contributions(new, old, job.vol_ref, VOLUME_TOL)
+    origins = component_origins(new, [[pieces[k] for k in g.members] for g, _ in changed])
+    shares = contributions(new, old, job.vol_ref, VOLUME_TOL, origins, job.measures)
     owner = list(range(len(changed))) + [i for i, (g, _) in enumerate(changed) for _ in g.members]
     per_group = np.bincount(owner, weights=shares, minlength=len(changed))
 
@@ -555,9 +557,13 @@ def _validated(
             why += f"; {float(per_group[picked].sum()):.1e} of it on the faces of fillets {names}"
         return Failure(why, fillets)
 
-    dv_local = _gap_settled(job, changed, pieces, kinds, devs, shares, owner, per_group, expected)
+    dv_local = _gap_settled(
+        job, changed, pieces, kinds, devs, shares, owner, per_group, expected, origins
+    )
     if dv_local is None:
-        dv_local = local_volume_change(new, old, job.vol_ref, VOLUME_TOL, expected, shares)
+        dv_local = local_volume_change(
+            new, old, job.vol_ref, VOLUME_TOL, expected, shares, origins, job.measures
+        )
     base = job.vol_ref  # the volume the change is relative to
     if dv_local is None:
         base = job.vol0
@@ -590,6 +596,7 @@ def _gap_settled(
     owner: list[int],
     per_group: np.ndarray,
     expected: float | None,
+    origins: np.ndarray,
 ) -> float | None:
     """The relative volume change measured from the gap between each new face and the
     pieces it replaces (:func:`.gap_measure.gap_volume`), when OCCT's integrators and the
@@ -597,8 +604,8 @@ def _gap_settled(
     groups' gap agrees with ``expected``, and the other merged groups' gap with the
     integrators' or their change is bounded within the budget by their deviations
     (``devs``, per group, times their areas; ``shares``: the faces' contributions,
-    ``owner``: each face's group; faces on their own surface count 0: their change of
-    outline is the neighbours' gap).
+    ``owner``: each face's group, ``origins``: each face's point; faces on their own
+    surface count 0: their change of outline is the neighbours' gap).
     The gap values go into ``per_group`` (the refusal's blame). None otherwise: the
     integrators decide, as before."""
     fitted = [i for i, (g, _) in enumerate(changed) if kinds.get(g.id) in (FITTED, ROUNDED)]
@@ -614,7 +621,11 @@ def _gap_settled(
     for part in (fitted, merged):  # the fitted groups first: most attempts end there
         for i in part:
             g, face = changed[i]
-            measured = gap_volume(face, [pieces[k] for k in g.members])
+            old = [pieces[k] for k in g.members]
+            # (a group rebuilt as in an attempt before: its faces' geometry is the key)
+            measured = job.measures.get(
+                ("gap", group_key([face, *old])), partial(gap_volume, face, old)
+            )
             if measured is None:
                 return None
             gaps[i], areas[i] = measured[0] / job.vol_ref, measured[1]
@@ -629,7 +640,9 @@ def _gap_settled(
         mask = np.isin(np.asarray(owner), rest)
         new = [changed[i][1] for i in rest]
         old = [pieces[k] for i in rest for k in changed[i][0].members]
-        settled = local_volume_change(new, old, job.vol_ref, VOLUME_TOL, None, shares[mask])
+        settled = local_volume_change(
+            new, old, job.vol_ref, VOLUME_TOL, None, shares[mask], origins[mask], job.measures
+        )
         if settled is None or abs(float(gaps[rest].sum()) - settled) > budget:
             return None
     job.say(
