@@ -11,10 +11,11 @@ move:
 * :func:`winslow_sweeps` - Winslow's equations ``g22 x_ss - 2 g12 x_st + g11 x_tt = 0`` by
   Gauss-Seidel sweeps in row order, over-relaxed;
 * :func:`optimise_nodes` - a local optimisation of listed nodes: per node one Newton step
-  (finite-difference gradient and Hessian) on the sum of the condition numbers
-  ``(|a|^2 + |b|^2) / (2 a x b)`` of the 16 corners of its 4 quads, halved until the sum
-  falls, taken only when the 4 quads' smallest scaled Jacobian and smallest angle do not
-  fall: the grid's minimum scaled Jacobian and minimum angle never fall.
+  (gradient and Hessian by finite differences on 5 points around it) on the sum of the
+  condition numbers ``(|a|^2 + |b|^2) / (2 a x b)`` of the 16 corners of its 4 quads,
+  halved until the sum falls, taken only when the 4 quads' smallest scaled Jacobian and
+  smallest angle do not fall: the grid's minimum scaled Jacobian and minimum angle never
+  fall.
 
 Compiled with ``cache=True`` like :mod:`medax.geometry.kernels`, which announces and warms
 them up with the others (:func:`warm_up`).
@@ -165,17 +166,16 @@ def optimise_nodes(g: FloatArray, nodes: IntArray, sweeps: int, tol: float) -> i
             for dj, di in ((0, 1), (0, -1), (1, 0), (-1, 0)):
                 h = min(h, np.hypot(g[j + dj, i + di, 0] - ox, g[j + dj, i + di, 1] - oy))
             h *= _FD_STEP
-            for u in range(3):
-                for v in range(3):
-                    g[j, i, 0] = ox + (u - 1) * h
-                    g[j, i, 1] = oy + (v - 1) * h
-                    fv[u, v] = _condition(g, j, i)
+            for u, v in ((0, 1), (2, 1), (1, 0), (1, 2), (2, 2)):  # the 5 points used
+                g[j, i, 0] = ox + (u - 1) * h
+                g[j, i, 1] = oy + (v - 1) * h
+                fv[u, v] = _condition(g, j, i)
             g[j, i, 0], g[j, i, 1] = ox, oy
             gx = (fv[2, 1] - fv[0, 1]) / (2.0 * h)
             gy = (fv[1, 2] - fv[1, 0]) / (2.0 * h)
             hxx = (fv[2, 1] - 2.0 * f0 + fv[0, 1]) / (h * h)
             hyy = (fv[1, 2] - 2.0 * f0 + fv[1, 0]) / (h * h)
-            hxy = (fv[2, 2] - fv[2, 0] - fv[0, 2] + fv[0, 0]) / (4.0 * h * h)
+            hxy = (fv[2, 2] - fv[2, 1] - fv[1, 2] + f0) / (h * h)
             det = hxx * hyy - hxy * hxy
             if not (np.isfinite(det) and det > 0.0 and hxx > 0.0):
                 continue
