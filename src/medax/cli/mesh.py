@@ -102,10 +102,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         action=argparse.BooleanOptionalAction,
         default=None,
         help="regions: the quality pass after the grid (the default; Winslow's equations on "
-        "the interior nodes, then the worst quads' nodes optimised; boundary nodes and exact "
-        "polar grids kept), kept only where it lowers neither the minimum nor the "
-        "5th-percentile scaled Jacobian nor the smallest angle; --no-smooth: the medial "
-        "grid as solved",
+        "the interior nodes, boundary nodes and exact polar grids kept), kept only where it "
+        "lowers neither the minimum nor the 5th-percentile scaled Jacobian nor the smallest "
+        "angle; --no-smooth: the medial grid as solved",
     )
     p.add_argument(
         "--allow-inverted",

@@ -25,8 +25,7 @@ same algorithms as compiled loops over the points, one call per query:
   (:mod:`medax.geometry.nurbs_kernel`) - NURBS surface jets and the Newton of
   :func:`medax.geometry.surface_heights.graph_heights` (announced and warmed up here with
   the others);
-* ``grid_quality``, ``winslow_sweeps`` and ``optimise_nodes``
-  (:mod:`medax.geometry.grid_kernel`) - the mesh quality pass and its measures.
+* ``winslow_sweeps`` (:mod:`medax.geometry.grid_kernel`) - the mesh quality pass.
 
 Compiled with ``cache=True``: the first run after an install compiles (a few seconds, logged
 at INFO) and stores the machine code in ``__pycache__`` next to this file, or, where that is
@@ -671,9 +670,7 @@ _COMPILED = (
     crossing,
     span_basis_rows,
     heights_newton,
-    grid_kernel.grid_quality,
     grid_kernel.winslow_sweeps,
-    grid_kernel.optimise_nodes,
 )
 _announced = False
 

@@ -132,11 +132,11 @@ def mesh_region(
     allow_inverted : bool
         Return a grid that is still inverted (with a warning) instead of raising.
     smooth : bool
-        Planar regions: the quality pass ``medax.mesh.untangle.smooth_grid`` (default; Winslow
-        on the interior nodes, then a local optimisation of the worst quads' nodes, each
-        kept only where it lowers neither the minimum nor the 5th percentile of the scaled
-        Jacobian nor the smallest angle; boundary nodes and the exact polar grid stay;
-        ``info["smooth"]``). ``False``: the medial grid as solved (and untangled).
+        Planar regions: the quality pass ``medax.mesh.untangle.smooth_grid`` (default;
+        Winslow's equations on the interior nodes, kept only where it lowers neither the
+        minimum nor the 5th percentile of the scaled Jacobian nor the smallest angle;
+        boundary nodes and the exact polar grid stay; ``info["smooth"]``). ``False``: the
+        medial grid as solved (and untangled).
 
     Returns
     -------
