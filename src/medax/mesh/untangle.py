@@ -440,7 +440,7 @@ def untangle_grid(
     than ``p``'s, else ``p`` unchanged. ``info`` gets ``untangle`` (what was done).
     ``options`` default: :data:`OPTIONS` at the time of the call."""
     options = OPTIONS if options is None else options
-    sj = grid_quality(p, n1, n2)[0]  # (the compiled measure: most grids need nothing)
+    sj = grid_quality(p, n1, n2, angles=False)[0]  # (most grids need nothing more)
     if float(sj.min()) > threshold:
         return p
     start = (float(sj.min()), float(np.percentile(sj, 5.0)))
@@ -462,11 +462,14 @@ def untangle_grid(
     return best
 
 
-def grid_quality(p: FloatArray, n1: int, n2: int) -> tuple[FloatArray, FloatArray]:
+def grid_quality(
+    p: FloatArray, n1: int, n2: int, angles: bool = True
+) -> tuple[FloatArray, FloatArray]:
     """Per quad of the grid ``p`` ((n1 + 1) * (n2 + 1), 2), row by row: the scaled Jacobian
     (n1 * n2,) (the smallest corner sine, 0 where an edge has zero length) and the largest
-    corner cosine (n1 * n2,) (the smallest angle; 2 where a corner is not convex), from the
-    grid's edge arrays (no gather: 4x faster than :func:`scaled_jacobian` at 512x512)."""
+    corner cosine (n1 * n2,) (the smallest angle; 2 where a corner is not convex; empty
+    unless ``angles``), from the grid's edge arrays (no gather: 4x faster than
+    :func:`scaled_jacobian` at 512x512)."""
     g = p.reshape(n2 + 1, n1 + 1, 2)
     h = g[:, 1:] - g[:, :-1]  # edges along i (n2 + 1, n1, 2)
     v = g[1:] - g[:-1]  # edges along j (n2, n1 + 1, 2)
@@ -486,11 +489,12 @@ def grid_quality(p: FloatArray, n1: int, n2: int) -> tuple[FloatArray, FloatArra
         for a, b, la, lb, sign in pairs:
             d = la * lb
             s = sign * (a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]) / d
-            c = sign * (a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]) / d
             s = np.where(np.isfinite(s), s, 0.0)
             np.minimum(sj, s, out=sj)
-            np.maximum(cmax, np.where(s > 0.0, c, 2.0), out=cmax)
-    return sj.ravel(), cmax.ravel()
+            if angles:
+                c = sign * (a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]) / d
+                np.maximum(cmax, np.where(s > 0.0, c, 2.0), out=cmax)
+    return sj.ravel(), cmax.ravel() if angles else np.zeros(0)
 
 
 def _measures(p: FloatArray, n1: int, n2: int) -> tuple[float, float, float]:
