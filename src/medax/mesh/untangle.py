@@ -471,29 +471,38 @@ def grid_quality(
     unless ``angles``), from the grid's edge arrays (no gather: 4x faster than
     :func:`scaled_jacobian` at 512x512)."""
     g = p.reshape(n2 + 1, n1 + 1, 2)
-    h = g[:, 1:] - g[:, :-1]  # edges along i (n2 + 1, n1, 2)
-    v = g[1:] - g[:-1]  # edges along j (n2, n1 + 1, 2)
-    lh, lv = np.hypot(h[..., 0], h[..., 1]), np.hypot(v[..., 0], v[..., 1])
+    x, y = np.ascontiguousarray(g[..., 0]), np.ascontiguousarray(g[..., 1])
+    hx, hy = x[:, 1:] - x[:, :-1], y[:, 1:] - y[:, :-1]  # edges along i (n2 + 1, n1)
+    vx, vy = x[1:] - x[:-1], y[1:] - y[:-1]  # edges along j (n2, n1 + 1)
+    lh, lv = np.hypot(hx, hy), np.hypot(vx, vy)
     # corner k of quad (i, j): its edges a (to the next corner) and b (to the previous) are,
     # up to one sign for both, corner 0 (h[j, i], v[j, i]), 1 (v[j, i+1], h[j, i]),
     # 2 (h[j+1, i], v[j, i+1]), 3 (v[j, i], h[j+1, i])
+    lo, hi, left, right = np.s_[:-1], np.s_[1:], np.s_[:, :-1], np.s_[:, 1:]
     pairs = (
-        (h[:-1], v[:, :-1], lh[:-1], lv[:, :-1], 1.0),
-        (v[:, 1:], h[:-1], lv[:, 1:], lh[:-1], -1.0),
-        (h[1:], v[:, 1:], lh[1:], lv[:, 1:], 1.0),
-        (v[:, :-1], h[1:], lv[:, :-1], lh[1:], -1.0),
+        (hx[lo], hy[lo], vx[left], vy[left], lh[lo], lv[left], 1.0),
+        (vx[right], vy[right], hx[lo], hy[lo], lv[right], lh[lo], -1.0),
+        (hx[hi], hy[hi], vx[right], vy[right], lh[hi], lv[right], 1.0),
+        (vx[left], vy[left], hx[hi], hy[hi], lv[left], lh[hi], -1.0),
     )
     sj = np.full((n2, n1), np.inf)
     cmax = np.full((n2, n1), -np.inf)
     with np.errstate(divide="ignore", invalid="ignore"):
-        for a, b, la, lb, sign in pairs:
+        for ax, ay, bx, by, la, lb, sign in pairs:
             d = la * lb
-            s = sign * (a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]) / d
-            s = np.where(np.isfinite(s), s, 0.0)
+            if sign < 0.0:
+                d = -d
+            s = ax * by
+            s -= ay * bx
+            s /= d
+            s[~np.isfinite(s)] = 0.0
             np.minimum(sj, s, out=sj)
             if angles:
-                c = sign * (a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]) / d
-                np.maximum(cmax, np.where(s > 0.0, c, 2.0), out=cmax)
+                c = ax * bx
+                c += ay * by
+                c /= d
+                c[~(s > 0.0)] = 2.0
+                np.maximum(cmax, c, out=cmax)
     return sj.ravel(), cmax.ravel() if angles else np.zeros(0)
 
 
