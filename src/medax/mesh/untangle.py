@@ -551,7 +551,8 @@ def smooth_grid(
     (``["winslow"]`` when kept, else empty) and ``kept``."""
     before = _measures(p, n1, n2)
     record: dict = {"min_sj": [before[0]], "p5_sj": [before[1]], "min_angle": [before[2]]}
-    out, stages = p, []
+    out = p
+    stages: list[str] = []
     if exact:
         record["why"] = "exact polar grid"
     elif min(n1, n2) >= 2:
