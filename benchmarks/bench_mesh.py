@@ -1,20 +1,25 @@
 """Benchmark: medax quad meshes vs gmsh transfinite + recombine on every shared region.
 
 For each region of ``regions.json`` and each size N x N (16, 32, 128, 512 by default), the
-same run meshes the region with medax (``method="ratio"``), with gmsh transfinite + recombine
+same run meshes the region with medax (``method="ratio"``, without the quality pass
+``smooth=False``: "medax ratio", and with it, the default: "medax smooth"), with gmsh
+transfinite + recombine
 (the same boundary division counts, exact geometry: lines, circle arcs and the same B-splines)
 and with gmsh transfinite + ``Mesh.Smoothing = 100``. It prints the quality side by side
 (scaled Jacobian min / 5th percentile, min angle min / 5th percentile, inverted count, all by
-medax's Verdict code on both meshes) and the time ratio medax / gmsh transfinite. Finally the
+medax's Verdict code on both meshes) and the time ratio to gmsh transfinite; then the
+targets of issue 22: the 5th-percentile scaled Jacobian and the minimum angle of medax (with
+the pass) at least gmsh TFI+smoothing's and TFI's, and the times of medax without the pass
+/ gmsh TFI and with it / gmsh TFI+smoothing. Finally the
 peak memory of a medax 512 x 512 mesh (largest region) is measured in a fresh subprocess
 (``ru_maxrss``, and ``tracemalloc`` for the Python heap).
 
     python benchmarks/bench_mesh.py [--sizes 16,32,128,512] [--regions a,b] [--repeat 3]
-                                    [--angle] [--paper]
+                                    [--angle] [--paper] [--no-exact] [--no-smooth]
 
-Each mesher runs ``--repeat`` times per region and size (medax and gmsh transfinite in
-turn) and its fastest run is reported: on a shared machine one run's time moves by 30 % or
-more, the fastest of a few much less.
+Each mesher runs ``--repeat`` times per region and size (medax, gmsh transfinite, medax
+with the pass and gmsh transfinite + smoothing in turn) and its fastest run is reported: on
+a shared machine one run's time moves by 30 % or more, the fastest of a few much less.
 
 ``--angle`` adds ``method="angle"`` (angle-weighted ratio curves on all line and arc pairs);
 ``--paper`` adds the paper's recursion (``method="paper"``) at the sizes up to 32.
@@ -158,6 +163,9 @@ def main() -> int:
         "--no-exact", action="store_true", help="leave out medax with every node solved (tol=0)"
     )
     ap.add_argument("--paper", action="store_true", help="add method='paper' at N <= 32")
+    ap.add_argument(
+        "--no-smooth", action="store_true", help="leave out medax with the quality pass"
+    )
     ap.add_argument("--memory-child", nargs=2, metavar=("REGION", "N"), help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.memory_child:
@@ -179,28 +187,37 @@ def main() -> int:
     for name in names:
         region = regions[name]
         for n in sizes:
-            # medax and gmsh transfinite in turn, each timed by its fastest of the repeats
-            t_medax = t_gmsh = np.inf
+            # medax and gmsh transfinite in turn, without and with smoothing, each timed by
+            # its fastest of the repeats
+            t_medax = t_gmsh = t_smooth = t_sm = np.inf
             for _ in range(args.repeat):
-                m, t = timed(mesh_region, region, (n, n))
+                m, t = timed(mesh_region, region, (n, n), smooth=False)
                 t_medax = min(t_medax, t)
                 gp, gq, t, dev = gmsh_mesh(region, n, n, 0)
                 t_gmsh = min(t_gmsh, t)
-            rows = [("medax ratio", m.points, m.quads, t_medax)]
-            if not args.no_exact:
-                me, t = best_of(args.repeat, mesh_region, region, (n, n), tol=0.0)
-                rows.append(("medax exact", me.points, me.quads, t))
-            if args.angle:
-                ma, t = best_of(args.repeat, mesh_region, region, (n, n), method="angle")
-                rows.append(("medax angle", ma.points, ma.quads, t))
-            if args.paper and n <= 32:
-                mp, t = best_of(args.repeat, mesh_region, region, (n, n), method="paper", tol=1e-7)
-                rows.append(("medax paper", mp.points, mp.quads, t))
-            rows.append(("gmsh TFI", gp, orient(gp, gq), t_gmsh))
-            t_sm = np.inf
-            for _ in range(args.repeat):
+                if not args.no_smooth:
+                    ms, t = timed(mesh_region, region, (n, n), smooth=True)
+                    t_smooth = min(t_smooth, t)
                 sp, sq, t, _ = gmsh_mesh(region, n, n, 100)
                 t_sm = min(t_sm, t)
+            rows = [("medax ratio", m.points, m.quads, t_medax)]
+            if not args.no_smooth:
+                rows.append(("medax smooth", ms.points, ms.quads, t_smooth))
+            if not args.no_exact:
+                me, t = best_of(args.repeat, mesh_region, region, (n, n), tol=0.0, smooth=False)
+                rows.append(("medax exact", me.points, me.quads, t))
+            if args.angle:
+                ma, t = best_of(
+                    args.repeat, mesh_region, region, (n, n), method="angle", smooth=False
+                )
+                rows.append(("medax angle", ma.points, ma.quads, t))
+            if args.paper and n <= 32:
+                mp, t = best_of(
+                    args.repeat, mesh_region, region, (n, n), method="paper", tol=1e-7,
+                    smooth=False,
+                )  # fmt: skip
+                rows.append(("medax paper", mp.points, mp.quads, t))
+            rows.append(("gmsh TFI", gp, orient(gp, gq), t_gmsh))
             rows.append(("gmsh TFI+sm", sp, orient(sp, sq), t_sm))
             res = {}
             for label, pts, quads, t in rows:
@@ -209,15 +226,26 @@ def main() -> int:
                 print(f"{name:15s} {n:4d} {label:12s} {t:8.3f} {s['sj_min']:7.3f} {s['sj_p5']:7.4f}"
                       f" {s['ang_min']:8.4f} {s['ang_p5']:7.2f} {s['inv']:4d}  "
                       f"{t / t_gmsh:7.2f}")  # fmt: skip
-            a, g = res["medax ratio"], res["gmsh TFI"]
-            ok = a["sj_p5"] >= g["sj_p5"] - 1e-12 and a["ang_min"] >= g["ang_min"] - 1e-9
-            verdict.append((name, n, ok, t_medax / t_gmsh, dev))
+            times = {label: t for label, _, _, t in rows}
+            verdict.append((name, n, res, times, dev))
     gmsh.finalize()
-    print("\nquality target (medax sj p5 and min angle >= gmsh TFI), time ratio, gmsh geometry "
-          "deviation from ours:")  # fmt: skip
-    for name, n, ok, ratio, dev in verdict:
-        print(f"  {name:15s} {n:4d}  quality {'met' if ok else 'MISSED'}  time x{ratio:.1f}  "
-              f"(gmsh sides within {dev:.1e})")  # fmt: skip
+    print("\nissue 22 targets: sj p5 and min angle >= gmsh TFI+sm's and TFI's; time "
+          "without the pass / gmsh TFI, with it / gmsh TFI+sm; gmsh sides' deviation:")  # fmt: skip
+    for name, n, res, times, dev in verdict:
+        words = []
+        for label in ("medax ratio", "medax smooth"):
+            if label not in res:
+                continue
+            a = res[label]
+            ok = all(
+                a["sj_p5"] >= res[g]["sj_p5"] - 1e-12 and a["ang_min"] >= res[g]["ang_min"] - 1e-9
+                for g in ("gmsh TFI", "gmsh TFI+sm")
+            )
+            words.append(f"{label.split()[1]} {'met' if ok else 'MISSED'}")
+        ratio = times["medax ratio"] / times["gmsh TFI"]
+        sm = times.get("medax smooth", np.nan) / times["gmsh TFI+sm"]
+        print(f"  {name:15s} {n:4d}  quality {', '.join(words)}  time x{ratio:.2f} / TFI, "
+              f"smooth x{sm:.2f} / TFI+sm  (gmsh sides within {dev:.1e})")  # fmt: skip
     big = max(sizes)
     worst = "wavy" if "wavy" in names else names[0]
     out = subprocess.run([sys.executable, __file__, "--memory-child", worst, str(big)],

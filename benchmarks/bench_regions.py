@@ -5,8 +5,8 @@ valid regions, line, arc, B-spline and polyline sides, convex and non-convex, sc
 to 1e3, a fixed seed), each at 16x16 and 7x23 divisions, in one run:
 
 - medax ``mesh_region`` (ratio method, the untangling stage where the medial grid is
-  tangled or degenerate; a refusal counts as no mesh), and the same with ``smooth=True``
-  (the quality pass, ``medax mesh --smooth``);
+  tangled or degenerate; a refusal counts as no mesh; ``smooth=False``), and the same with
+  ``smooth=True`` (the quality pass, ``medax mesh``'s default);
 - gmsh transfinite + recombine, and the same with ``Mesh.Smoothing = 100``.
 
 Per mesher: the share of the meshes with no inverted quad, then over those meshes the

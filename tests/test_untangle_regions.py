@@ -247,7 +247,7 @@ def test_smooth_lifts_wavy_to_gmsh_smoothed_and_keeps_polar_grid(shared_regions)
     from medax.mesh.gmsh_transfinite import gmsh_transfinite
 
     wavy = shared_regions["wavy"]
-    plain = mesh_region(wavy, divisions=(32, 32))
+    plain = mesh_region(wavy, divisions=(32, 32), smooth=False)
     smooth = mesh_region(wavy, divisions=(32, 32), smooth=True)
     p5 = [np.percentile(m.quality().scaled_jacobian, 5) for m in (plain, smooth)]
     gp, gq = gmsh_transfinite(wavy, 32, 32, smoothing=100)
@@ -257,7 +257,7 @@ def test_smooth_lifts_wavy_to_gmsh_smoothed_and_keeps_polar_grid(shared_regions)
     for idx in boundary_indices(32, 32):  # boundary nodes unchanged
         np.testing.assert_array_equal(smooth.points[idx], plain.points[idx])
     sector = shared_regions["annulus_sector"]
-    a = mesh_region(sector, divisions=(16, 16))
+    a = mesh_region(sector, divisions=(16, 16), smooth=False)
     b = mesh_region(sector, divisions=(16, 16), smooth=True)
     assert not b.info["smooth"]["kept"]
     np.testing.assert_array_equal(a.points, b.points)
@@ -267,4 +267,4 @@ def test_cli_smooth_refused_on_parts(tmp_path, capsys):
     step = tmp_path / "p.step"
     step.write_text("not read")
     assert main(["mesh", str(step), "--size", "1", "-o", str(tmp_path / "m.msh"), "--smooth"])
-    assert "--smooth applies to regions" in capsys.readouterr().err
+    assert "--smooth and --no-smooth apply to regions" in capsys.readouterr().err

@@ -578,7 +578,7 @@ def _structured(
     else:
         chained = any(len(s) > 1 for s in sides)
         fractions = [p[2] for p in per_side] if chained else None
-    mesh = mesh_region(region, divisions=(n1, n2), fractions=fractions)
+    mesh = mesh_region(region, divisions=(n1, n2), fractions=fractions, smooth=False)
     uv = mesh.params if flat is None else flat.uv(mesh.params)
     pts = np.array(mesh.points if flat is None else flat.points(mesh.params), dtype=np.float64)
     gid = np.full(len(pts), -1, dtype=np.int64)

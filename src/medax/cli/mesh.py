@@ -99,10 +99,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--plot", help="plot coloured by scaled Jacobian (.png, .svg, .pdf)")
     p.add_argument(
         "--smooth",
-        action="store_true",
-        help="regions: a quality pass after the grid (Winslow's equations on the interior "
-        "nodes, boundary nodes kept), kept only where it raises the 5th-percentile scaled "
-        "Jacobian without lowering the minimum",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="regions: the quality pass after the grid (the default; Winslow's equations on "
+        "the interior nodes, boundary nodes and exact polar grids kept), kept only where it "
+        "lowers neither the minimum nor the 5th-percentile scaled Jacobian nor the smallest "
+        "angle; --no-smooth: the medial grid as solved",
     )
     p.add_argument(
         "--allow-inverted",
@@ -177,8 +179,8 @@ def run(args: argparse.Namespace) -> int:
     if Path(args.regions).suffix.lower() in CAD_SUFFIXES:
         from medax.cli.mesh_part import run_part
 
-        if args.smooth:
-            raise InputError("--smooth applies to regions, not to CAD parts")
+        if args.smooth is not None:
+            raise InputError("--smooth and --no-smooth apply to regions, not to CAD parts")
         return run_part(args)
     # validate everything before any work, so bad input leaves no file behind
     check_outputs(
@@ -218,7 +220,7 @@ def run(args: argparse.Namespace) -> int:
         tol=args.tol,
         boundary=args.boundary or "arclength",
         allow_inverted=args.allow_inverted,
-        smooth=args.smooth,
+        smooth=args.smooth is not False,
     )
     time_s = float(mesh.info["time_s"])
     rep = report(mesh, time_s)

@@ -24,7 +24,8 @@ same algorithms as compiled loops over the points, one call per query:
   derivatives, per span polynomials or Cox-de Boor; ``jet_rows`` and ``heights_newton``
   (:mod:`medax.geometry.nurbs_kernel`) - NURBS surface jets and the Newton of
   :func:`medax.geometry.surface_heights.graph_heights` (announced and warmed up here with
-  the others).
+  the others);
+* ``winslow_sweeps`` (:mod:`medax.geometry.grid_kernel`) - the mesh quality pass.
 
 Compiled with ``cache=True``: the first run after an install compiles (a few seconds, logged
 at INFO) and stores the machine code in ``__pycache__`` next to this file, or, where that is
@@ -42,6 +43,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from medax.geometry import grid_kernel
 from medax.geometry._jit import HELPER, KERNEL
 from medax.geometry._types import FloatArray
 from medax.geometry.basis_kernel import span_basis_rows
@@ -668,6 +670,7 @@ _COMPILED = (
     crossing,
     span_basis_rows,
     heights_newton,
+    grid_kernel.winslow_sweeps,
 )
 _announced = False
 
@@ -728,3 +731,4 @@ def warm_up() -> None:
         surf = (np.ones((2, 2, 4)), kn, coef, kn, coef, False)
         box = np.array([0.0, 1.0, 0.0, 1.0])
         heights_newton(*surf, np.eye(3), x, x, np.zeros(1, np.bool_), box, 0.1, 2)
+    grid_kernel.warm_up()

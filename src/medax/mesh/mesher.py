@@ -87,7 +87,7 @@ def mesh_region(
     boundary: str = "arclength",
     fractions: Sequence[FloatArray] | None = None,
     allow_inverted: bool = False,
-    smooth: bool = False,
+    smooth: bool = True,
 ) -> QuadMesh:
     """Build a structured quad mesh of a 4-sided region from its medial axes.
 
@@ -132,9 +132,11 @@ def mesh_region(
     allow_inverted : bool
         Return a grid that is still inverted (with a warning) instead of raising.
     smooth : bool
-        Planar regions: the quality pass ``medax.mesh.untangle.smooth_grid`` (Winslow on the
-        interior nodes, kept only where it raises the 5th-percentile scaled Jacobian;
-        ``info["smooth"]``).
+        Planar regions: the quality pass ``medax.mesh.untangle.smooth_grid`` (default;
+        Winslow's equations on the interior nodes, kept only where it lowers neither the
+        minimum nor the 5th percentile of the scaled Jacobian nor the smallest angle;
+        boundary nodes and the exact polar grid stay; ``info["smooth"]``). ``False``: the
+        medial grid as solved (and untangled).
 
     Returns
     -------
@@ -206,7 +208,8 @@ def mesh_region(
                 _refuse_stuck_corner(region, params, n1, n2, work.sides, fractions is None)
             params = untangle_grid(params, n1, n2, slide, info=info)
             if smooth:
-                params = smooth_grid(params, n1, n2, info)
+                exact = info.get("polar_grid", 0.0) == 1.0 and "untangle" not in info
+                params = smooth_grid(params, n1, n2, info, exact=exact)
         params = params * scale + offset
     else:
         params, n1, n2 = _paper_grid(region, n1, n2, size, tol)

@@ -226,6 +226,10 @@ def _grid(
             error[1:-1, 1:-1] = err.reshape(n2 - 1, n1 - 1)
     counts["copied"] = float(fine.size)  # on a solved coarse node: solved there
     counts["interpolated"] = float(m - rows.size - fine.size)
+    # 1: the exact polar grid (the crossings of curves of constant ratio, one family rays of
+    # equal angle), which the quality pass keeps as it is
+    constant = axes[0] is not None and axes[1] is not None
+    counts["polar_grid"] = float(constant and "angle" in kinds)
     for key in ("newton_iterations", "global_resolved", "interpolated", "copied"):
         counts[f"coarse_{key}"] = coarse_counts.get(key, 0) + coarse_counts.get(f"coarse_{key}", 0)
     own = [(idx[k], side_t[0][k][0]) for k in range(4)]
