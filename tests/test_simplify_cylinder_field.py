@@ -288,16 +288,12 @@ def test_periodic_fit_of_a_boss_foot_with_its_fillet_half():
     assert off.max() <= 2 * tol
 
 
-def test_second_passes_not_started_past_their_budget(monkeypatch):
-    """Past ``SECOND_PASS_BUDGET`` seconds of the run the cylinder field's pass (a second
-    pass over the fitted faces) is not started, and the progress says so; the result is
-    still a valid, validated solid (the 12-edge box, whose fillets need no second pass,
-    simplified all the same). Within it, the pass runs."""
+def _box_with_spied_cylinder_pass(monkeypatch):  # type: ignore[no-untyped-def]
+    """The 12-edge box (six fitted faces) classified, its specs, and the list that gets one
+    entry per call of the cylinder field's pass (spied on in the pipeline)."""
     from medax.cad.simplify import parts, pipeline
 
-    shape = parts.box_all_fillets(40.0, 30.0, 20.0, 4.0).shape  # six fitted faces
-    cls = classify_solid(shape)
-    specs = specs_from_classification(cls)
+    cls = classify_solid(parts.box_all_fillets(40.0, 30.0, 20.0, 4.0).shape)
     calls: list[int] = []
     real = pipeline.cylinder_pass
 
@@ -306,6 +302,17 @@ def test_second_passes_not_started_past_their_budget(monkeypatch):
         return real(*args)
 
     monkeypatch.setattr(pipeline, "cylinder_pass", spy)
+    return cls, specs_from_classification(cls), calls
+
+
+def test_second_passes_not_started_past_their_budget(monkeypatch):
+    """Past ``SECOND_PASS_BUDGET`` seconds of the run the cylinder field's pass (a second
+    pass over the fitted faces) is not started, and the progress says so; the result is
+    still a valid, validated solid (the 12-edge box, whose fillets need no second pass,
+    simplified all the same). Within it, the pass runs."""
+    from medax.cad.simplify import pipeline
+
+    cls, specs, calls = _box_with_spied_cylinder_pass(monkeypatch)
     said: list[str] = []
     simplify(cls.shape, specs, progress=said.append)
     assert calls and not any("not tried:" in m for m in said)
@@ -325,23 +332,13 @@ def test_budgets_count_cpu_time_not_wall_time(monkeypatch):
     import time
     import types
 
-    from medax.cad.simplify import parts, pipeline
+    from medax.cad.simplify import pipeline
 
-    shape = parts.box_all_fillets(40.0, 30.0, 20.0, 4.0).shape
-    cls = classify_solid(shape)
-    specs = specs_from_classification(cls)
-    calls: list[int] = []
-    real = pipeline.cylinder_pass
-
-    def spy(*args):  # type: ignore[no-untyped-def]
-        calls.append(1)
-        return real(*args)
-
+    cls, specs, calls = _box_with_spied_cylinder_pass(monkeypatch)
     wall = iter(range(0, 10**9, 1000))
     loaded = types.SimpleNamespace(
         perf_counter=lambda: float(next(wall)), process_time=time.process_time
     )
-    monkeypatch.setattr(pipeline, "cylinder_pass", spy)
     monkeypatch.setattr(pipeline, "time", loaded)
     said: list[str] = []
     r = simplify(cls.shape, specs, progress=said.append)
