@@ -166,10 +166,10 @@ def component_origins(new: Sequence[Any], old: Sequence[Sequence[Any]]) -> np.nd
             j = first.setdefault(k, i)
             parent[root(i)] = root(j)
     comp = [root(i) for i in range(len(new))]
-    centre = {
-        c: _centre([f for i in range(len(new)) if comp[i] == c for f in (new[i], *old[i])])
-        for c in set(comp)
-    }
+    members: dict[int, list[Any]] = {}
+    for i, c in enumerate(comp):
+        members.setdefault(c, []).extend((new[i], *old[i]))
+    centre = {c: _centre(faces) for c, faces in members.items()}
     rows = [centre[comp[i]] for i in range(len(new))]
     rows += [centre[comp[i]] for i in range(len(new)) for _ in old[i]]
     return np.array(rows, dtype=np.float64).reshape(-1, 3)
