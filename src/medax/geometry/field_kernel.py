@@ -105,7 +105,7 @@ def arc_term(c: FloatArray, x: float, y: float, w: float) -> tuple[float, float,
 @njit(**HELPER, inline="always")
 def _field(
     sides: FloatArray,
-    w: FloatArray,
+    r: FloatArray,
     i: int,
     x: float,
     y: float,
@@ -114,10 +114,11 @@ def _field(
     h: FloatArray,
 ) -> None:
     """Both equations ``g`` (6,: ``g_a, gax, gay, g_b, gbx, gby``) and the Hessian bounds
-    ``h`` (4,) of node ``i`` (weights ``w[i]``) at ``(x, y)``; on tracked sides from the
+    ``h`` (4,) of node ``i`` (ratios ``r[:, i]``: weights ``1 - r`` on sides 0, 1, ``r`` on 2, 3) at ``(x, y)``; on tracked sides from the
     feet in ``fs`` (20,: a column of the state layout), whose distances are set here."""
     for k in range(4):
-        wk = w[i, k]
+        rk = r[k & 1, i]
+        wk = 1.0 - rk if k < 2 else rk
         kind = sides[k, 0]
         if kind == 2.0:
             rx, ry = x - fs[8 + 2 * k], y - fs[9 + 2 * k]
@@ -179,7 +180,8 @@ def _start(
     table: tuple[FloatArray, FloatArray, FloatArray],
     x: float,
     y: float,
-    t0: FloatArray,
+    tio: FloatArray,
+    i: int,
     given: FloatArray,
     fs: FloatArray,
     alt: FloatArray,
@@ -187,21 +189,23 @@ def _start(
     foot: FloatArray,
     jet: FloatArray,
 ) -> None:
-    """The starting feet of a node at ``(x, y)`` into ``fs``: on each tracked side ``k`` the
-    caller's global foot where ``given[k]`` is one (foot point ``given[8 + 2k:10 + 2k]``),
-    else tracked from ``t0[k]``, and also from a second start ``given[4 + k]`` where that
-    is one, the nearer kept (scratch ``alt``)."""
-    _track(sides, table, x, y, t0, fs, pt, foot, jet)
+    """The starting feet of node ``i`` at ``(x, y)`` into ``fs``: on each tracked side
+    ``k`` tracked from ``tio[k, i]``, and also from a second start ``tio[4 + k, i]`` where
+    that is one (not NaN), the nearer kept (scratch ``alt``); where ``tio[k, i]`` is NaN
+    the caller's global foot ``given[k]`` (foot point ``given[8 + 2k:10 + 2k]``)."""
     second = False
     for k in range(4):
-        alt[k] = given[4 + k] if sides[k, 0] == 2.0 else np.nan
+        alt[k] = tio[k, i]
+    _track(sides, table, x, y, alt, fs, pt, foot, jet)
+    for k in range(4):
+        alt[k] = tio[4 + k, i] if sides[k, 0] == 2.0 and tio[k, i] == tio[k, i] else np.nan
         second = second or alt[k] == alt[k]
     if second:
         _track(sides, table, x, y, alt, alt, pt, foot, jet)
     for k in range(4):
         if sides[k, 0] != 2.0:
             continue
-        if given[k] == given[k]:
+        if tio[k, i] != tio[k, i]:
             fs[k], fs[16 + k] = given[k], np.inf
             fs[8 + 2 * k], fs[9 + 2 * k] = given[8 + 2 * k], given[9 + 2 * k]
         elif alt[k] == alt[k]:
@@ -219,7 +223,8 @@ def free_newton(  # type: ignore[no-untyped-def]
     starts: FloatArray,
     rows: FloatArray,
     xs: FloatArray,
-    w: FloatArray,
+    r: FloatArray,
+    tio: FloatArray,
     fs: FloatArray,
     pend: FloatArray,
     g: FloatArray,
@@ -228,12 +233,12 @@ def free_newton(  # type: ignore[no-untyped-def]
     ist: np.ndarray,
     par: FloatArray,
     iters: int,
+    first: bool,
 ) -> int:
     """The damped Newton of :func:`medax.mesh.free_field.newton_free` on every node not
     done or waiting (module layout; ``par``: residual tolerance, tracking range and step
-    cap, region units), in place. A first call with every node in phase :data:`RESUME`
-    and its starting feet in ``pend`` evaluates the nodes where they are. Returns the
-    number of nodes left waiting."""
+    cap, region units), in place. The ``first`` call evaluates every node where it is,
+    from its starting feet. Returns the number of nodes left waiting."""
     tol, far, max_step = par[0], par[1], par[2]
     table = (inner, starts, rows)
     n = xs.shape[0]
@@ -243,22 +248,23 @@ def free_newton(  # type: ignore[no-untyped-def]
     pt, foot, jet = np.empty((2, 1)), np.empty((2, 1)), np.empty((3, 2))
     waiting = 0
     for i in range(n):
-        phase = ist[i, 0]
-        if phase == RESUME and ist[i, 2] < 0:  # the first call: the node where it is
+        phase = RUN if first else ist[i, 0]
+        if first:  # the node where it is
+            ist[i, 1] = 0
             qx, qy = xs[i, 0], xs[i, 1]
-            _start(sides, table, qx, qy, fs[i], pend[i], col, alt, pt, foot, jet)
-            _field(sides, w, i, qx, qy, col, ng, nh)
+            _start(sides, table, qx, qy, tio, i, pend[i], col, alt, pt, foot, jet)
+            _field(sides, r, i, qx, qy, col, ng, nh)
             nres = math.sqrt(ng[0] * ng[0] + ng[3] * ng[3])
             _accept(i, qx, qy, nres, col, ng, nh, xs, res, fs, g)
             phase = RUN
         elif phase == RESUME:  # the trial point with the caller's feet
             for k in range(4):
                 if sides[k, 0] == 2.0:
-                    for r in (k, 8 + 2 * k, 9 + 2 * k, 16 + k):
-                        col[r] = pend[i, r]
+                    for c in (k, 8 + 2 * k, 9 + 2 * k, 16 + k):
+                        col[c] = pend[i, c]
             lam = st[i, 3]
             qx, qy = st[i, 4], st[i, 5]
-            _field(sides, w, i, qx, qy, col, ng, nh)
+            _field(sides, r, i, qx, qy, col, ng, nh)
             nres = math.sqrt(ng[0] * ng[0] + ng[3] * ng[3])
             if nres < res[i] * (1.0 - 1e-4 * lam) + tol:
                 _accept(i, qx, qy, nres, col, ng, nh, xs, res, fs, g)
@@ -273,7 +279,7 @@ def free_newton(  # type: ignore[no-untyped-def]
                     phase = DONE
                     break
                 ist[i, 1] += 1
-                phase = _step(sides, i, w, fs, g, xs, res, st, ist, tol, max_step)
+                phase = _step(sides, i, r, fs, g, xs, res, st, ist, tol, max_step)
                 continue
             # backtracking on the residual from damping st[i, 3]
             lam = st[i, 3]
@@ -283,12 +289,12 @@ def free_newton(  # type: ignore[no-untyped-def]
                 # feet are tracked for small moves only: a long step may cross the place
                 # where a foot jumps to another part of its side, which only a global
                 # query sees (the caller's)
-                for r in range(20):
-                    pend[i, r] = col[r]  # (NaN on untracked sides)
+                for c in range(20):
+                    pend[i, c] = col[c]  # (NaN on untracked sides)
                 st[i, 4], st[i, 5] = qx, qy
                 phase = WAIT
                 break
-            _field(sides, w, i, qx, qy, col, ng, nh)
+            _field(sides, r, i, qx, qy, col, ng, nh)
             nres = math.sqrt(ng[0] * ng[0] + ng[3] * ng[3])
             if nres < res[i] * (1.0 - 1e-4 * lam) + tol:
                 _accept(i, qx, qy, nres, col, ng, nh, xs, res, fs, g)
@@ -301,6 +307,10 @@ def free_newton(  # type: ignore[no-untyped-def]
         ist[i, 0] = phase
         if phase == WAIT:
             waiting += 1
+        else:  # done: the feet and distances out
+            for k in range(4):
+                if sides[k, 0] == 2.0:
+                    tio[k, i], tio[4 + k, i] = fs[i, k], fs[i, 4 + k]
     return waiting
 
 
@@ -333,7 +343,7 @@ def _accept(
 def _step(
     sides: FloatArray,
     i: int,
-    w: FloatArray,
+    r: FloatArray,
     fs: FloatArray,
     g: FloatArray,
     xs: FloatArray,
@@ -358,9 +368,8 @@ def _step(
     h0, h1, h2, h3 = fs[i, 20], fs[i, 21], fs[i, 22], fs[i, 23]
     top = _nmax(_nmax(h0, h1), _nmax(h2, h3))
     half = 0.5 * norm * norm
-    bound = 2.0 * math.hypot(
-        half * (w[i, 0] * h0 + w[i, 2] * h2), half * (w[i, 1] * h1 + w[i, 3] * h3)
-    )
+    ra, rb = r[0, i], r[1, i]
+    bound = 2.0 * math.hypot(half * ((1.0 - ra) * h0 + ra * h2), half * ((1.0 - rb) * h1 + rb * h3))
     if cap == 1.0 and norm * top <= _LOCAL and bound <= 0.5 * tol:
         # unevaluated: the feet stay (distances to their points, upper bounds)
         x, y = xs[i, 0] + sx, xs[i, 1] + sy
@@ -383,12 +392,12 @@ def warm_up() -> None:
     sides[:, 2] = 1e-6
     inner, starts = np.array([0.5]), np.array([0.0, 0.5])
     rows = np.ones((4, 2, 2))
-    fs, pend = np.full((1, 24), 0.5), np.full((1, 20), np.nan)
-    ist = np.zeros((1, 3), dtype=np.int64)
-    ist[0, 0], ist[0, 2] = RESUME, -1
+    tio = np.full((8, 1), 0.5)
+    tio[4:] = np.nan
     free_newton(
-        sides, inner, starts, rows, np.zeros((1, 2)), np.full((1, 4), 0.5), fs, pend,
-        np.zeros((1, 6)), np.zeros(1), np.zeros((1, 6)), ist, np.array([1e-9, 1e-3, 1.0]), 2,
+        sides, inner, starts, rows, np.zeros((1, 2)), np.full((2, 1), 0.5), tio,
+        np.empty((1, 24)), np.empty((1, 20)), np.empty((1, 6)), np.empty(1), np.empty((1, 6)),
+        np.empty((1, 3), dtype=np.int64), np.array([1e-9, 1e-3, 1.0]), 2, True,
     )  # fmt: skip
 
 

@@ -112,36 +112,42 @@ def newton_free(
     field = FreeField(sides, tol)
     n = rows.size
     at: np.ndarray | slice = slice(None) if n == ra_all.size else rows
-    ra, rb = ra_all[at], rb_all[at]
+    r = np.stack((ra_all[at], rb_all[at]))
     xs = np.ascontiguousarray(p, dtype=np.float64)
-    w = np.column_stack((1.0 - ra, 1.0 - rb, ra, rb))
-    # (the kernel reads only the tracked sides' columns and writes all it reads)
-    fs, pend = np.empty((n, 24)), np.empty((n, 20))
     tracked = [k for k in range(4) if field.tracked[k]]
+    # per side the feet, in (and out), and the second starts, in (the distances, out)
+    tio = np.full((8, n), np.nan)
     for k in tracked:
-        fs[:, k], pend[:, k] = sides.t[k][at], np.nan  # (NaN: no global start)
-        pend[:, 4 + k] = sides.t_alt[k][at]
-        none = np.flatnonzero(np.isnan(fs[:, k]))  # no start: a global query
-        if none.size:
-            c = field.curves[k].closest(xs[none])
-            pend[none, k], pend[none, 8 + 2 * k], pend[none, 9 + 2 * k] = c.t, *c.foot.T
-            pend[none, 4 + k] = np.nan
-    g, res, st = np.empty((n, 6)), np.empty(n), np.empty((n, 6))
-    ist = np.zeros((n, 3), dtype=np.int64)
-    ist[:, 0], ist[:, 2] = fk.RESUME, -1
+        tio[k], tio[4 + k] = sides.t[k][at], sides.t_alt[k][at]
+    res = np.empty(n)
     par = np.array([tol, track_step * sides.region.diagonal, 0.1 * sides.region.diagonal])
     inner, starts, table = field.table
+    it = 0
     for s in range(0, n, _BLOCK):
-        b = slice(s, min(n, s + _BLOCK))
+        e = min(n, s + _BLOCK)
+        m = e - s
+        xb, rblk, tb = xs[s:e], r[:, s:e].copy(), tio[:, s:e].copy()
+        # (the kernel reads only the tracked sides' columns of these, and writes them first)
+        fs, pend, g, st = np.empty((m, 24)), np.empty((m, 20)), np.empty((m, 6)), np.empty((m, 6))
+        ist = np.empty((m, 3), dtype=np.int64)
+        for k in tracked:
+            none = np.flatnonzero(np.isnan(tb[k]))  # no start: a global query
+            if none.size:
+                c = field.curves[k].closest(xb[none])
+                pend[none, k], pend[none, 8 + 2 * k], pend[none, 9 + 2 * k] = c.t, *c.foot.T
+        first = True
         while fk.free_newton(
-            field.sides, inner, starts, table, xs[b], w[b], fs[b], pend[b], g[b], res[b],
-            st[b], ist[b], par, iters,
+            field.sides, inner, starts, table, xb, rblk, tb, fs, pend, g, res[s:e], st, ist,
+            par, iters, first,
         ):  # fmt: skip
-            _certify(field, pend[b], st[b], ist[b], tracked)
+            first = False
+            _certify(field, pend, st, ist, tracked)
+        tio[:, s:e] = tb
+        it = max(it, int(ist[:, 1].max(initial=0)))
     for k in tracked:
-        sides.t[k][at], sides.d[k][at] = fs[:, k], fs[:, 4 + k]
+        sides.t[k][at], sides.d[k][at] = tio[k], tio[4 + k]
         sides.t_alt[k][at] = np.nan
-    return xs, int(ist[:, 1].max(initial=0)), res
+    return xs, it, res
 
 
 def _certify(
