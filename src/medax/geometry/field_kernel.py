@@ -47,7 +47,7 @@ _LOCAL = 0.05  # a step unevaluated only if at most this times each distance's c
 _TRACK_ITERS = 8  # tracking steps per foot (as :func:`medax.geometry.curve.track_rows`)
 
 
-@njit(**HELPER, inline="always")
+@njit(**HELPER)
 def _nmax(a: float, b: float) -> float:
     """``np.maximum`` of two numbers (NaN if either is)."""
     if a != a or b != b:
@@ -102,7 +102,7 @@ def arc_term(c: FloatArray, x: float, y: float, w: float) -> tuple[float, float,
     return dr, vx, vy
 
 
-@njit(**HELPER, inline="always")
+@njit(**HELPER)
 def _field(
     sides: FloatArray,
     r: FloatArray,
@@ -143,10 +143,12 @@ def _field(
             g[3 * k - 4] -= vy
 
 
-@njit(**HELPER, inline="always")
+@njit(**HELPER)
 def _track(
     sides: FloatArray,
-    table: tuple[FloatArray, FloatArray, FloatArray],
+    inner: FloatArray,
+    starts: FloatArray,
+    rows: FloatArray,
     x: float,
     y: float,
     t0: FloatArray,
@@ -165,8 +167,8 @@ def _track(
         kap = 0.0
         off, tol = sides[k, 1], sides[k, 2]
         for it in range(_TRACK_ITERS):  # (the loop of track_table, on one point)
-            span = table_span(table[0], t + off)
-            table_jet1(table[2], span, t - table[1][span], jet)
+            span = table_span(inner, t + off)
+            table_jet1(rows, span, t - starts[span], jet)
             t, kap, done = _track1(jet, pt, 0, t, tol, it == _TRACK_ITERS - 1, foot)
             if done:
                 break
@@ -174,10 +176,12 @@ def _track(
         fs[8 + 2 * k], fs[9 + 2 * k] = foot[0, 0], foot[1, 0]
 
 
-@njit(**HELPER, inline="always")
+@njit(**HELPER)
 def _start(
     sides: FloatArray,
-    table: tuple[FloatArray, FloatArray, FloatArray],
+    inner: FloatArray,
+    starts: FloatArray,
+    rows: FloatArray,
     x: float,
     y: float,
     tio: FloatArray,
@@ -196,12 +200,12 @@ def _start(
     second = False
     for k in range(4):
         alt[k] = tio[k, i]
-    _track(sides, table, x, y, alt, fs, pt, foot, jet)
+    _track(sides, inner, starts, rows, x, y, alt, fs, pt, foot, jet)
     for k in range(4):
         alt[k] = tio[4 + k, i] if sides[k, 0] == 2.0 and tio[k, i] == tio[k, i] else np.nan
         second = second or alt[k] == alt[k]
     if second:
-        _track(sides, table, x, y, alt, alt, pt, foot, jet)
+        _track(sides, inner, starts, rows, x, y, alt, alt, pt, foot, jet)
     for k in range(4):
         if sides[k, 0] != 2.0:
             continue
@@ -240,7 +244,6 @@ def free_newton(  # type: ignore[no-untyped-def]
     cap, region units), in place. The ``first`` call evaluates every node where it is,
     from its starting feet. Returns the number of nodes left waiting."""
     tol, far, max_step = par[0], par[1], par[2]
-    table = (inner, starts, rows)
     n = xs.shape[0]
     col, alt = np.full(20, np.nan), np.full(20, np.nan)
     ng = np.empty(6)
@@ -252,7 +255,7 @@ def free_newton(  # type: ignore[no-untyped-def]
         if first:  # the node where it is
             ist[i, 1] = 0
             qx, qy = xs[i, 0], xs[i, 1]
-            _start(sides, table, qx, qy, tio, i, pend[i], col, alt, pt, foot, jet)
+            _start(sides, inner, starts, rows, qx, qy, tio, i, pend[i], col, alt, pt, foot, jet)
             _field(sides, r, i, qx, qy, col, ng, nh)
             nres = math.sqrt(ng[0] * ng[0] + ng[3] * ng[3])
             _accept(i, qx, qy, nres, col, ng, nh, xs, res, fs, g)
@@ -284,7 +287,7 @@ def free_newton(  # type: ignore[no-untyped-def]
             # backtracking on the residual from damping st[i, 3]
             lam = st[i, 3]
             qx, qy = xs[i, 0] + lam * st[i, 0], xs[i, 1] + lam * st[i, 1]
-            _track(sides, table, qx, qy, fs[i], col, pt, foot, jet)
+            _track(sides, inner, starts, rows, qx, qy, fs[i], col, pt, foot, jet)
             if lam * st[i, 2] > far:
                 # feet are tracked for small moves only: a long step may cross the place
                 # where a foot jumps to another part of its side, which only a global
@@ -314,7 +317,7 @@ def free_newton(  # type: ignore[no-untyped-def]
     return waiting
 
 
-@njit(**HELPER, inline="always")
+@njit(**HELPER)
 def _accept(
     i: int,
     x: float,
@@ -339,7 +342,7 @@ def _accept(
         g[i, r_] = ng[r_]
 
 
-@njit(**HELPER, inline="always")
+@njit(**HELPER)
 def _step(
     sides: FloatArray,
     i: int,
