@@ -48,14 +48,6 @@ _TRACK_ITERS = 8  # tracking steps per foot (as :func:`medax.geometry.curve.trac
 
 
 @njit(**HELPER)
-def _nmax(a: float, b: float) -> float:
-    """``np.maximum`` of two numbers (NaN if either is)."""
-    if a != a or b != b:
-        return a + b
-    return a if a >= b else b
-
-
-@njit(**HELPER)
 def segment_term(c: FloatArray, x: float, y: float, w: float) -> tuple[float, float, float]:
     """``w d`` and ``w u`` (``u`` the unit vector from the foot, 0 on the segment) of point
     ``(x, y)`` for a segment with constants ``c`` (``ax, ay, ex, ey, ee``)."""
@@ -102,122 +94,15 @@ def arc_term(c: FloatArray, x: float, y: float, w: float) -> tuple[float, float,
     return dr, vx, vy
 
 
-@njit(**HELPER)
-def _field(
-    sides: FloatArray,
-    r: FloatArray,
-    i: int,
-    x: float,
-    y: float,
-    fs: FloatArray,
-    g: FloatArray,
-    h: FloatArray,
-) -> None:
-    """Both equations ``g`` (6,: ``g_a, gax, gay, g_b, gbx, gby``) and the Hessian bounds
-    ``h`` (4,) of node ``i`` (ratios ``r[:, i]``: weights ``1 - r`` on sides 0, 1, ``r`` on 2, 3) at ``(x, y)``; on tracked sides from the
-    feet in ``fs`` (20,: a column of the state layout), whose distances are set here."""
-    for k in range(4):
-        rk = r[k & 1, i]
-        wk = 1.0 - rk if k < 2 else rk
-        kind = sides[k, 0]
-        if kind == 2.0:
-            rx, ry = x - fs[8 + 2 * k], y - fs[9 + 2 * k]
-            d = math.sqrt(rx * rx + ry * ry)
-            inv = 1.0 / max(d, _TINY)
-            h[k] = (fs[16 + k] + 1.0) * inv
-            f = wk * inv
-            v, vx, vy = wk * d, rx * f, ry * f
-            fs[4 + k] = d
-        elif kind == 0.0:
-            v, vx, vy = segment_term(sides[k, 3:], x, y, wk)
-            h[k] = wk / max(v, _TINY)
-        else:
-            v, vx, vy = arc_term(sides[k, 3:], x, y, wk)
-            rho = math.hypot(x - sides[k, 3], y - sides[k, 4])
-            h[k] = wk / max(v, _TINY) + 1.0 / max(rho, _TINY)
-        if k < 2:
-            g[3 * k], g[3 * k + 1], g[3 * k + 2] = v, vx, vy
-        else:
-            g[3 * k - 6] -= v
-            g[3 * k - 5] -= vx
-            g[3 * k - 4] -= vy
-
-
-@njit(**HELPER)
-def _track(
-    sides: FloatArray,
-    inner: FloatArray,
-    starts: FloatArray,
-    rows: FloatArray,
-    x: float,
-    y: float,
-    t0: FloatArray,
-    fs: FloatArray,
-    pt: FloatArray,
-    foot: FloatArray,
-    jet: FloatArray,
-) -> None:
-    """Feet of ``(x, y)`` on the tracked sides from the feet ``t0`` (20,: state layout) into
-    ``fs`` (foot, foot point, curvature term); scratch ``pt``, ``foot`` (2, 1), ``jet``."""
-    pt[0, 0], pt[1, 0] = x, y
-    for k in range(4):
-        if sides[k, 0] != 2.0 or t0[k] != t0[k]:
-            continue
-        t = min(max(t0[k], 0.0), 1.0)
-        kap = 0.0
-        off, tol = sides[k, 1], sides[k, 2]
-        for it in range(_TRACK_ITERS):  # (the loop of track_table, on one point)
-            span = table_span(inner, t + off)
-            table_jet1(rows, span, t - starts[span], jet)
-            t, kap, done = _track1(jet, pt, 0, t, tol, it == _TRACK_ITERS - 1, foot)
-            if done:
-                break
-        fs[k], fs[16 + k] = t, kap
-        fs[8 + 2 * k], fs[9 + 2 * k] = foot[0, 0], foot[1, 0]
-
-
-@njit(**HELPER)
-def _start(
-    sides: FloatArray,
-    inner: FloatArray,
-    starts: FloatArray,
-    rows: FloatArray,
-    x: float,
-    y: float,
-    tio: FloatArray,
-    i: int,
-    given: FloatArray,
-    fs: FloatArray,
-    alt: FloatArray,
-    pt: FloatArray,
-    foot: FloatArray,
-    jet: FloatArray,
-) -> None:
-    """The starting feet of node ``i`` at ``(x, y)`` into ``fs``: on each tracked side
-    ``k`` tracked from ``tio[k, i]``, and also from a second start ``tio[4 + k, i]`` where
-    that is one (not NaN), the nearer kept (scratch ``alt``); where ``tio[k, i]`` is NaN
-    the caller's global foot ``given[k]`` (foot point ``given[8 + 2k:10 + 2k]``)."""
-    second = False
-    for k in range(4):
-        alt[k] = tio[k, i]
-    _track(sides, inner, starts, rows, x, y, alt, fs, pt, foot, jet)
-    for k in range(4):
-        alt[k] = tio[4 + k, i] if sides[k, 0] == 2.0 and tio[k, i] == tio[k, i] else np.nan
-        second = second or alt[k] == alt[k]
-    if second:
-        _track(sides, inner, starts, rows, x, y, alt, alt, pt, foot, jet)
-    for k in range(4):
-        if sides[k, 0] != 2.0:
-            continue
-        if tio[k, i] != tio[k, i]:
-            fs[k], fs[16 + k] = given[k], np.inf
-            fs[8 + 2 * k], fs[9 + 2 * k] = given[8 + 2 * k], given[9 + 2 * k]
-        elif alt[k] == alt[k]:
-            ax, ay = x - alt[8 + 2 * k], y - alt[9 + 2 * k]
-            bx, by = x - fs[8 + 2 * k], y - fs[9 + 2 * k]
-            if ax * ax + ay * ay < bx * bx + by * by:
-                fs[k], fs[16 + k] = alt[k], alt[16 + k]
-                fs[8 + 2 * k], fs[9 + 2 * k] = alt[8 + 2 * k], alt[9 + 2 * k]
+#: columns of the node state ``fs`` (n, WIDTH): per side ``k`` the accepted foot ``T + k``,
+#: distance ``D + k``, foot point ``FOOT + 2k, FOOT + 2k + 1``, curvature term of its
+#: tracking ``KAP + k`` (inf where not known) and Hessian bound ``HESS + k``; the equations
+#: ``G + 0..5`` (``g_a, gax, gay, g_b, gbx, gby``); the step ``STEP + 0..5`` (``sx, sy``, its
+#: uncapped length, the damping, the trial point); ``PEND + 0..19`` a trial point's feet in
+#: the layout of ``T .. KAP + 3`` (and the caller's global starting feet); the residual
+#: ``RES``
+T, D, FOOT, KAP, HESS, G, STP, PEND, RES, WIDTH = 0, 4, 8, 16, 20, 24, 30, 36, 56, 57
+_ALT = 5  # phase: tracking a node's second starts
 
 
 @njit(**KERNEL)
@@ -230,162 +115,192 @@ def free_newton(  # type: ignore[no-untyped-def]
     r: FloatArray,
     tio: FloatArray,
     fs: FloatArray,
-    pend: FloatArray,
-    g: FloatArray,
-    res: FloatArray,
-    st: FloatArray,
     ist: np.ndarray,
     par: FloatArray,
     iters: int,
     first: bool,
 ) -> int:
-    """The damped Newton of :func:`medax.mesh.free_field.newton_free` on every node not
-    done or waiting (module layout; ``par``: residual tolerance, tracking range and step
-    cap, region units), in place. The ``first`` call evaluates every node where it is,
-    from its starting feet. Returns the number of nodes left waiting."""
+    """The damped Newton of :func:`medax.mesh.free_field.newton_free` on the nodes ``xs``
+    (n, 2; in place) not done or waiting: ratios ``r`` (2, n; side weights ``1 - r`` on
+    sides 0 and 1, ``r`` on 2 and 3), feet ``tio`` (8, n: per side the starting foot, NaN:
+    the caller's global one in ``fs``, then the second start, NaN: none; out: the feet and
+    the distances), state ``fs`` and ``ist`` (n, 3: phase, iterations, backtracking step),
+    ``par``: residual tolerance, tracking range, step cap (region units). The ``first``
+    call evaluates every node where it is. Returns the number of nodes left waiting.
+
+    One place tracks the feet (from the starts, the second starts or the accepted feet)
+    and one evaluates the equations, for every purpose: the kernel compiles as one
+    function (its helpers' calls cost time and compile time)."""
     tol, far, max_step = par[0], par[1], par[2]
     n = xs.shape[0]
-    col, alt = np.full(20, np.nan), np.full(20, np.nan)
-    ng = np.empty(6)
-    nh = np.empty(4)
+    col, prim = np.full(20, np.nan), np.full(20, np.nan)
     pt, foot, jet = np.empty((2, 1)), np.empty((2, 1)), np.empty((3, 2))
+    ga = gax = gay = gb = gbx = gby = 0.0
     waiting = 0
     for i in range(n):
-        phase = RUN if first else ist[i, 0]
-        if first:  # the node where it is
-            ist[i, 1] = 0
-            qx, qy = xs[i, 0], xs[i, 1]
-            _start(sides, inner, starts, rows, qx, qy, tio, i, pend[i], col, alt, pt, foot, jet)
-            _field(sides, r, i, qx, qy, col, ng, nh)
-            nres = math.sqrt(ng[0] * ng[0] + ng[3] * ng[3])
-            _accept(i, qx, qy, nres, col, ng, nh, xs, res, fs, g)
-            phase = RUN
-        elif phase == RESUME:  # the trial point with the caller's feet
-            for k in range(4):
-                if sides[k, 0] == 2.0:
-                    for c in (k, 8 + 2 * k, 9 + 2 * k, 16 + k):
-                        col[c] = pend[i, c]
-            lam = st[i, 3]
-            qx, qy = st[i, 4], st[i, 5]
-            _field(sides, r, i, qx, qy, col, ng, nh)
-            nres = math.sqrt(ng[0] * ng[0] + ng[3] * ng[3])
-            if nres < res[i] * (1.0 - 1e-4 * lam) + tol:
-                _accept(i, qx, qy, nres, col, ng, nh, xs, res, fs, g)
-                phase = RUN
-            else:
-                ist[i, 2] += 1
-                st[i, 3] = 0.5 * lam
-                phase = STEP if ist[i, 2] < _BACKTRACKS else RUN
+        phase = ist[i, 0]
+        if first:
+            phase, ist[i, 1] = RUN - 1, 0  # (-1: the start)
         while phase != DONE and phase != WAIT:
             if phase == RUN:
-                if not res[i] > tol or ist[i, 1] == iters:
+                if not fs[i, RES] > tol or ist[i, 1] == iters:
                     phase = DONE
                     break
                 ist[i, 1] += 1
-                phase = _step(sides, i, r, fs, g, xs, res, st, ist, tol, max_step)
+                ga, gax, gay = fs[i, G], fs[i, G + 1], fs[i, G + 2]
+                gb, gbx, gby = fs[i, G + 3], fs[i, G + 4], fs[i, G + 5]
+                det = gax * gby - gay * gbx
+                safe = det if abs(det) > 1e-300 else 1e-300
+                sx = (gay * gb - gby * ga) / safe
+                sy = (gbx * ga - gax * gb) / safe
+                norm = math.sqrt(sx * sx + sy * sy)
+                cap = min(1.0, max_step / max(norm, 1e-300))
+                sx *= cap
+                sy *= cap
+                top = fs[i, HESS]  # (np.maximum: NaN if any is)
+                for k in range(1, 4):
+                    hk = fs[i, HESS + k]
+                    top = top + hk if top != top or hk != hk else max(top, hk)
+                half = 0.5 * norm * norm
+                ra, rb = r[0, i], r[1, i]
+                ha = (1.0 - ra) * fs[i, HESS] + ra * fs[i, HESS + 2]
+                hb = (1.0 - rb) * fs[i, HESS + 1] + rb * fs[i, HESS + 3]
+                bound = 2.0 * math.hypot(half * ha, half * hb)
+                if cap == 1.0 and norm * top <= _LOCAL and bound <= 0.5 * tol:
+                    # unevaluated (see newton_free): the feet stay, distances to them
+                    x, y = xs[i, 0] + sx, xs[i, 1] + sy
+                    xs[i, 0], xs[i, 1], fs[i, RES] = x, y, bound
+                    for k in range(4):
+                        if sides[k, 0] == 2.0:
+                            rx, ry = x - fs[i, FOOT + 2 * k], y - fs[i, FOOT + 2 * k + 1]
+                            fs[i, D + k] = math.sqrt(rx * rx + ry * ry)
+                    continue
+                fs[i, STP], fs[i, STP + 1], fs[i, STP + 2], fs[i, STP + 3] = sx, sy, norm, 1.0
+                ist[i, 2] = 0
+                phase = STEP
                 continue
-            # backtracking on the residual from damping st[i, 3]
-            lam = st[i, 3]
-            qx, qy = xs[i, 0] + lam * st[i, 0], xs[i, 1] + lam * st[i, 1]
-            _track(sides, inner, starts, rows, qx, qy, fs[i], col, pt, foot, jet)
-            if lam * st[i, 2] > far:
-                # feet are tracked for small moves only: a long step may cross the place
-                # where a foot jumps to another part of its side, which only a global
-                # query sees (the caller's)
-                for c in range(20):
-                    pend[i, c] = col[c]  # (NaN on untracked sides)
-                st[i, 4], st[i, 5] = qx, qy
-                phase = WAIT
-                break
-            _field(sides, r, i, qx, qy, col, ng, nh)
-            nres = math.sqrt(ng[0] * ng[0] + ng[3] * ng[3])
-            if nres < res[i] * (1.0 - 1e-4 * lam) + tol:
-                _accept(i, qx, qy, nres, col, ng, nh, xs, res, fs, g)
-                phase = RUN
-                continue
-            ist[i, 2] += 1
-            st[i, 3] = 0.5 * lam
-            if ist[i, 2] == _BACKTRACKS:  # no acceptable step: left as it was
-                phase = RUN
+            # an evaluation: the node itself (its start, then its second starts), a
+            # backtracking step's trial point, or a waiting one's with the caller's feet
+            lam = fs[i, STP + 3]
+            if phase == RESUME:
+                qx, qy = fs[i, STP + 4], fs[i, STP + 5]
+                for k in range(4):
+                    if sides[k, 0] == 2.0:
+                        for c in (T + k, FOOT + 2 * k, FOOT + 2 * k + 1, KAP + k):
+                            col[c] = fs[i, PEND + c]
+            else:
+                if phase == STEP:
+                    qx, qy = xs[i, 0] + lam * fs[i, STP], xs[i, 1] + lam * fs[i, STP + 1]
+                else:
+                    qx, qy = xs[i, 0], xs[i, 1]
+                pt[0, 0], pt[1, 0] = qx, qy
+                for k in range(4):
+                    if sides[k, 0] != 2.0:
+                        continue
+                    t = fs[i, T + k] if phase == STEP else tio[k if phase < RUN else 4 + k, i]
+                    if t != t:
+                        continue
+                    t = min(max(t, 0.0), 1.0)
+                    kap = 0.0
+                    off, stol = sides[k, 1], sides[k, 2]
+                    for it in range(_TRACK_ITERS):  # (the loop of track_table, one point)
+                        span = table_span(inner, t + off)
+                        table_jet1(rows, span, t - starts[span], jet)
+                        t, kap, done = _track1(jet, pt, 0, t, stol, it == _TRACK_ITERS - 1, foot)
+                        if done:
+                            break
+                    col[T + k], col[KAP + k] = t, kap
+                    col[FOOT + 2 * k], col[FOOT + 2 * k + 1] = foot[0, 0], foot[1, 0]
+                if phase < RUN:  # the start: global feet where none, a second start?
+                    second = False
+                    for k in range(4):
+                        if sides[k, 0] != 2.0:
+                            continue
+                        if tio[k, i] != tio[k, i]:
+                            for c in (T + k, FOOT + 2 * k, FOOT + 2 * k + 1):
+                                col[c] = fs[i, PEND + c]
+                            col[KAP + k] = np.inf
+                        elif tio[4 + k, i] == tio[4 + k, i]:
+                            second = True
+                    if second:
+                        for c in range(20):
+                            prim[c] = col[c]
+                        phase = _ALT
+                        continue
+                elif phase == _ALT:  # the nearer of the two feet
+                    for c in range(20):
+                        t = col[c]
+                        col[c] = prim[c]
+                        prim[c] = t
+                    for k in range(4):
+                        if sides[k, 0] != 2.0 or tio[k, i] != tio[k, i]:
+                            continue
+                        if tio[4 + k, i] == tio[4 + k, i]:
+                            ax, ay = qx - prim[FOOT + 2 * k], qy - prim[FOOT + 2 * k + 1]
+                            bx, by = qx - col[FOOT + 2 * k], qy - col[FOOT + 2 * k + 1]
+                            if ax * ax + ay * ay < bx * bx + by * by:
+                                for c in (T + k, FOOT + 2 * k, FOOT + 2 * k + 1, KAP + k):
+                                    col[c] = prim[c]
+                elif lam * fs[i, STP + 2] > far:
+                    # feet are tracked for small moves only: a long step may cross the
+                    # place where a foot jumps to another part of its side, which only a
+                    # global query sees (the caller's)
+                    for c in range(20):
+                        fs[i, PEND + c] = col[c]  # (NaN on untracked sides)
+                    fs[i, STP + 4], fs[i, STP + 5] = qx, qy
+                    phase = WAIT
+                    break
+            # the equations and the Hessian bounds at (qx, qy)
+            for k in range(4):
+                rk = r[k & 1, i]
+                wk = 1.0 - rk if k < 2 else rk
+                kind = sides[k, 0]
+                if kind == 2.0:
+                    rx, ry = qx - col[FOOT + 2 * k], qy - col[FOOT + 2 * k + 1]
+                    d = math.sqrt(rx * rx + ry * ry)
+                    inv = 1.0 / max(d, _TINY)
+                    col[D + k], prim[HESS - 20 + k] = d, (col[KAP + k] + 1.0) * inv
+                    f = wk * inv
+                    v, vx, vy = wk * d, rx * f, ry * f
+                elif kind == 0.0:
+                    v, vx, vy = segment_term(sides[k, 3:], qx, qy, wk)
+                    prim[k] = wk / max(v, _TINY)
+                else:
+                    v, vx, vy = arc_term(sides[k, 3:], qx, qy, wk)
+                    rho = math.hypot(qx - sides[k, 3], qy - sides[k, 4])
+                    prim[k] = wk / max(v, _TINY) + 1.0 / max(rho, _TINY)
+                if k == 0:
+                    ga, gax, gay = v, vx, vy
+                elif k == 1:
+                    gb, gbx, gby = v, vx, vy
+                elif k == 2:
+                    ga, gax, gay = ga - v, gax - vx, gay - vy
+                else:
+                    gb, gbx, gby = gb - v, gbx - vx, gby - vy
+            nres = math.sqrt(ga * ga + gb * gb)
+            if phase == STEP or phase == RESUME:
+                if not nres < fs[i, RES] * (1.0 - 1e-4 * lam) + tol:
+                    ist[i, 2] += 1
+                    fs[i, STP + 3] = 0.5 * lam
+                    phase = STEP if ist[i, 2] < _BACKTRACKS else RUN
+                    continue
+            # accepted
+            xs[i, 0], xs[i, 1], fs[i, RES] = qx, qy, nres
+            for c in range(16):
+                fs[i, c] = col[c]
+            for k in range(4):
+                fs[i, KAP + k], fs[i, HESS + k] = col[KAP + k], prim[k]
+            fs[i, G], fs[i, G + 1], fs[i, G + 2] = ga, gax, gay
+            fs[i, G + 3], fs[i, G + 4], fs[i, G + 5] = gb, gbx, gby
+            phase = RUN
         ist[i, 0] = phase
         if phase == WAIT:
             waiting += 1
         else:  # done: the feet and distances out
             for k in range(4):
                 if sides[k, 0] == 2.0:
-                    tio[k, i], tio[4 + k, i] = fs[i, k], fs[i, 4 + k]
+                    tio[k, i], tio[4 + k, i] = fs[i, T + k], fs[i, D + k]
     return waiting
-
-
-@njit(**HELPER)
-def _accept(
-    i: int,
-    x: float,
-    y: float,
-    r: float,
-    col: FloatArray,
-    ng: FloatArray,
-    nh: FloatArray,
-    xs: FloatArray,
-    res: FloatArray,
-    fs: FloatArray,
-    g: FloatArray,
-) -> None:
-    """Node ``i`` moves to ``(x, y)`` with residual ``r``, feet ``col`` (20,), equations
-    ``ng`` and Hessian bounds ``nh``."""
-    xs[i, 0], xs[i, 1], res[i] = x, y, r
-    for r_ in range(20):
-        fs[i, r_] = col[r_]
-    for k in range(4):
-        fs[i, 20 + k] = nh[k]
-    for r_ in range(6):
-        g[i, r_] = ng[r_]
-
-
-@njit(**HELPER)
-def _step(
-    sides: FloatArray,
-    i: int,
-    r: FloatArray,
-    fs: FloatArray,
-    g: FloatArray,
-    xs: FloatArray,
-    res: FloatArray,
-    st: FloatArray,
-    ist: np.ndarray,
-    tol: float,
-    max_step: float,
-) -> int:
-    """The Newton step of node ``i`` (capped at ``max_step``) into ``st``; taken without
-    evaluation where its remainder is bounded below ``tol / 2`` (see
-    :func:`medax.mesh.free_field.newton_free`): returns the next phase."""
-    ga, gax, gay, gb, gbx, gby = g[i, 0], g[i, 1], g[i, 2], g[i, 3], g[i, 4], g[i, 5]
-    det = gax * gby - gay * gbx
-    safe = det if abs(det) > 1e-300 else 1e-300
-    sx = (gay * gb - gby * ga) / safe
-    sy = (gbx * ga - gax * gb) / safe
-    norm = math.sqrt(sx * sx + sy * sy)
-    cap = min(1.0, max_step / max(norm, 1e-300))
-    sx *= cap
-    sy *= cap
-    h0, h1, h2, h3 = fs[i, 20], fs[i, 21], fs[i, 22], fs[i, 23]
-    top = _nmax(_nmax(h0, h1), _nmax(h2, h3))
-    half = 0.5 * norm * norm
-    ra, rb = r[0, i], r[1, i]
-    bound = 2.0 * math.hypot(half * ((1.0 - ra) * h0 + ra * h2), half * ((1.0 - rb) * h1 + rb * h3))
-    if cap == 1.0 and norm * top <= _LOCAL and bound <= 0.5 * tol:
-        # unevaluated: the feet stay (distances to their points, upper bounds)
-        x, y = xs[i, 0] + sx, xs[i, 1] + sy
-        xs[i, 0], xs[i, 1], res[i] = x, y, bound
-        for k in range(4):
-            fx, fy = fs[i, 8 + 2 * k], fs[i, 9 + 2 * k]
-            if sides[k, 0] == 2.0:
-                rx, ry = x - fx, y - fy
-                fs[i, 4 + k] = math.sqrt(rx * rx + ry * ry)
-        return RUN
-    st[i, 0], st[i, 1], st[i, 2], st[i, 3] = sx, sy, norm, 1.0
-    ist[i, 2] = 0
-    return STEP
 
 
 def warm_up() -> None:
@@ -399,9 +314,9 @@ def warm_up() -> None:
     tio[4:] = np.nan
     free_newton(
         sides, inner, starts, rows, np.zeros((1, 2)), np.full((2, 1), 0.5), tio,
-        np.empty((1, 24)), np.empty((1, 20)), np.empty((1, 6)), np.empty(1), np.empty((1, 6)),
-        np.empty((1, 3), dtype=np.int64), np.array([1e-9, 1e-3, 1.0]), 2, True,
+        np.empty((1, WIDTH)), np.empty((1, 3), dtype=np.int64), np.array([1e-9, 1e-3, 1.0]),
+        2, True,
     )  # fmt: skip
 
 
-__all__ = ["DONE", "RESUME", "RUN", "STEP", "WAIT", "arc_term", "free_newton", "segment_term"]
+__all__ = ["DONE", "RESUME", "RUN", "STEP", "WAIT", "WIDTH", "arc_term", "free_newton", "segment_term"]

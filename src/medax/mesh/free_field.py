@@ -128,20 +128,20 @@ def newton_free(
         m = e - s
         xb, rblk, tb = xs[s:e], r[:, s:e].copy(), tio[:, s:e].copy()
         # (the kernel reads only the tracked sides' columns of these, and writes them first)
-        fs, pend, g, st = np.empty((m, 24)), np.empty((m, 20)), np.empty((m, 6)), np.empty((m, 6))
-        ist = np.empty((m, 3), dtype=np.int64)
+        fs, ist = np.empty((m, fk.WIDTH)), np.empty((m, 3), dtype=np.int64)
         for k in tracked:
             none = np.flatnonzero(np.isnan(tb[k]))  # no start: a global query
             if none.size:
                 c = field.curves[k].closest(xb[none])
-                pend[none, k], pend[none, 8 + 2 * k], pend[none, 9 + 2 * k] = c.t, *c.foot.T
+                at_k = fk.PEND + np.array([fk.T + k, fk.FOOT + 2 * k, fk.FOOT + 2 * k + 1])
+                fs[none[:, None], at_k] = np.column_stack((c.t, c.foot))
         first = True
         while fk.free_newton(
-            field.sides, inner, starts, table, xb, rblk, tb, fs, pend, g, res[s:e], st, ist,
-            par, iters, first,
-        ):  # fmt: skip
+            field.sides, inner, starts, table, xb, rblk, tb, fs, ist, par, iters, first
+        ):
             first = False
-            _certify(field, pend, st, ist, tracked)
+            _certify(field, fs, ist, tracked)
+        res[s:e] = fs[:, fk.RES]
         tio[:, s:e] = tb
         it = max(it, int(ist[:, 1].max(initial=0)))
     for k in tracked:
@@ -150,23 +150,22 @@ def newton_free(
     return xs, it, res
 
 
-def _certify(
-    field: FreeField, pend: FloatArray, st: FloatArray, ist: np.ndarray, tracked: list[int]
-) -> None:
-    """The tracked feet of the waiting nodes' trial points (``pend``; points ``st[:, 4:6]``)
-    certified global (:func:`~medax.geometry.curve.certify_closest`, slack
-    ``field.slack``), a global query where that is not shown; the nodes then resume."""
+def _certify(field: FreeField, fs: FloatArray, ist: np.ndarray, tracked: list[int]) -> None:
+    """The tracked feet of the waiting nodes' trial points (the kernel's state ``fs``)
+    certified global (:func:`~medax.geometry.curve.certify_closest`, slack ``field.slack``),
+    a global query where that is not shown; the nodes then resume."""
     wait = np.flatnonzero(ist[:, 0] == fk.WAIT)
-    q = st[wait, 4:6]
+    q = fs[wait, fk.STP + 4 : fk.STP + 6]
     for k in tracked:
-        fx, fy = pend[wait, 8 + 2 * k], pend[wait, 9 + 2 * k]
+        t_at, x_at = fk.PEND + fk.T + k, fk.PEND + fk.FOOT + 2 * k
+        fx, fy = fs[wait, x_at], fs[wait, x_at + 1]
         rx, ry = q[:, 0] - fx, q[:, 1] - fy
         d = np.sqrt(rx * rx + ry * ry)
-        ok = certify_closest(field.curves[k], q, pend[wait, k], d, field.slack)
+        ok = certify_closest(field.curves[k], q, fs[wait, t_at], d, field.slack)
         if not ok.all():
             bad = np.flatnonzero(~ok)
             c = field.curves[k].closest(q[bad])
             at = wait[bad]
-            pend[at, k], pend[at, 8 + 2 * k], pend[at, 9 + 2 * k] = c.t, *c.foot.T
-            pend[at, 16 + k] = np.inf
+            fs[at, t_at], fs[at, x_at], fs[at, x_at + 1] = c.t, *c.foot.T
+            fs[at, fk.PEND + fk.KAP + k] = np.inf
     ist[wait, 0] = fk.RESUME
