@@ -135,20 +135,22 @@ def free_newton(  # type: ignore[no-untyped-def]
     n = xs.shape[0]
     col, prim = np.full(20, np.nan), np.full(20, np.nan)
     pt, foot, jet = np.empty((2, 1)), np.empty((2, 1)), np.empty((3, 2))
+    i0 = n - n  # (column 0 of pt: not a literal argument, which would compile _track1 again)
     ga = gax = gay = gb = gbx = gby = 0.0
     waiting = 0
     for i in range(n):
-        phase = ist[i, 0]
+        f, si = fs[i], ist[i]
+        phase = si[0]
         if first:
-            phase, ist[i, 1] = RUN - 1, 0  # (-1: the start)
+            phase, si[1] = RUN - 1, 0  # (-1: the start)
         while phase != DONE and phase != WAIT:
             if phase == RUN:
-                if not fs[i, RES] > tol or ist[i, 1] == iters:
+                if not f[RES] > tol or si[1] == iters:
                     phase = DONE
                     break
-                ist[i, 1] += 1
-                ga, gax, gay = fs[i, G], fs[i, G + 1], fs[i, G + 2]
-                gb, gbx, gby = fs[i, G + 3], fs[i, G + 4], fs[i, G + 5]
+                si[1] += 1
+                ga, gax, gay = f[G], f[G + 1], f[G + 2]
+                gb, gbx, gby = f[G + 3], f[G + 4], f[G + 5]
                 det = gax * gby - gay * gbx
                 safe = det if abs(det) > 1e-300 else 1e-300
                 sx = (gay * gb - gby * ga) / safe
@@ -157,47 +159,45 @@ def free_newton(  # type: ignore[no-untyped-def]
                 cap = min(1.0, max_step / max(norm, 1e-300))
                 sx *= cap
                 sy *= cap
-                top = fs[i, HESS]  # (np.maximum: NaN if any is)
+                top = f[HESS]  # (np.maximum: NaN if any is)
                 for k in range(1, 4):
-                    hk = fs[i, HESS + k]
+                    hk = f[HESS + k]
                     top = top + hk if top != top or hk != hk else max(top, hk)
                 half = 0.5 * norm * norm
                 ra, rb = r[0, i], r[1, i]
-                ha = (1.0 - ra) * fs[i, HESS] + ra * fs[i, HESS + 2]
-                hb = (1.0 - rb) * fs[i, HESS + 1] + rb * fs[i, HESS + 3]
+                ha = (1.0 - ra) * f[HESS] + ra * f[HESS + 2]
+                hb = (1.0 - rb) * f[HESS + 1] + rb * f[HESS + 3]
                 bound = 2.0 * math.hypot(half * ha, half * hb)
                 if cap == 1.0 and norm * top <= _LOCAL and bound <= 0.5 * tol:
                     # unevaluated (see newton_free): the feet stay, distances to them
                     x, y = xs[i, 0] + sx, xs[i, 1] + sy
-                    xs[i, 0], xs[i, 1], fs[i, RES] = x, y, bound
+                    xs[i, 0], xs[i, 1], f[RES] = x, y, bound
                     for k in range(4):
                         if sides[k, 0] == 2.0:
-                            rx, ry = x - fs[i, FOOT + 2 * k], y - fs[i, FOOT + 2 * k + 1]
-                            fs[i, D + k] = math.sqrt(rx * rx + ry * ry)
+                            rx, ry = x - f[FOOT + 2 * k], y - f[FOOT + 2 * k + 1]
+                            f[D + k] = math.sqrt(rx * rx + ry * ry)
                     continue
-                fs[i, STP], fs[i, STP + 1], fs[i, STP + 2], fs[i, STP + 3] = sx, sy, norm, 1.0
-                ist[i, 2] = 0
+                f[STP], f[STP + 1], f[STP + 2], f[STP + 3] = sx, sy, norm, 1.0
+                si[2] = 0
                 phase = STEP
                 continue
             # an evaluation: the node itself (its start, then its second starts), a
             # backtracking step's trial point, or a waiting one's with the caller's feet
-            lam = fs[i, STP + 3]
+            lam = f[STP + 3]
             if phase == RESUME:
-                qx, qy = fs[i, STP + 4], fs[i, STP + 5]
-                for k in range(4):
-                    if sides[k, 0] == 2.0:
-                        for c in (T + k, FOOT + 2 * k, FOOT + 2 * k + 1, KAP + k):
-                            col[c] = fs[i, PEND + c]
+                qx, qy = f[STP + 4], f[STP + 5]
+                for c in range(20):
+                    col[c] = f[PEND + c]
             else:
                 if phase == STEP:
-                    qx, qy = xs[i, 0] + lam * fs[i, STP], xs[i, 1] + lam * fs[i, STP + 1]
+                    qx, qy = xs[i, 0] + lam * f[STP], xs[i, 1] + lam * f[STP + 1]
                 else:
                     qx, qy = xs[i, 0], xs[i, 1]
                 pt[0, 0], pt[1, 0] = qx, qy
                 for k in range(4):
                     if sides[k, 0] != 2.0:
                         continue
-                    t = fs[i, T + k] if phase == STEP else tio[k if phase < RUN else 4 + k, i]
+                    t = f[T + k] if phase == STEP else tio[k if phase < RUN else 4 + k, i]
                     if t != t:
                         continue
                     t = min(max(t, 0.0), 1.0)
@@ -206,7 +206,7 @@ def free_newton(  # type: ignore[no-untyped-def]
                     for it in range(_TRACK_ITERS):  # (the loop of track_table, one point)
                         span = table_span(inner, t + off)
                         table_jet1(rows, span, t - starts[span], jet)
-                        t, kap, done = _track1(jet, pt, 0, t, stol, it == _TRACK_ITERS - 1, foot)
+                        t, kap, done = _track1(jet, pt, i0, t, stol, it == _TRACK_ITERS - 1, foot)
                         if done:
                             break
                     col[T + k], col[KAP + k] = t, kap
@@ -217,9 +217,9 @@ def free_newton(  # type: ignore[no-untyped-def]
                         if sides[k, 0] != 2.0:
                             continue
                         if tio[k, i] != tio[k, i]:
-                            for c in (T + k, FOOT + 2 * k, FOOT + 2 * k + 1):
-                                col[c] = fs[i, PEND + c]
-                            col[KAP + k] = np.inf
+                            col[T + k], col[KAP + k] = f[PEND + T + k], np.inf
+                            col[FOOT + 2 * k] = f[PEND + FOOT + 2 * k]
+                            col[FOOT + 2 * k + 1] = f[PEND + FOOT + 2 * k + 1]
                         elif tio[4 + k, i] == tio[4 + k, i]:
                             second = True
                     if second:
@@ -239,15 +239,16 @@ def free_newton(  # type: ignore[no-untyped-def]
                             ax, ay = qx - prim[FOOT + 2 * k], qy - prim[FOOT + 2 * k + 1]
                             bx, by = qx - col[FOOT + 2 * k], qy - col[FOOT + 2 * k + 1]
                             if ax * ax + ay * ay < bx * bx + by * by:
-                                for c in (T + k, FOOT + 2 * k, FOOT + 2 * k + 1, KAP + k):
-                                    col[c] = prim[c]
-                elif lam * fs[i, STP + 2] > far:
+                                col[T + k], col[KAP + k] = prim[T + k], prim[KAP + k]
+                                col[FOOT + 2 * k] = prim[FOOT + 2 * k]
+                                col[FOOT + 2 * k + 1] = prim[FOOT + 2 * k + 1]
+                elif lam * f[STP + 2] > far:
                     # feet are tracked for small moves only: a long step may cross the
                     # place where a foot jumps to another part of its side, which only a
                     # global query sees (the caller's)
                     for c in range(20):
-                        fs[i, PEND + c] = col[c]  # (NaN on untracked sides)
-                    fs[i, STP + 4], fs[i, STP + 5] = qx, qy
+                        f[PEND + c] = col[c]  # (NaN on untracked sides)
+                    f[STP + 4], f[STP + 5] = qx, qy
                     phase = WAIT
                     break
             # the equations and the Hessian bounds at (qx, qy)
@@ -260,8 +261,8 @@ def free_newton(  # type: ignore[no-untyped-def]
                     d = math.sqrt(rx * rx + ry * ry)
                     inv = 1.0 / max(d, _TINY)
                     col[D + k], prim[HESS - 20 + k] = d, (col[KAP + k] + 1.0) * inv
-                    f = wk * inv
-                    v, vx, vy = wk * d, rx * f, ry * f
+                    wi = wk * inv
+                    v, vx, vy = wk * d, rx * wi, ry * wi
                 elif kind == 0.0:
                     v, vx, vy = segment_term(sides[k, 3:], qx, qy, wk)
                     prim[k] = wk / max(v, _TINY)
@@ -279,27 +280,27 @@ def free_newton(  # type: ignore[no-untyped-def]
                     gb, gbx, gby = gb - v, gbx - vx, gby - vy
             nres = math.sqrt(ga * ga + gb * gb)
             if phase == STEP or phase == RESUME:
-                if not nres < fs[i, RES] * (1.0 - 1e-4 * lam) + tol:
-                    ist[i, 2] += 1
-                    fs[i, STP + 3] = 0.5 * lam
-                    phase = STEP if ist[i, 2] < _BACKTRACKS else RUN
+                if not nres < f[RES] * (1.0 - 1e-4 * lam) + tol:
+                    si[2] += 1
+                    f[STP + 3] = 0.5 * lam
+                    phase = STEP if si[2] < _BACKTRACKS else RUN
                     continue
             # accepted
-            xs[i, 0], xs[i, 1], fs[i, RES] = qx, qy, nres
+            xs[i, 0], xs[i, 1], f[RES] = qx, qy, nres
             for c in range(16):
-                fs[i, c] = col[c]
+                f[c] = col[c]
             for k in range(4):
-                fs[i, KAP + k], fs[i, HESS + k] = col[KAP + k], prim[k]
-            fs[i, G], fs[i, G + 1], fs[i, G + 2] = ga, gax, gay
-            fs[i, G + 3], fs[i, G + 4], fs[i, G + 5] = gb, gbx, gby
+                f[KAP + k], f[HESS + k] = col[KAP + k], prim[k]
+            f[G], f[G + 1], f[G + 2] = ga, gax, gay
+            f[G + 3], f[G + 4], f[G + 5] = gb, gbx, gby
             phase = RUN
-        ist[i, 0] = phase
+        si[0] = phase
         if phase == WAIT:
             waiting += 1
         else:  # done: the feet and distances out
             for k in range(4):
                 if sides[k, 0] == 2.0:
-                    tio[k, i], tio[4 + k, i] = fs[i, T + k], fs[i, D + k]
+                    tio[k, i], tio[4 + k, i] = f[T + k], f[D + k]
     return waiting
 
 
@@ -319,4 +320,14 @@ def warm_up() -> None:
     )  # fmt: skip
 
 
-__all__ = ["DONE", "RESUME", "RUN", "STEP", "WAIT", "WIDTH", "arc_term", "free_newton", "segment_term"]
+__all__ = [
+    "DONE",
+    "RESUME",
+    "RUN",
+    "STEP",
+    "WAIT",
+    "WIDTH",
+    "arc_term",
+    "free_newton",
+    "segment_term",
+]
