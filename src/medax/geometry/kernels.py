@@ -19,8 +19,6 @@ same algorithms as compiled loops over the points, one call per query:
   for a few percent of a part's axis time);
 * ``track_table`` and ``track_step_rows`` (:mod:`medax.geometry.track_kernel`) - the
   ratio grid's node tracking (Newton steps from warm starts);
-* ``free_newton`` (:mod:`medax.geometry.field_kernel`) - the ratio grid's node Newton on
-  planar regions with free-form sides, with its foot tracking;
 * ``crossing`` (:mod:`medax.geometry.crossing_kernel`) - the region's side-crossing checks;
 * ``span_basis_rows`` (:mod:`medax.geometry.basis_kernel`) - B-spline basis values and
   derivatives, per span polynomials or Cox-de Boor; ``jet_rows`` and ``heights_newton``
@@ -45,7 +43,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from medax.geometry import field_kernel, grid_kernel
+from medax.geometry import grid_kernel
 from medax.geometry._jit import HELPER, KERNEL
 from medax.geometry._types import FloatArray
 from medax.geometry.basis_kernel import span_basis_rows
@@ -673,7 +671,6 @@ _COMPILED = (
     span_basis_rows,
     heights_newton,
     grid_kernel.winslow_sweeps,
-    field_kernel.free_newton,
 )
 _announced = False
 
@@ -735,4 +732,3 @@ def warm_up() -> None:
         box = np.array([0.0, 1.0, 0.0, 1.0])
         heights_newton(*surf, np.eye(3), x, x, np.zeros(1, np.bool_), box, 0.1, 2)
     grid_kernel.warm_up()
-    field_kernel.warm_up()
