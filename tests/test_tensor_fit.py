@@ -217,3 +217,55 @@ def test_height_fitter_shares_fits_between_probe_and_full_fit():
     # probe first, its level's 2 grids are not taken again
     assert len(calls) == n_alone
     assert n_probe < n_alone
+
+
+def _dimpled_plate(cx: float, cy: float, a: float, hole: tuple[float, float, float]):
+    """A plate ``z = 0.01 x`` on [0, 100]^2 with a C1 bump of radius ``a`` at (cx, cy)
+    (``0.2 (1 - rho^2 / a^2)^2``: its curvature jumps on the circle) and a round hole
+    (centre x, y, radius) where the face has no data."""
+    hx, hy, hr = hole
+
+    def h(x, y):
+        rho2 = ((x - cx) ** 2 + (y - cy) ** 2) / a**2
+        z = 0.01 * x + np.where(rho2 < 1.0, 0.2 * (1.0 - rho2) ** 2, 0.0)
+        face = (x - hx) ** 2 + (y - hy) ** 2 > hr**2
+        return z, face.copy(), face
+
+    return h
+
+
+def test_a_bump_between_the_probe_lines_is_found_by_probes_through_it():
+    """A bump narrower than the uniform probe lines' spacing (2.5) that none of them crosses
+    looks flat: one span over it and a large error; lines through its rim find it."""
+    from medax.geometry.tensor_fit import HeightFitter
+
+    cx = cy = 51.25  # halfway between the uniform lines at 50 and 52.5
+    h = _dimpled_plate(cx, cy, 0.7, (20.0, 80.0, 8.0))
+    blind = HeightFitter((0.0, 100.0), (0.0, 100.0), [], [], h, 0.25).fit(1e-3, 3)
+    t = np.linspace(0.0, 2 * np.pi, 48)
+    rim = (cx + 0.7 * np.cos(t), cy + 0.7 * np.sin(t))
+    seen = HeightFitter((0.0, 100.0), (0.0, 100.0), [], [], h, 0.25, rim).fit(1e-3, 3)
+    assert blind is not None and seen is not None
+    assert blind.error > 0.05  # the bump is 0.2 high
+    assert seen.error <= 1e-3
+
+
+def test_a_flat_span_over_a_hole_keeps_samples_on_both_sides():
+    """A plane with a hole 16 wide under one long flat span: sampled at most a spacing
+    apart, every column keeps data on both sides of the hole and the plane is fitted to
+    rounding (4 samples per span left columns with 2 and a free cubic)."""
+    from medax.geometry.tensor_fit import HeightFitter, span_samples, span_weights
+
+    h = _dimpled_plate(80.0, 80.0, 1.0, (30.0, 30.0, 8.0))
+    rim = (80.0 + np.cos(np.linspace(0, 6.3, 48)), 80.0 + np.sin(np.linspace(0, 6.3, 48)))
+    fit = HeightFitter((0.0, 100.0), (0.0, 100.0), [], [], h, 0.25, rim).fit(1e-3, 3)
+    assert fit is not None and fit.error <= 1e-3
+    xc, yc = fit.check_samples()
+    x, y = np.meshgrid(xc, yc, indexing="ij")
+    flat = (x < 60.0) & (y < 60.0) & h(x, y)[2]  # round the hole, far from the bump
+    assert np.abs(fit(xc, yc) - 0.01 * x)[flat].max() <= 1e-9
+    # the samples of a long span are at most the gap apart, and the cells cover the range
+    t = np.array([0.0] * 4 + [1.0, 41.0] + [42.0] * 4)
+    s, w = span_samples(t, 4, 2.0), span_weights(t, 4, 2.0)
+    assert np.diff(s).max() <= 2.0 + 1e-12 and abs(w.sum() - 42.0) < 1e-12
+    assert np.allclose(s, np.cumsum(w) - w / 2)

@@ -90,6 +90,14 @@ class TensorFit:
     spacing: float
     volume: float = 0.0
 
+    def check_samples(self) -> tuple[FloatArray, FloatArray]:
+        """The x and y samples where the error is measured: CHECK_PER_SPAN per span, at most
+        half the spacing apart in long spans."""
+        gap = 0.5 * self.spacing
+        return span_samples(self.tx, CHECK_PER_SPAN, gap), span_samples(
+            self.ty, CHECK_PER_SPAN, gap
+        )
+
     def __call__(self, x: FloatArray, y: FloatArray) -> FloatArray:
         """Heights on the tensor grid ``x`` (n,) by ``y`` (m,), shape (n, m)."""
         bx = BSpline.design_matrix(x, self.tx, DEGREE)
@@ -135,10 +143,34 @@ def knot_vector(
     return np.array(t)
 
 
-def span_samples(t: FloatArray, per_span: int) -> FloatArray:
+def _span_counts(u: FloatArray, per_span: int, max_gap: float) -> np.ndarray:
+    """Samples per span between the distinct knots ``u``: ``per_span``, more in spans longer
+    than ``per_span * max_gap``."""
+    n = np.full(len(u) - 1, per_span)
+    if np.isfinite(max_gap) and max_gap > 0.0:
+        n = np.maximum(n, np.ceil(np.diff(u) / max_gap - 1e-9).astype(int))
+    return n
+
+
+def span_samples(t: FloatArray, per_span: int, max_gap: float = np.inf) -> FloatArray:
+    """Centres of equal cells of every knot span of ``t``: ``per_span`` per span, and in
+    long spans (a flat strip fitted by one span) cells at most ``max_gap`` wide, so that a
+    span over a hole in the face keeps samples on both sides of it."""
     u = np.unique(t)
-    off = (np.arange(per_span) + 0.5) / per_span
-    return (u[:-1, None] + (u[1:] - u[:-1])[:, None] * off[None, :]).ravel()
+    n = _span_counts(u, per_span, max_gap)
+    if np.all(n == per_span):
+        off = (np.arange(per_span) + 0.5) / per_span
+        return (u[:-1, None] + (u[1:] - u[:-1])[:, None] * off[None, :]).ravel()
+    k = np.repeat(np.arange(len(n)), n)
+    j = np.arange(k.size) - np.repeat(np.cumsum(n) - n, n)
+    return u[k] + (u[k + 1] - u[k]) * (j + 0.5) / n[k]
+
+
+def span_weights(t: FloatArray, per_span: int, max_gap: float = np.inf) -> FloatArray:
+    """Widths of the cells of :func:`span_samples` with the same arguments (midpoint rule)."""
+    u = np.unique(t)
+    n = _span_counts(u, per_span, max_gap)
+    return np.repeat(np.diff(u) / n, n)
 
 
 def _second_diff(n: int) -> sp.spmatrix:
@@ -235,7 +267,10 @@ def fit_height(
 class HeightFitter:
     """The fits of one height ``h`` on a rectangle (arguments as :func:`fit_height`'s,
     ``spacing > 0``), each spacing fitted once: a coarse first check (``fit(tol, 1)``) and
-    the full refinement after it share their common fits and the knot placement."""
+    the full refinement after it share their common fits and the knot placement.
+    ``probes``: x and y coordinates (1-D arrays) of more lines along which the height is
+    probed for curvature, besides 41 uniform ones in each direction (lines through each
+    curved part: a thin strip between two uniform lines would be taken for flat)."""
 
     def __init__(
         self,
@@ -245,13 +280,16 @@ class HeightFitter:
         y_breaks: Sequence[float],
         h: HeightFn,
         spacing: float,
+        probes: tuple[FloatArray, FloatArray] | None = None,
     ) -> None:
         (x0, x1), (y0, y1) = x_range, y_range
         self.x_range, self.y_range, self.h, self.spacing = x_range, y_range, h, spacing
         xb = sorted(b for b in set(x_breaks) if x0 < b < x1)
         yb = sorted(b for b in set(y_breaks) if y0 < b < y1)
-        probe_y = np.linspace(y0, y1, 41)
-        probe_x = np.linspace(x0, x1, 41)
+        probe_x, probe_y = np.linspace(x0, x1, 41), np.linspace(y0, y1, 41)
+        if probes is not None:
+            probe_x = _probe_lines(probe_x, probes[0], spacing)
+            probe_y = _probe_lines(probe_y, probes[1], spacing)
         self.xb, self.fine_x = curved_intervals(x0, x1, xb, h, probe_y, 0, spacing)
         self.yb, self.fine_y = curved_intervals(y0, y1, yb, h, probe_x, 1, spacing)
         self._fits: dict[tuple[float, float], TensorFit | None] = {}
@@ -280,6 +318,17 @@ class HeightFitter:
     def fit(self, tol: float, levels: int = 5) -> TensorFit | None:
         """As :func:`fit_height` with this fitter's height and spacing."""
         return refine_both(self.fit_at, self.spacing, tol, levels)
+
+
+def _probe_lines(uniform: FloatArray, extra: FloatArray, spacing: float) -> FloatArray:
+    """The probe coordinates ``uniform`` with ``extra`` ones (the caller's: where thin curved
+    parts lie, which 41 uniform lines can all miss), those within ``spacing / 2`` of one
+    already kept left out."""
+    extra = np.sort(np.asarray(extra, dtype=np.float64).ravel())
+    if extra.size == 0:
+        return uniform
+    keep = np.concatenate([[True], np.diff(np.floor(extra / (0.5 * spacing))) > 0])
+    return np.union1d(uniform, extra[keep])
 
 
 def refine_both(
@@ -413,22 +462,23 @@ def _fit_once(
     tx = knot_vector(x_range[0], x_range[1], xb, fine_x, sx)
     ty = knot_vector(y_range[0], y_range[1], yb, fine_y, sy)
     step = min(sx, sy)
-    xs, ys = span_samples(tx, SAMPLES_PER_SPAN), span_samples(ty, SAMPLES_PER_SPAN)
+    # long (flat) spans sampled at most ``step`` apart, checked at most ``step / 2``
+    xs, ys = span_samples(tx, SAMPLES_PER_SPAN, step), span_samples(ty, SAMPLES_PER_SPAN, step)
     z, ok, _ = h(*np.meshgrid(xs, ys, indexing="ij"))
     bx = BSpline.design_matrix(xs, tx, DEGREE).tocsr()
     by = BSpline.design_matrix(ys, ty, DEGREE).tocsr()
     coef = solve_masked(bx, by, ok, z)
     fit = TensorFit(tx, ty, coef, 0.0, step)
-    xc, yc = span_samples(tx, CHECK_PER_SPAN), span_samples(ty, CHECK_PER_SPAN)
+    xc, yc = fit.check_samples()
     zc, okc, inside = h(*np.meshgrid(xc, yc, indexing="ij"))
     diff = fit(xc, yc) - zc
     use = inside & okc
     missing = bool(np.any(inside & ~okc))
     error = float("inf") if missing else float(np.abs(diff[use]).max(initial=0.0))
     # signed volume between fit and data over the face: midpoint rule on the check cells
-    # (the samples sit at the centres of CHECK_PER_SPAN equal cells of every span)
-    wx = np.repeat(np.diff(np.unique(tx)) / CHECK_PER_SPAN, CHECK_PER_SPAN)
-    wy = np.repeat(np.diff(np.unique(ty)) / CHECK_PER_SPAN, CHECK_PER_SPAN)
+    # (the samples sit at the centres of equal cells of every span)
+    wx = span_weights(tx, CHECK_PER_SPAN, 0.5 * step)
+    wy = span_weights(ty, CHECK_PER_SPAN, 0.5 * step)
     volume = float(np.sum(np.where(use, diff, 0.0) * np.outer(wx, wy)))
     return TensorFit(tx, ty, coef, error, step, volume)
 

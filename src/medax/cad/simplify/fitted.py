@@ -53,12 +53,10 @@ from medax.geometry.polygon_grid import inside_grid
 from medax.geometry.surface_heights import graph_heights
 from medax.geometry.surfaces import NurbsSurface
 from medax.geometry.tensor_fit import (
-    CHECK_PER_SPAN,
     MAX_COEFFICIENTS,
     HeightFitter,
     TensorFit,
     greville,
-    span_samples,
 )
 
 #: Samples per edge for the projected member boundaries.
@@ -595,7 +593,10 @@ def graph_setup(plane_face: Any, members: Sequence[Any], geom_tol: float) -> Gra
         return z.reshape(x.shape), ok.reshape(x.shape), face_mask.reshape(x.shape)
 
     xb, yb = _breaks(ms, geom_tol)
-    fitter = HeightFitter((lo[0], hi[0]), (lo[1], hi[1]), xb, yb, h, rmin / 4)
+    # probe lines through every curved piece's boundary samples
+    rim = np.vstack([b for m, b in zip(ms, bnds, strict=True) if m.kind != "plane"])
+    probes = (rim[:, 0], rim[:, 1])
+    fitter = HeightFitter((lo[0], hi[0]), (lo[1], hi[1]), xb, yb, h, rmin / 4, probes)
     return GraphSetup(o, ex, ey, n, fitter, tuple(ms))
 
 
@@ -673,7 +674,7 @@ def _culprits(setup: GraphSetup, fit: TensorFit, limit: float) -> frozenset[int]
     curved = [i for i, m in enumerate(setup.members) if m.kind != "plane"]
     if not curved:
         return frozenset()
-    xc, yc = span_samples(fit.tx, CHECK_PER_SPAN), span_samples(fit.ty, CHECK_PER_SPAN)
+    xc, yc = fit.check_samples()
     x, y = np.meshgrid(xc, yc, indexing="ij")
     z, ok, inside = setup.fitter.h(x, y)
     err = np.where(ok, np.abs(fit(xc, yc) - z), np.inf)
