@@ -45,6 +45,7 @@ from medax.geometry.tensor_fit import (
     _coefficient_count,
     curved_intervals,
     knot_vector,
+    probe_lines,
     refine_both,
     solve_masked,
     span_samples,
@@ -254,7 +255,9 @@ class PointFitter:
     (rulings) and ``z_breaks`` (circles) where the curvature jumps, spans of at most
     ``spacing`` (halved by :func:`refine_both`); in ``z`` one span where the radial offset
     ``height(S, Z) -> (h, defined, inside)`` is linear (the points are then linear in
-    ``z``), in ``s`` fine spans everywhere (the circle). ``frame``: for the volume's sign."""
+    ``z``), in ``s`` fine spans everywhere (the circle). ``frame``: for the volume's sign.
+    ``probes``: ``s`` (1-D array) of more lines along which the offset is probed for
+    curvature in ``z``, besides 41 uniform ones (lines through the curved pieces)."""
 
     def __init__(
         self,
@@ -266,6 +269,7 @@ class PointFitter:
         height: HeightFn,
         spacing: float,
         frame: CylinderFrame,
+        probes: FloatArray | None = None,
     ) -> None:
         (s0, s1), (z0, z1) = s_range, z_range
         self.s_range, self.z_range, self.points, self.spacing = s_range, z_range, points, spacing
@@ -273,9 +277,10 @@ class PointFitter:
         self.sb = sorted(b for b in set(s_breaks) if s0 < b < s1)
         self.fine_s = [True] * (len(self.sb) + 1)
         zb = sorted(b for b in set(z_breaks) if z0 < b < z1)
-        self.zb, self.fine_z = curved_intervals(
-            z0, z1, zb, height, np.linspace(s0, s1, 41), 1, spacing
-        )
+        lines = np.linspace(s0, s1, 41)
+        if probes is not None:  # and through the curved pieces (a thin one fits between)
+            lines = probe_lines(lines, probes[(probes >= s0) & (probes <= s1)], spacing)
+        self.zb, self.fine_z = curved_intervals(z0, z1, zb, height, lines, 1, spacing)
         self._fits: dict[tuple[float, float], PointFit | None] = {}
 
     def fit_at(self, ss: float, sz: float) -> PointFit | None:

@@ -288,8 +288,8 @@ class HeightFitter:
         yb = sorted(b for b in set(y_breaks) if y0 < b < y1)
         probe_x, probe_y = np.linspace(x0, x1, 41), np.linspace(y0, y1, 41)
         if probes is not None:
-            probe_x = _probe_lines(probe_x, probes[0], spacing)
-            probe_y = _probe_lines(probe_y, probes[1], spacing)
+            probe_x = probe_lines(probe_x, probes[0], spacing)
+            probe_y = probe_lines(probe_y, probes[1], spacing)
         self.xb, self.fine_x = curved_intervals(x0, x1, xb, h, probe_y, 0, spacing)
         self.yb, self.fine_y = curved_intervals(y0, y1, yb, h, probe_x, 1, spacing)
         self._fits: dict[tuple[float, float], TensorFit | None] = {}
@@ -320,7 +320,7 @@ class HeightFitter:
         return refine_both(self.fit_at, self.spacing, tol, levels)
 
 
-def _probe_lines(uniform: FloatArray, extra: FloatArray, spacing: float) -> FloatArray:
+def probe_lines(uniform: FloatArray, extra: FloatArray, spacing: float) -> FloatArray:
     """The probe coordinates ``uniform`` with ``extra`` ones (the caller's: where thin curved
     parts lie, which 41 uniform lines can all miss), those within ``spacing / 2`` of one
     already kept left out."""

@@ -349,7 +349,15 @@ def cylinder_surface(
         fit = _periodic(fld, points, height, fit_tol, spacing, levels)
     else:
         fitter = PointFitter(
-            fld.s_range, fld.z_range, fld.s_breaks, fld.z_breaks, points, height, spacing, fld.frame
+            fld.s_range,
+            fld.z_range,
+            fld.s_breaks,
+            fld.z_breaks,
+            points,
+            height,
+            spacing,
+            fld.frame,
+            _rims(fld),
         )
         fit = fitter.fit(fit_tol, levels)
     if fit is None:
@@ -378,17 +386,30 @@ def _periodic(
 ) -> PeriodicFit | None:
     """The periodic fit in ``(theta, z)`` (``theta`` from ``theta0``): z knot lines at the
     circles, one span in z where the offset is linear (see :class:`PointFitter`)."""
-    from medax.geometry.tensor_fit import curved_intervals
+    from medax.geometry.tensor_fit import curved_intervals, probe_lines
 
     r = fld.frame.radius
     z0, z1 = fld.z_range
     zb = sorted(b for b in fld.z_breaks if z0 < b < z1)
-    zb, fine = curved_intervals(z0, z1, zb, height, np.linspace(0.0, PERIOD * r, 41), 1, spacing)
+    period = PERIOD * r
+    lines = probe_lines(np.linspace(0.0, period, 41), np.mod(_rims(fld), period), spacing)
+    zb, fine = curved_intervals(z0, z1, zb, height, lines, 1, spacing)
 
     def by_angle(th: Array, zz: Array) -> tuple[Array, np.ndarray, np.ndarray]:
         return points(np.asarray(th) * r, zz)
 
     return fit_radial_height((z0, z1), zb, by_angle, tol, spacing, r, levels=levels, s_fine=fine)
+
+
+def _rims(fld: _Field) -> Array:
+    """``s`` of the curved members' boundary samples: lines there cross every curved piece
+    (41 uniform ones can all miss a thin strip)."""
+
+    def support(m: _Member) -> bool:  # the supporting cylinder's own piece: no offset
+        return m.kind == "cylinder" and abs(m.radius - fld.frame.radius) <= 1e-9 * m.radius
+
+    rims = [e[:, 0] for m in fld.members if m.kind != "plane" and not support(m) for e in m.edges]
+    return np.concatenate(rims) if rims else np.zeros(0)
 
 
 def _periodic_volume(fit: PeriodicFit, points: Any, fld: _Field) -> float:
