@@ -94,7 +94,7 @@ def chord_points(
     done = np.zeros(n, dtype=bool)
     pts = np.empty((n, 2))
     lam_at = np.empty(n)  # the parameter of each row's last evaluated point
-    cols = {f: np.empty((n, *getattr(first, f).shape[1:])) for f in _FIELDS}
+    cols = np.empty((n, first.data.shape[1]))  # each row's last field sample
     it = 0
     for it in range(1, MAX_ITER + 1):  # noqa: B007
         if it == 1:  # the chords' middles, from the scan's evaluation (the ends next step)
@@ -107,8 +107,7 @@ def chord_points(
                 break
             c, dc = _rows(rows, t, b1, b2, p0, dp)
             fs = field(c)
-        for f in _FIELDS:
-            cols[f][rows] = getattr(fs, f)
+        cols[rows] = fs.data
         pts[rows] = c
         lam_at[rows] = t[rows]
         g = fs.g
@@ -133,7 +132,7 @@ def chord_points(
     keep = np.concatenate(([True, True], region.contains(pts[2:])))
     order = np.concatenate(([0], 2 + np.flatnonzero(keep[2:]), [1]))
     p = pts[order]
-    sp = FieldSample(*(cols[f][order] for f in _FIELDS))
+    sp = FieldSample(cols[order], first.dim)
     tt = tangent(sp)
     step = np.diff(p, axis=0)
     fwd = np.einsum("ij,ij->i", step, tt[:-1]) > 0.0
@@ -144,7 +143,6 @@ def chord_points(
     return ChordPoints(p, sp, float(lam_at[0]), float(lam_at[1]), it)
 
 
-_FIELDS = tuple(FieldSample.__dataclass_fields__)
 #: weight of the cosine spacing in :func:`chord_spacing` (0: uniform)
 GRADING = 0.5
 

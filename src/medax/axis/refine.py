@@ -56,16 +56,6 @@ class Fitted:
     corrector_iterations: int
 
 
-def _take(s: FieldSample, idx: np.ndarray) -> FieldSample:
-    return FieldSample(*(getattr(s, f)[idx] for f in FieldSample.__dataclass_fields__))
-
-
-def _cat(a: FieldSample, b: FieldSample) -> FieldSample:
-    return FieldSample(
-        *(np.concatenate((getattr(a, f), getattr(b, f))) for f in FieldSample.__dataclass_fields__)
-    )
-
-
 def fit_and_refine(
     field: DistanceField,
     points: FloatArray,
@@ -172,7 +162,7 @@ def fit_and_refine(
             if np.any(fresh):
                 breaks |= marked
                 # (the field at the breaks is that of their global check: no evaluation)
-                ks = _take(_cat(trans_s, kink_s), rows[fresh])
+                ks = FieldSample.concat([trans_s, kink_s]).take(rows[fresh])
                 pts, s, breaks = _insert_at(pts, s, breaks, idx[fresh], kp[fresh], ks, True)
             elif marked:
                 breaks |= marked
@@ -348,7 +338,7 @@ def _insert(
     same = intervals[1:] == intervals[:-1]
     keep[1:] &= ~same | (along[1:] > along[:-1] + 1e-9)
     if not np.all(keep):
-        intervals, new, sn = intervals[keep], new[keep], _take(sn, np.flatnonzero(keep))
+        intervals, new, sn = intervals[keep], new[keep], sn.take(keep)
     pts, s, breaks = _insert_at(pts, s, breaks, intervals, new, sn, as_break=False)
     return pts, s, breaks, it
 
@@ -368,7 +358,7 @@ def _insert_at(
     order = np.argsort(np.concatenate((np.arange(n, dtype=float), intervals + 0.5)), kind="stable")
     # several points in one interval keep their given order (stable sort, ascending input)
     pts = np.concatenate((pts, new))[order]
-    s = _take(_cat(s, sn), order)
+    s = FieldSample(np.concatenate((s.data, sn.data))[order], s.dim)
     pos = np.empty(n + len(intervals), dtype=np.int64)
     pos[order] = np.arange(n + len(intervals))
     new_breaks = {int(pos[b]) for b in breaks}
