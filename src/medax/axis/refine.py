@@ -17,7 +17,7 @@ import numpy as np
 
 from medax.axis.correct import correct_newton
 from medax.axis.field import DistanceField, FieldSample
-from medax.axis.kinks import KINK_TRY, kink_intervals, locate_kinks
+from medax.axis.kinks import KINK_SPEED, KINK_TRY, kink_intervals2, locate_kinks
 from medax.axis.transitions import locate_transitions, transition_intervals, vertex_crossings
 from medax.geometry._types import FloatArray
 from medax.geometry.bspline import BSpline
@@ -109,10 +109,10 @@ def fit_and_refine(
                 continue
         # 2. breaks where the axis is not smooth: kinks (a foot jumps between branches of a
         # constraint) and transitions (a foot reaches its constraint's end)
-        jumps = kink_intervals(s, scale)
+        jumps, tries = kink_intervals2(s, scale, (KINK_SPEED, KINK_TRY))
         kinks = [
             i
-            for i in kink_intervals(s, scale, KINK_TRY)
+            for i in tries.tolist()
             if i not in tried and i not in breaks and i + 1 not in breaks
         ]
         found, kink_s = locate_kinks(
