@@ -271,7 +271,7 @@ def _check(
     frac = np.arange(1, CHECK_SAMPLES) / CHECK_SAMPLES
     m = CHECK_SAMPLES - 1
     uu = (u[:-1, None] + frac[None, :] * np.diff(u)[:, None]).ravel()
-    y = spline.evaluate(uu)
+    y = spline.evaluate_once(uu)
     x = field.region.embedding.evaluate(y).reshape(len(u) - 1, m, -1)
     ends = [pts[i].tobytes() + pts[i + 1].tobytes() for i in range(len(pts) - 1)]
     err = np.full((len(u) - 1, m), np.inf)

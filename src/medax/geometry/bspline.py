@@ -12,6 +12,7 @@ from scipy.interpolate import BSpline as _ScipyBSpline
 from medax.errors import CurveError
 from medax.geometry import kernels
 from medax.geometry._types import FloatArray
+from medax.geometry.basis_kernel import span_basis_rows
 from medax.geometry.curve import Curve
 
 
@@ -95,6 +96,16 @@ class BSpline(Curve):
             self.weights.shape != (ctrl.shape[0],) or np.any(self.weights <= 0)
         ):
             raise CurveError("B-spline weights must be positive, one per control point")
+
+    @classmethod
+    def on_unit_knots(cls, control_points: FloatArray, degree: int, knots: FloatArray) -> BSpline:
+        """The non-rational spline of ``control_points`` (m, dim) and a clamped knot vector
+        ``knots`` (m + degree + 1,) whose domain is already [0, 1] (as :meth:`__init__`
+        would map it), from trusted inputs (the fitter's): no checks."""
+        spline = cls.__new__(cls)
+        spline.control_points, spline.degree = control_points, int(degree)
+        spline.knots, spline.weights = knots, None
+        return spline
 
     @classmethod
     def from_bezier(cls, control_points: FloatArray, breaks: FloatArray, degree: int) -> BSpline:
@@ -209,6 +220,20 @@ class BSpline(Curve):
         w = kernels.jet_rows(inner, x, rows, np.ascontiguousarray(t.ravel()), _NO_OFFSET)
         dim = rows.shape[1]
         return [w[nu * dim : (nu + 1) * dim].T for nu in orders]
+
+    def evaluate_once(self, t: FloatArray) -> FloatArray:
+        """:meth:`evaluate` (equal to rounding) of a non-rational spline from its basis values
+        at ``t`` (n,) (the compiled Cox-de Boor recursion): for a spline evaluated once, e.g.
+        the fitter's check of each new spline, where building the polynomial pieces of
+        :meth:`evaluate` would cost more than the evaluation."""
+        if self.weights is not None:
+            return self.evaluate(t)
+        k = self.degree
+        span, values, _ = span_basis_rows(
+            self.knots, np.zeros((0, k + 1, k + 1)), k, False, np.ascontiguousarray(t)
+        )
+        ctrl = self.control_points[span[:, None] + np.arange(-k, 1)]  # (n, k + 1, dim)
+        return np.einsum("nk,nkd->nd", values, ctrl)
 
     def jet(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         h0, h1, h2 = self._raw_many(t, (0, 1, 2))

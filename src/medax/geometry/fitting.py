@@ -6,10 +6,15 @@ from collections.abc import Sequence
 
 import numpy as np
 from scipy.interpolate import BarycentricInterpolator, make_interp_spline
+from scipy.linalg import get_lapack_funcs
 
 from medax.errors import CurveError
 from medax.geometry._types import FloatArray
+from medax.geometry.basis_kernel import span_basis_rows
 from medax.geometry.bspline import BSpline
+
+#: LAPACK's banded solver (double precision)
+_GBSV = get_lapack_funcs(("gbsv",), (np.zeros((1, 1)),))[0]
 
 
 def chord_parameters(points: FloatArray) -> FloatArray:
@@ -107,5 +112,20 @@ def _interpolate_odd(pts: FloatArray, u: FloatArray, cuts: list[int], degree: in
         knots.append(u[a + 1 + half : b - half])
         knots.append(np.full(degree if j < len(cuts) - 2 else degree + 1, u[b]))
     kn = np.concatenate(knots)
-    spl = make_interp_spline(u, pts, k=degree, t=kn)
-    return BSpline(np.asarray(spl.c), degree, kn)
+    return BSpline.on_unit_knots(_collocation_solve(u, pts, kn, degree), degree, kn)
+
+
+def _collocation_solve(u: FloatArray, pts: FloatArray, kn: FloatArray, k: int) -> FloatArray:
+    """Control points (n, dim) of the degree-``k`` spline on knots ``kn`` (n + k + 1,)
+    through ``pts`` (n, dim) at the sites ``u`` (n,): the banded collocation system (its
+    basis values from the compiled Cox-de Boor recursion) solved by LAPACK's ``gbsv``, as
+    scipy's ``make_interp_spline`` does, without its argument handling."""
+    n = u.size
+    span, values, _ = span_basis_rows(kn, np.zeros((0, k + 1, k + 1)), k, False, u)
+    cols = span[:, None] + np.arange(-k, 1)  # (n, k + 1): the non-zero basis functions
+    ab = np.zeros((3 * k + 1, n), order="F")  # LAPACK band storage, kl = ku = k
+    ab[2 * k + np.arange(n)[:, None] - cols, cols] = values
+    _, _, c, info = _GBSV(k, k, ab, np.array(pts, order="F"), overwrite_ab=True, overwrite_b=True)
+    if info != 0:
+        raise CurveError(f"cannot fit a spline: singular collocation system (info {info})")
+    return np.ascontiguousarray(c)
