@@ -102,7 +102,7 @@ def chord_points(
             c, dc = p0 + 0.5 * dp, dp
             fs = first.take(np.arange(2 * SCAN, 2 * SCAN + n_chords))
         else:
-            rows = np.flatnonzero(~done)
+            rows = (~done).nonzero()[0]
             if rows.size == 0:
                 break
             c, dc = _rows(rows, t, b1, b2, p0, dp)

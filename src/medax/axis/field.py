@@ -89,6 +89,9 @@ class FieldSample:
         return np.abs(self.g) * 2.0
 
 
+_TINY = np.finfo(float).tiny
+
+
 class DistanceField:
     """Evaluates ``g`` for one region, one pair and one ratio; counts evaluations."""
 
@@ -130,7 +133,9 @@ class DistanceField:
 
     def __call__(self, p: FloatArray) -> FieldSample:
         """The field at parameter points ``p`` of shape ``(n, 2)``."""
-        p = np.atleast_2d(np.asarray(p, dtype=np.float64))
+        p = np.asarray(p, dtype=np.float64)
+        if p.ndim < 2:
+            p = p.reshape(1, -1)
         emb = self.region.embedding
         x = emb.evaluate(p)
         self.evaluations += p.shape[0]
@@ -154,9 +159,7 @@ class DistanceField:
             )  # fmt: skip
             dist = data[:, c : c + 2]
         # unit vectors from the feet, both at once: (x - q) / max(d, tiny)
-        u = (x[:, None, :] - data[:, dim:c].reshape(n, 2, dim)) / np.maximum(
-            dist, np.finfo(float).tiny
-        )[:, :, None]
+        u = (x[:, None, :] - data[:, dim:c].reshape(n, 2, dim)) / np.maximum(dist, _TINY)[:, :, None]
         r = self.ratio
         gx = (1.0 - r) * u[:, 0] - r * u[:, 1]
         data[:, c + 4] = (1.0 - r) * dist[:, 0] - r * dist[:, 1]

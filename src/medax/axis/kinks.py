@@ -206,10 +206,9 @@ def _solve(
         conv[act[done]] = True
         det = ga[:, 0] * gb[:, 1] - ga[:, 1] * gb[:, 0]
         move = ~done & (det != 0.0) & np.isfinite(det)  # singular rows: no kink
-        with np.errstate(divide="ignore", invalid="ignore"):
-            step = np.column_stack((f0 * gb[:, 1] - f1 * ga[:, 1], ga[:, 0] * f1 - gb[:, 0] * f0))
-            step /= det[:, None]
-        q[act[move]] -= step[move]
+        f0, f1, ga, gb = f0[move], f1[move], ga[move], gb[move]
+        step = np.array((f0 * gb[:, 1] - f1 * ga[:, 1], ga[:, 0] * f1 - gb[:, 0] * f0)).T
+        q[act[move]] -= step / det[move, None]
         act = act[move]
         if act.size == 0:
             break

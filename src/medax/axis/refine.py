@@ -19,6 +19,7 @@ from medax.axis.correct import correct_newton
 from medax.axis.field import DistanceField, FieldSample
 from medax.axis.kinks import KINK_SPEED, KINK_TRY, kink_intervals2, locate_kinks
 from medax.axis.transitions import locate_transitions, transition_intervals, vertex_crossings
+from medax.geometry._rows import row_norms
 from medax.geometry._types import FloatArray
 from medax.geometry.bspline import BSpline
 from medax.geometry.fitting import interpolate
@@ -94,8 +95,8 @@ def fit_and_refine(
         # (where the corrected points leave their interval, the piece stays short and is
         # fitted by a lower-degree polynomial: see interpolate)
         cuts = np.array([0, *sorted(breaks), len(pts) - 1])
-        span = np.diff(cuts)
-        if np.any(span < DEGREE):
+        span = cuts[1:] - cuts[:-1]
+        if (span < DEGREE).any():
             short = np.flatnonzero(span < DEGREE)
             intervals = np.concatenate([np.arange(cuts[j], cuts[j + 1]) for j in short])
             parts = np.repeat(-(-DEGREE // span[short]), span[short])  # ceil(DEGREE / span)
@@ -181,7 +182,7 @@ def fit_and_refine(
         # intervals already shorter than the tracer's smallest step are not split again: no
         # smooth piece needs them, and at a singularity that no break describes (e.g. the
         # axis through a focal point of a constraint) splitting would never end
-        chord = np.linalg.norm(pts[bad + 1] - pts[bad], axis=1)
+        chord = row_norms(pts[bad + 1] - pts[bad])
         bad = bad[chord > MIN_INTERVAL * scale]
         history.append(curve_error)
         stalled = False
@@ -191,7 +192,8 @@ def fit_and_refine(
         if bad.size == 0 or stalled:
             break
         # cubic interpolation error ~ h^4: split each bad interval into enough pieces
-        pieces = np.clip(np.ceil(1.3 * (err[bad] / target) ** 0.25), 2, 8).astype(np.int64)
+        pieces = np.minimum(np.maximum(np.ceil(1.3 * (err[bad] / target) ** 0.25), 2), 8)
+        pieces = pieces.astype(np.int64)
         pts, s, breaks, it = _insert(
             field, pts, s, breaks, bad, spline, u, tol_point, pieces, checked
         )
@@ -238,12 +240,14 @@ def _existing(pts: FloatArray, idx: np.ndarray, q: FloatArray, eps: float) -> np
 
 @dataclass
 class _Checked:
-    """Check samples of the last round: per-interval endpoint keys, space points
-    (n_int, m, dim) and equidistance errors (n_int, m) (measured or bounded); the parameter
-    points (n_int, m, 2), and the field ``sample`` at the measured ones, row ``rows[i, j]``
-    ((n_int, m), -1 where only bounded)."""
+    """Check samples of the last round: per-interval endpoint keys (:func:`_ends`, sorted)
+    and the intervals they key (``order``), space points (n_int, m, dim) and equidistance
+    errors (n_int, m) (measured or bounded); the parameter points (n_int, m, 2), and the
+    field ``sample`` at the measured ones, row ``rows[i, j]`` ((n_int, m), -1 where only
+    bounded)."""
 
-    keys: dict[bytes, int]
+    keys: np.ndarray
+    order: np.ndarray
     x: FloatArray
     err: FloatArray
     y: FloatArray
@@ -273,21 +277,29 @@ def _check(
     uu = (u[:-1, None] + frac[None, :] * np.diff(u)[:, None]).ravel()
     y = spline.evaluate_once(uu)
     x = field.region.embedding.evaluate(y).reshape(len(u) - 1, m, -1)
-    ends = [pts[i].tobytes() + pts[i + 1].tobytes() for i in range(len(pts) - 1)]
+    ends = _ends(pts)
     err = np.full((len(u) - 1, m), np.inf)
-    if prev is not None:
-        j = np.array([prev.keys.get(k, -1) for k in ends], dtype=np.int64)
-        same = np.nonzero(j >= 0)[0]
-        moved = np.linalg.norm(x[same] - prev.x[j[same]], axis=2)
-        err[same] = prev.err[j[same]] + 2.0 * moved
+    if prev is not None:  # the intervals whose two end points were checked last round
+        at = np.minimum(np.searchsorted(prev.keys, ends), prev.keys.size - 1)
+        same = np.flatnonzero(prev.keys[at] == ends)
+        j = prev.order[at[same]]
+        d = x[same] - prev.x[j]
+        err[same] = prev.err[j] + 2.0 * np.sqrt(np.add.reduce(d * d, axis=2))
     need = ~(err <= 0.5 * tol_curve)
     y = y.reshape(len(u) - 1, m, 2)
     rows = np.full(need.shape, -1, dtype=np.int64)
     rows[need] = np.arange(int(need.sum()))
     measured = field(y[need]) if np.any(need) else FieldSample.empty(x.shape[2])
     err[need] = measured.error
-    keys = {k: i for i, k in enumerate(ends)}
-    return err.max(axis=1), _Checked(keys, x, err, y, rows, measured)
+    order = np.argsort(ends)
+    return err.max(axis=1), _Checked(ends[order], order, x, err, y, rows, measured)
+
+
+def _ends(pts: FloatArray) -> np.ndarray:
+    """Keys (n - 1,) of the intervals of ``pts`` (n, dim): the bytes of their two end
+    points (opaque ``void`` items, sortable and exact; they survive re-indexing)."""
+    both = np.concatenate((pts[:-1], pts[1:]), axis=1)  # (n - 1, 2 dim), contiguous
+    return both.view(np.dtype((np.void, both.shape[1] * both.itemsize))).ravel()
 
 
 def _insert(

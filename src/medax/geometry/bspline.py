@@ -84,7 +84,7 @@ class BSpline(Curve):
         if knots is None:
             knots = clamped_uniform_knots(ctrl.shape[0], degree)
         kn = np.asarray(knots, dtype=np.float64)
-        if kn.size != ctrl.shape[0] + degree + 1 or np.any(np.diff(kn) < 0):
+        if kn.size != ctrl.shape[0] + degree + 1 or (kn[1:] < kn[:-1]).any():
             raise CurveError("B-spline knots must be non-decreasing, m + degree + 1 of them")
         lo, hi = kn[degree], kn[-degree - 1]
         if not hi > lo:
