@@ -137,20 +137,22 @@ def fit_and_refine(
             for f in vertex_crossings(field, s, vertices)
             if _key(pts, f) not in tried_t and f[0] not in jumps and f[0] not in kinked
         ]
-        tried_t |= {_key(pts, f) for f in trans + cross}
-        ti, tq, trans_s, rows_t = locate_transitions(field, pts, s, trans + cross, tol_point)
-        # new breaks: one transition per interval (found from a foot on a vertex) and the
-        # vertex crossings, and the kinks, in order along each interval; each with its row
-        # in the field samples of both (transitions, then kinks)
-        at = rows_t < len(trans)
-        one = {int(ti[j]): int(j) for j in np.flatnonzero(at)}  # one per interval
-        nt = len(ti)
-        cand = (
-            [(i, tq[j], j) for i, j in one.items()]
-            + [(int(ti[j]), tq[j], int(j)) for j in np.flatnonzero(~at)]
-            + [(i, q, nt + k) for k, (i, q) in enumerate(found)]
-        )
-        new_breaks = _ordered(pts, cand, 1e-12 * scale)
+        cand: list[tuple[int, FloatArray, int]] = []
+        trans_s = FieldSample.empty(s.dim)
+        if trans or cross:
+            tried_t |= {_key(pts, f) for f in trans + cross}
+            ti, tq, trans_s, rows_t = locate_transitions(field, pts, s, trans + cross, tol_point)
+            # new breaks: one transition per interval (found from a foot on a vertex) and
+            # the vertex crossings, and the kinks, in order along each interval; each with
+            # its row in the field samples of both (transitions, then kinks)
+            at = rows_t < len(trans)
+            one = {int(ti[j]): int(j) for j in np.flatnonzero(at)}  # one per interval
+            cand = [(i, tq[j], j) for i, j in one.items()] + [
+                (int(ti[j]), tq[j], int(j)) for j in np.flatnonzero(~at)
+            ]
+        nt = len(trans_s)
+        cand += [(i, q, nt + k) for k, (i, q) in enumerate(found)]
+        new_breaks = _ordered(pts, cand, 1e-12 * scale) if cand else []
         if new_breaks:
             idx = np.array([b[0] for b in new_breaks], dtype=np.int64)
             kp = np.array([b[1] for b in new_breaks])

@@ -12,7 +12,6 @@ from scipy.interpolate import BSpline as _ScipyBSpline
 from medax.errors import CurveError
 from medax.geometry import kernels
 from medax.geometry._types import FloatArray
-from medax.geometry.basis_kernel import span_basis_rows
 from medax.geometry.curve import Curve
 
 
@@ -222,18 +221,16 @@ class BSpline(Curve):
         return [w[nu * dim : (nu + 1) * dim].T for nu in orders]
 
     def evaluate_once(self, t: FloatArray) -> FloatArray:
-        """:meth:`evaluate` (equal to rounding) of a non-rational spline from its basis values
-        at ``t`` (n,) (the compiled Cox-de Boor recursion): for a spline evaluated once, e.g.
-        the fitter's check of each new spline, where building the polynomial pieces of
-        :meth:`evaluate` would cost more than the evaluation."""
+        """:meth:`evaluate` (equal to rounding) at ``t`` (n,) in [0, 1] by scipy's de Boor
+        evaluation, without building the polynomial pieces of :meth:`evaluate`: for a
+        spline evaluated once (the fitter's check of each new spline), where building them
+        would cost more than the evaluation."""
         if self.weights is not None:
             return self.evaluate(t)
-        k = self.degree
-        span, values, _ = span_basis_rows(
-            self.knots, np.zeros((0, k + 1, k + 1)), k, False, np.ascontiguousarray(t)
+        spl = _ScipyBSpline.construct_fast(
+            self.knots, self.control_points, self.degree, extrapolate=False
         )
-        ctrl = self.control_points[span[:, None] + np.arange(-k, 1)]  # (n, k + 1, dim)
-        return np.einsum("nk,nkd->nd", values, ctrl)
+        return np.asarray(spl(np.asarray(t, dtype=np.float64)))
 
     def jet(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         h0, h1, h2 = self._raw_many(t, (0, 1, 2))
