@@ -109,17 +109,18 @@ def chord_points(
             fs = field(c)
         cols[rows] = fs.data
         pts[rows] = c
-        lam_at[rows] = t[rows]
-        g = fs.g
         tr = t[rows]
+        lam_at[rows] = tr
+        g = fs.g
         neg = g < 0.0
-        a[rows] = np.where(neg, tr, a[rows])
-        b[rows] = np.where(neg, b[rows], tr)
+        ar = np.where(neg, tr, a[rows])
+        br = np.where(neg, b[rows], tr)
+        a[rows], b[rows] = ar, br
         slope = np.einsum("ij,ij->i", fs.grad, dc)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            new = tr - g / slope
-        lo = np.minimum(a[rows], b[rows])
-        hi = np.maximum(a[rows], b[rows])
+        # the Newton step (NaN where the slope is 0: bisected below)
+        new = tr - np.divide(g, slope, out=np.full(g.size, np.nan), where=slope != 0.0)
+        lo = np.minimum(ar, br)
+        hi = np.maximum(ar, br)
         inside = (new > lo) & (new < hi)  # (False for NaN)
         new = np.where(inside, new, 0.5 * (lo + hi))
         t[rows] = new
@@ -157,18 +158,15 @@ def chord_spacing(n: int) -> FloatArray:
 def _rows(
     rows: np.ndarray, t: FloatArray, b1: Curve, b2: Curve, p0: FloatArray, dp: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
-    """Points (k, 2) and slopes ``dc/dlam`` (k, 2) of the active ``rows`` at ``t[rows]``:
-    row 0 on ``b1``, row 1 on ``b2``, row ``j >= 2`` on chord ``j - 2``."""
+    """Points (k, 2) and slopes ``dc/dlam`` (k, 2) of the active ``rows`` (increasing) at
+    ``t[rows]``: row 0 on ``b1``, row 1 on ``b2``, row ``j >= 2`` on chord ``j - 2``."""
     c = np.empty((rows.size, 2))
     dc = np.empty((rows.size, 2))
-    chord = rows >= 2
-    j = rows[chord] - 2
-    c[chord] = p0[j] + t[rows[chord], None] * dp[j]
-    dc[chord] = dp[j]
-    for k, side in ((0, b1), (1, b2)):
-        at = np.flatnonzero(rows == k)
-        if at.size:
-            tk = t[k : k + 1]
-            c[at] = side.evaluate(tk)
-            dc[at] = side.derivative(tk)
+    ends = rows[:2].tolist()
+    nb = sum(r < 2 for r in ends)  # the side rows come first
+    j = rows[nb:] - 2
+    c[nb:] = p0[j] + t[rows[nb:], None] * dp[j]
+    dc[nb:] = dp[j]
+    for at, k in enumerate(ends[:nb]):  # (C and C' from one jet)
+        c[at], dc[at], _ = (v[0] for v in (b1, b2)[k].jet(t[k : k + 1]))
     return c, dc
