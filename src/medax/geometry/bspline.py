@@ -363,6 +363,8 @@ class BSpline(Curve):
             moved = coefs / scale
             moved[:, -1, 0] -= np.asarray(offset, dtype=np.float64) / scale
             out.__dict__["_pieces"] = (x, moved)
+        if "_runs" in self.__dict__:  # (the same knots)
+            out.__dict__["_runs"] = self._runs
         return out
 
 

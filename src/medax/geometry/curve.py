@@ -9,7 +9,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -37,6 +37,15 @@ class Closest:
     foot: FloatArray
     distance: FloatArray
 
+
+
+@lru_cache(maxsize=64)
+def _unit_steps(n: int) -> FloatArray:
+    """``np.linspace(0, 1, n)``, read-only, made once per ``n`` (every curve's search
+    samples: a region's curves are transformed and sampled again for each axis)."""
+    t = np.linspace(0.0, 1.0, n)
+    t.flags.writeable = False
+    return t
 
 class Curve(ABC):
     """A parametric curve ``C(t)``, ``t in [0, 1]``."""
@@ -139,8 +148,7 @@ class Curve(ABC):
     @cached_property
     def _search(self) -> tuple[FloatArray, FloatArray]:
         """The search samples: parameters (m,) and points (m, dim)."""
-        n = self.samples_per_piece * max(self.complexity(), 1) + 1
-        t = np.linspace(0.0, 1.0, n)
+        t = _unit_steps(self.samples_per_piece * max(self.complexity(), 1) + 1)
         return t, self.evaluate(t)
 
     @cached_property
