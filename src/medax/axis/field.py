@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from medax.geometry._rows import points2d
 from medax.geometry._types import FloatArray
 from medax.geometry.curve import Closest, Curve, closest_near
 from medax.geometry.pair_search import PairSearch
@@ -133,9 +134,7 @@ class DistanceField:
 
     def __call__(self, p: FloatArray) -> FieldSample:
         """The field at parameter points ``p`` of shape ``(n, 2)``."""
-        p = np.asarray(p, dtype=np.float64)
-        if p.ndim < 2:
-            p = p.reshape(1, -1)
+        p = points2d(p)
         emb = self.region.embedding
         x = emb.evaluate(p)
         self.evaluations += p.shape[0]

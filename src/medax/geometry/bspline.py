@@ -149,7 +149,8 @@ class BSpline(Curve):
     def _spl(self) -> _ScipyBSpline:
         """scipy's B-spline of the same knots (de Boor; homogeneous for a NURBS)."""
         if self.weights is None:
-            return _ScipyBSpline(self.knots, self.control_points, self.degree, extrapolate=False)
+            ctrl = np.ascontiguousarray(self.control_points)  # (checked by __init__)
+            return _ScipyBSpline.construct_fast(self.knots, ctrl, self.degree, extrapolate=False)
         hom = np.column_stack((self.control_points * self.weights[:, None], self.weights))
         return _ScipyBSpline(self.knots, hom, self.degree, extrapolate=False)
 
@@ -183,7 +184,7 @@ class BSpline(Curve):
         Evaluating them by Horner's rule costs a few numpy operations for all points and
         orders at once, where scipy's BSpline call pays its overhead once per call and
         derivative."""
-        x = np.unique(self.knots)
+        x = self._runs[0].copy()  # the distinct knots
         k = self.degree
         # Taylor coefficients at each interval start (right limits: scipy evaluates a knot
         # with the interval to its right)

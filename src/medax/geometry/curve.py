@@ -39,13 +39,15 @@ class Closest:
 
 
 
-@lru_cache(maxsize=64)
 def _unit_steps(n: int) -> FloatArray:
-    """``np.linspace(0, 1, n)``, read-only, made once per ``n`` (every curve's search
-    samples: a region's curves are transformed and sampled again for each axis)."""
-    t = np.linspace(0.0, 1.0, n)
-    t.flags.writeable = False
-    return t
+    """``np.linspace(0, 1, n)`` (a fresh copy of one made once per ``n``: curves are
+    sampled again for every region and axis)."""
+    return _linspace(n).copy()
+
+
+@lru_cache(maxsize=64)
+def _linspace(n: int) -> FloatArray:
+    return np.linspace(0.0, 1.0, n)
 
 class Curve(ABC):
     """A parametric curve ``C(t)``, ``t in [0, 1]``."""
@@ -135,7 +137,7 @@ class Curve(ABC):
         """Arc length, by Gauss-Legendre quadrature on ``complexity()`` pieces."""
         pieces = max(self.complexity(), 1) * 8
         x, w = _GAUSS
-        edges = np.linspace(0.0, 1.0, pieces + 1)
+        edges = _unit_steps(pieces + 1)
         a, b = edges[:-1, None], edges[1:, None]
         t = (0.5 * (b - a) * x[None, :] + 0.5 * (a + b)).ravel()
         speed = np.linalg.norm(self.derivative(t), axis=1).reshape(pieces, -1)
@@ -143,7 +145,7 @@ class Curve(ABC):
 
     def sample(self, n: int) -> FloatArray:
         """``n`` points at equal parameter steps, shape ``(n, dim)``."""
-        return self.evaluate(np.linspace(0.0, 1.0, n))
+        return self.evaluate(_unit_steps(n))
 
     @cached_property
     def _search(self) -> tuple[FloatArray, FloatArray]:

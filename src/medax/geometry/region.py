@@ -11,6 +11,7 @@ import numpy as np
 from medax import tolerances
 from medax.errors import RegionError
 from medax.geometry import kernels
+from medax.geometry._rows import points2d
 from medax.geometry._types import FloatArray
 from medax.geometry.crossing_kernel import polylines_cross, self_crossing
 from medax.geometry.curve import Curve
@@ -229,7 +230,7 @@ class Region:
         ndarray
             Booleans (n,).
         """
-        q = np.atleast_2d(np.asarray(p, dtype=np.float64))
+        q = points2d(p)
         a = self.boundary
         b = np.roll(a, -1, axis=0)
         px, py = q[:, 0:1], q[:, 1:2]
