@@ -158,7 +158,8 @@ class DistanceField:
             )  # fmt: skip
             dist = data[:, c : c + 2]
         # unit vectors from the feet, both at once: (x - q) / max(d, tiny)
-        u = (x[:, None, :] - data[:, dim:c].reshape(n, 2, dim)) / np.maximum(dist, _TINY)[:, :, None]
+        feet = data[:, dim:c].reshape(n, 2, dim)
+        u = (x[:, None, :] - feet) / np.maximum(dist, _TINY)[:, :, None]
         r = self.ratio
         gx = (1.0 - r) * u[:, 0] - r * u[:, 1]
         data[:, c + 4] = (1.0 - r) * dist[:, 0] - r * dist[:, 1]

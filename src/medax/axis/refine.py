@@ -112,9 +112,7 @@ def fit_and_refine(
         # constraint) and transitions (a foot reaches its constraint's end)
         jumps, tries = kink_intervals2(s, scale, (KINK_SPEED, KINK_TRY))
         kinks = [
-            i
-            for i in tries.tolist()
-            if i not in tried and i not in breaks and i + 1 not in breaks
+            i for i in tries.tolist() if i not in tried and i not in breaks and i + 1 not in breaks
         ]
         found, kink_s = locate_kinks(
             field, s, pts, kinks, tol_point, speed=KINK_TRY if both_kinks else np.inf

@@ -50,7 +50,8 @@ def transition_intervals(
             off = np.where(at[vi, ii], t[ii + 1], t[ii])  # the foot not at the vertex
             ev = e[vi]
             side = np.where(off < ev, -1, 1)
-            out += [(i, k, v, d) for i, v, d in zip(ii.tolist(), ev.tolist(), side.tolist())]
+            rows = zip(ii.tolist(), ev.tolist(), side.tolist(), strict=True)
+            out += [(i, k, v, d) for i, v, d in rows]
     return out
 
 

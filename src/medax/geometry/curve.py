@@ -38,7 +38,6 @@ class Closest:
     distance: FloatArray
 
 
-
 def _unit_steps(n: int) -> FloatArray:
     """``np.linspace(0, 1, n)`` (a fresh copy of one made once per ``n``: curves are
     sampled again for every region and axis)."""
@@ -48,6 +47,7 @@ def _unit_steps(n: int) -> FloatArray:
 @lru_cache(maxsize=64)
 def _linspace(n: int) -> FloatArray:
     return np.linspace(0.0, 1.0, n)
+
 
 class Curve(ABC):
     """A parametric curve ``C(t)``, ``t in [0, 1]``."""
