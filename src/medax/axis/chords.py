@@ -35,6 +35,7 @@ log = logging.getLogger(__name__)
 SCAN = 33
 #: Newton iterations at most (the rows converge quadratically: 5 - 8 are used)
 MAX_ITER = 60
+_SCAN_LAM = np.linspace(0.0, 1.0, SCAN)  # the scan's parameters on B1 and B2
 
 
 @dataclass(frozen=True)
@@ -59,37 +60,35 @@ def chord_points(
     roles = field.roles
     # the scan: the sign change along each start / end side, evaluated together with the
     # chords' middles (their first Newton step)
-    lam = np.linspace(0.0, 1.0, SCAN)
+    lam = _SCAN_LAM
     s = chord_spacing(n_chords)
     p0 = region.sides[roles.a1].evaluate(s)
     dp = region.sides[roles.a2].evaluate(1.0 - s) - p0
     first = field(np.concatenate((b1.evaluate(lam), b2.evaluate(lam), p0 + 0.5 * dp)))
     g_scan = first.g[: 2 * SCAN].reshape(2, SCAN)
-    brackets = []
-    for g in g_scan:
-        sg = np.sign(g)
-        change = np.flatnonzero(sg[:-1] * sg[1:] < 0.0)
-        zero = np.flatnonzero(sg == 0.0)
-        if change.size + zero.size != 1:
-            log.debug("%s: %d axis ends on a B side; tracing", region.name, change.size)
+    sg = np.sign(g_scan)
+    change = (sg[:, :-1] * sg[:, 1:] < 0.0).tolist()
+    zero = (sg == 0.0).tolist()
+    # rows 0 and 1: B1 and B2 in their brackets; then the chords on [0, 1] (the field's
+    # values at the chord ends are only known by sign: their middles first)
+    n = n_chords + 2
+    t = np.full(n, 0.5)
+    a = np.zeros(n)
+    b = np.ones(n)
+    for row in (0, 1):
+        ch = [i for i, c in enumerate(change[row]) if c]
+        zs = [i for i, z in enumerate(zero[row]) if z]
+        if len(ch) + len(zs) != 1:
+            log.debug("%s: %d axis ends on a B side; tracing", region.name, len(ch))
             return None
         # an exact root on a sample: the bracket [lam_i, lam_i] (solved at once)
-        brackets.append((int(change[0]), 1) if change.size else (int(zero[0]), 0))
-    (i1, w1), (i2, w2) = brackets
-    # rows 0 and 1: B1 and B2 in their brackets; then the chords on [0, 1]
-    n = n_chords + 2
-    a = np.concatenate(([lam[i1], lam[i2]], np.zeros(n_chords)))
-    b = np.concatenate(([lam[i1 + w1], lam[i2 + w2]], np.ones(n_chords)))
-    ga = np.concatenate(([g_scan[0, i1], g_scan[1, i2]], np.full(n_chords, -1.0)))
-    gb = np.concatenate(([g_scan[0, i1 + w1], g_scan[1, i2 + w2]], np.ones(n_chords)))
-    # regula falsi in the side brackets, the chords' middles (the field's values at the
-    # chord ends are only known by sign)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(ga != gb, a + (b - a) * ga / (ga - gb), 0.5 * (a + b))
-    t[2:] = 0.5
-    # orient each bracket so that g(a) < 0 < g(b) (B1 runs from A2 to A1: g falls)
-    flip = ga > gb
-    a, b = np.where(flip, b, a), np.where(flip, a, b)
+        i, w = (ch[0], 1) if ch else (zs[0], 0)
+        la, lb = float(lam[i]), float(lam[i + w])
+        ga, gb = float(g_scan[row, i]), float(g_scan[row, i + w])
+        # regula falsi in the side's bracket, oriented so that g(a) < 0 < g(b) (B1 runs
+        # from A2 to A1: g falls)
+        t[row] = la + (lb - la) * ga / (ga - gb) if ga != gb else 0.5 * (la + lb)
+        a[row], b[row] = (lb, la) if ga > gb else (la, lb)
     goal = 1e-3 * tol
     done = np.zeros(n, dtype=bool)
     pts = np.empty((n, 2))

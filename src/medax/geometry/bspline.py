@@ -356,7 +356,10 @@ class BSpline(Curve):
         return BSpline(self.control_points[::-1], self.degree, kn, w)
 
     def transformed(self, offset: FloatArray, scale: float) -> BSpline:
-        out = BSpline((self.control_points - offset) / scale, self.degree, self.knots, self.weights)
+        # (the checks of __init__ hold for the image: the same degree, knots and weights)
+        out = BSpline.__new__(BSpline)
+        out.control_points = (self.control_points - offset) / scale
+        out.degree, out.knots, out.weights = self.degree, self.knots, self.weights
         if self.weights is None and "_pieces" in self.__dict__:
             # the image's polynomial pieces in closed form (no de Boor evaluations): all
             # coefficients scaled, the value's constant term moved
