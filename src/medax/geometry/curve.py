@@ -16,6 +16,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from medax.geometry import kernels
+from medax.geometry._rows import row_norms
 from medax.geometry._types import FloatArray
 
 if TYPE_CHECKING:  # (pair_search imports this module)
@@ -409,13 +410,13 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
     t, foot, ta, tb, s0, interior, w_lo, w_hi = kernels.bracket_rows(
         ts, np.ascontiguousarray(pts), np.ascontiguousarray(curve._slopes), x, cand
     )
-    if np.any(interior):
+    if interior.any():
         t[interior], foot[interior] = _newton_in_brackets(
             curve, x[interior], ta[interior], tb[interior], s0[interior]
         )
     at_breaks(curve, curve.breaks(), x, w_lo, w_hi, t, foot)
-    dist = np.linalg.norm(foot - x, axis=1).reshape(n, k)
-    pick = np.argmin(dist, axis=1)
+    dist = row_norms(foot - x).reshape(n, k)
+    pick = dist.argmin(axis=1)
     r = np.arange(n)
     return Closest(
         t=t.reshape(n, k)[r, pick],
@@ -535,13 +536,15 @@ def _newton_in_brackets(
     its foot the second-order Taylor expansion of that step's jet (off by ``|C^(3)| s^3 / 6``):
     no separate evaluation of the feet.
     """
-    a = np.array(a, dtype=np.float64)
-    b = np.array(b, dtype=np.float64)
-    s = np.array(s, dtype=np.float64)
     x = np.ascontiguousarray(x, dtype=np.float64)
     table = curve.jet_table()
-    if table is not None:  # (the whole iteration compiled, the jets too)
+    if table is not None:  # (the whole iteration compiled, the jets too; the kernel keeps
+        # its inputs)
+        a, b, s = (np.ascontiguousarray(v, dtype=np.float64) for v in (a, b, s))
         return kernels.newton_table(*table, x, a, b, s, iters)  # type: ignore[no-any-return]
+    a = np.array(a, dtype=np.float64)  # (updated in place below)
+    b = np.array(b, dtype=np.float64)
+    s = np.array(s, dtype=np.float64)
     s = np.where(np.isfinite(s), s, 0.5 * (a + b))
     foot = np.empty_like(x)
     rows = np.arange(s.size)
