@@ -194,15 +194,13 @@ def _solve(
             dist = np.concatenate((dist, np.where(o2, c1.distance, c2.distance)[None]))
         u = (x - feet) / np.maximum(dist, 1e-300)[:, :, None]  # unit vectors (3, n, dim)
         wja, woa = wj[act], wo[act]
-        f0 = wja[:, 0] * dist[0] - woa[:, 0] * dist[2]
-        f1 = wja[:, 0] * dist[1] - woa[:, 0] * dist[2]
-        ga = wja * u[0] - woa * u[2]
-        gb = wja * u[1] - woa * u[2]
+        # both equations at once: values (2, n) and gradients (2, n, dim)
+        ff = wja[:, 0] * dist[:2] - woa[:, 0] * dist[2]
+        gg = wja * u[:2] - woa * u[2]
         if not emb.is_identity:
-            jac = emb.jacobian(q[act])
-            ga = np.einsum("mi,mij->mj", ga, jac)
-            gb = np.einsum("mi,mij->mj", gb, jac)
-        done = 2.0 * np.maximum(np.abs(f0), np.abs(f1)) <= tol
+            gg = np.einsum("kmi,mij->kmj", gg, emb.jacobian(q[act]))
+        f0, f1, ga, gb = ff[0], ff[1], gg[0], gg[1]
+        done = 2.0 * np.abs(ff).max(axis=0) <= tol
         conv[act[done]] = True
         det = ga[:, 0] * gb[:, 1] - ga[:, 1] * gb[:, 0]
         move = ~done & (det != 0.0) & np.isfinite(det)  # singular rows: no kink
