@@ -162,7 +162,9 @@ class BSpline(Curve):
     def _runs(self) -> tuple[FloatArray, np.ndarray, FloatArray]:
         """The distinct knots (k,), their multiplicities (k,) and the C0 joints (read-only;
         the tracer asks for them at every query)."""
-        kn, mult = np.unique(self.knots, return_counts=True)
+        knots = self.knots  # (non-decreasing: np.unique's runs without its sort)
+        first = np.flatnonzero(np.concatenate(([True], knots[1:] != knots[:-1])))
+        kn, mult = knots[first], np.diff(np.append(first, knots.size))
         joints = kn[(kn > 0.0) & (kn < 1.0) & (mult >= self.degree)]
         for a in (kn, mult, joints):
             a.flags.writeable = False
