@@ -35,6 +35,7 @@ log = logging.getLogger(__name__)
 SCAN = 33
 #: Newton iterations at most (the rows converge quadratically: 5 - 8 are used)
 MAX_ITER = 60
+_SCAN_LAM = np.linspace(0.0, 1.0, SCAN)  # the scan's parameters on B1 and B2
 
 
 @dataclass(frozen=True)
@@ -59,42 +60,40 @@ def chord_points(
     roles = field.roles
     # the scan: the sign change along each start / end side, evaluated together with the
     # chords' middles (their first Newton step)
-    lam = np.linspace(0.0, 1.0, SCAN)
+    lam = _SCAN_LAM
     s = chord_spacing(n_chords)
     p0 = region.sides[roles.a1].evaluate(s)
     dp = region.sides[roles.a2].evaluate(1.0 - s) - p0
     first = field(np.concatenate((b1.evaluate(lam), b2.evaluate(lam), p0 + 0.5 * dp)))
     g_scan = first.g[: 2 * SCAN].reshape(2, SCAN)
-    brackets = []
-    for g in g_scan:
-        sg = np.sign(g)
-        change = np.flatnonzero(sg[:-1] * sg[1:] < 0.0)
-        zero = np.flatnonzero(sg == 0.0)
-        if change.size + zero.size != 1:
-            log.debug("%s: %d axis ends on a B side; tracing", region.name, change.size)
+    sg = np.sign(g_scan)
+    change = (sg[:, :-1] * sg[:, 1:] < 0.0).tolist()
+    zero = (sg == 0.0).tolist()
+    # rows 0 and 1: B1 and B2 in their brackets; then the chords on [0, 1] (the field's
+    # values at the chord ends are only known by sign: their middles first)
+    n = n_chords + 2
+    t = np.full(n, 0.5)
+    a = np.zeros(n)
+    b = np.ones(n)
+    for row in (0, 1):
+        ch = [i for i, c in enumerate(change[row]) if c]
+        zs = [i for i, z in enumerate(zero[row]) if z]
+        if len(ch) + len(zs) != 1:
+            log.debug("%s: %d axis ends on a B side; tracing", region.name, len(ch))
             return None
         # an exact root on a sample: the bracket [lam_i, lam_i] (solved at once)
-        brackets.append((int(change[0]), 1) if change.size else (int(zero[0]), 0))
-    (i1, w1), (i2, w2) = brackets
-    # rows 0 and 1: B1 and B2 in their brackets; then the chords on [0, 1]
-    n = n_chords + 2
-    a = np.concatenate(([lam[i1], lam[i2]], np.zeros(n_chords)))
-    b = np.concatenate(([lam[i1 + w1], lam[i2 + w2]], np.ones(n_chords)))
-    ga = np.concatenate(([g_scan[0, i1], g_scan[1, i2]], np.full(n_chords, -1.0)))
-    gb = np.concatenate(([g_scan[0, i1 + w1], g_scan[1, i2 + w2]], np.ones(n_chords)))
-    # regula falsi in the side brackets, the chords' middles (the field's values at the
-    # chord ends are only known by sign)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(ga != gb, a + (b - a) * ga / (ga - gb), 0.5 * (a + b))
-    t[2:] = 0.5
-    # orient each bracket so that g(a) < 0 < g(b) (B1 runs from A2 to A1: g falls)
-    flip = ga > gb
-    a, b = np.where(flip, b, a), np.where(flip, a, b)
+        i, w = (ch[0], 1) if ch else (zs[0], 0)
+        la, lb = float(lam[i]), float(lam[i + w])
+        ga, gb = float(g_scan[row, i]), float(g_scan[row, i + w])
+        # regula falsi in the side's bracket, oriented so that g(a) < 0 < g(b) (B1 runs
+        # from A2 to A1: g falls)
+        t[row] = la + (lb - la) * ga / (ga - gb) if ga != gb else 0.5 * (la + lb)
+        a[row], b[row] = (lb, la) if ga > gb else (la, lb)
     goal = 1e-3 * tol
     done = np.zeros(n, dtype=bool)
     pts = np.empty((n, 2))
     lam_at = np.empty(n)  # the parameter of each row's last evaluated point
-    cols = {f: np.empty((n, *getattr(first, f).shape[1:])) for f in _FIELDS}
+    cols = np.empty((n, first.data.shape[1]))  # each row's last field sample
     it = 0
     for it in range(1, MAX_ITER + 1):  # noqa: B007
         if it == 1:  # the chords' middles, from the scan's evaluation (the ends next step)
@@ -102,25 +101,25 @@ def chord_points(
             c, dc = p0 + 0.5 * dp, dp
             fs = first.take(np.arange(2 * SCAN, 2 * SCAN + n_chords))
         else:
-            rows = np.flatnonzero(~done)
+            rows = (~done).nonzero()[0]
             if rows.size == 0:
                 break
             c, dc = _rows(rows, t, b1, b2, p0, dp)
             fs = field(c)
-        for f in _FIELDS:
-            cols[f][rows] = getattr(fs, f)
+        cols[rows] = fs.data
         pts[rows] = c
-        lam_at[rows] = t[rows]
-        g = fs.g
         tr = t[rows]
+        lam_at[rows] = tr
+        g = fs.g
         neg = g < 0.0
-        a[rows] = np.where(neg, tr, a[rows])
-        b[rows] = np.where(neg, b[rows], tr)
+        ar = np.where(neg, tr, a[rows])
+        br = np.where(neg, b[rows], tr)
+        a[rows], b[rows] = ar, br
         slope = np.einsum("ij,ij->i", fs.grad, dc)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            new = tr - g / slope
-        lo = np.minimum(a[rows], b[rows])
-        hi = np.maximum(a[rows], b[rows])
+        # the Newton step (NaN where the slope is 0: bisected below)
+        new = tr - np.divide(g, slope, out=np.full(g.size, np.nan), where=slope != 0.0)
+        lo = np.minimum(ar, br)
+        hi = np.maximum(ar, br)
         inside = (new > lo) & (new < hi)  # (False for NaN)
         new = np.where(inside, new, 0.5 * (lo + hi))
         t[rows] = new
@@ -133,7 +132,7 @@ def chord_points(
     keep = np.concatenate(([True, True], region.contains(pts[2:])))
     order = np.concatenate(([0], 2 + np.flatnonzero(keep[2:]), [1]))
     p = pts[order]
-    sp = FieldSample(*(cols[f][order] for f in _FIELDS))
+    sp = FieldSample(cols[order], first.dim)
     tt = tangent(sp)
     step = np.diff(p, axis=0)
     fwd = np.einsum("ij,ij->i", step, tt[:-1]) > 0.0
@@ -144,7 +143,6 @@ def chord_points(
     return ChordPoints(p, sp, float(lam_at[0]), float(lam_at[1]), it)
 
 
-_FIELDS = tuple(FieldSample.__dataclass_fields__)
 #: weight of the cosine spacing in :func:`chord_spacing` (0: uniform)
 GRADING = 0.5
 
@@ -159,18 +157,15 @@ def chord_spacing(n: int) -> FloatArray:
 def _rows(
     rows: np.ndarray, t: FloatArray, b1: Curve, b2: Curve, p0: FloatArray, dp: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
-    """Points (k, 2) and slopes ``dc/dlam`` (k, 2) of the active ``rows`` at ``t[rows]``:
-    row 0 on ``b1``, row 1 on ``b2``, row ``j >= 2`` on chord ``j - 2``."""
+    """Points (k, 2) and slopes ``dc/dlam`` (k, 2) of the active ``rows`` (increasing) at
+    ``t[rows]``: row 0 on ``b1``, row 1 on ``b2``, row ``j >= 2`` on chord ``j - 2``."""
     c = np.empty((rows.size, 2))
     dc = np.empty((rows.size, 2))
-    chord = rows >= 2
-    j = rows[chord] - 2
-    c[chord] = p0[j] + t[rows[chord], None] * dp[j]
-    dc[chord] = dp[j]
-    for k, side in ((0, b1), (1, b2)):
-        at = np.flatnonzero(rows == k)
-        if at.size:
-            tk = t[k : k + 1]
-            c[at] = side.evaluate(tk)
-            dc[at] = side.derivative(tk)
+    ends = rows[:2].tolist()
+    nb = sum(r < 2 for r in ends)  # the side rows come first
+    j = rows[nb:] - 2
+    c[nb:] = p0[j] + t[rows[nb:], None] * dp[j]
+    dc[nb:] = dp[j]
+    for at, k in enumerate(ends[:nb]):  # (C and C' from one jet)
+        c[at], dc[at], _ = (v[0] for v in (b1, b2)[k].jet(t[k : k + 1]))
     return c, dc

@@ -27,8 +27,9 @@ def correct_newton(
     """
     p = np.array(p, dtype=np.float64, copy=True)
     s = field(p) if sample is None else sample
-    cols = {f: getattr(s, f).copy() for f in FieldSample.__dataclass_fields__}
-    g, grad = cols["g"], cols["grad"]
+    data = s.data.copy()  # the accepted points' field, row by row
+    cur = FieldSample(data, s.dim)
+    g, grad = cur.g, cur.grad  # (views of data: they follow its updates)
     lam = np.ones(len(p))
     goal = target * tol
     done = 2.0 * np.abs(g) <= goal
@@ -37,29 +38,29 @@ def correct_newton(
         act = np.nonzero(~done)[0]
         if act.size == 0:
             break
-        gg = np.einsum("ij,ij->i", grad[act], grad[act])
-        step = (g[act] / np.maximum(gg, 1e-300))[:, None] * grad[act]
+        ga = grad[act]
+        gg = np.einsum("ij,ij->i", ga, ga)
+        step = (g[act] / np.maximum(gg, 1e-300))[:, None] * ga
         trial = p[act] - lam[act, None] * step
         st = field(trial)
         better = np.abs(st.g) < np.abs(g[act])
         if act.size == p.shape[0] and better.all():  # all accepted: take the new sample
             p = trial
-            cols = {f: getattr(st, f) for f in cols}
-            g, grad = cols["g"], cols["grad"]
+            data = st.data
+            cur = st
+            g, grad = cur.g, cur.grad
             lam[:] = 1.0
             done = 2.0 * np.abs(g) <= goal
             continue
         idx = act[better]
         p[idx] = trial[better]
-        for f, col in cols.items():  # the accepted points' field (g and grad among them)
-            col[idx] = getattr(st, f)[better]
+        data[idx] = st.data[better]  # the accepted points' field (g and grad among them)
         lam[idx] = 1.0
         lam[act[~better]] *= 0.5
         done[idx] = 2.0 * np.abs(g[idx]) <= goal
         stuck = act[~better][lam[act[~better]] < 1e-12]
         done[stuck] = True  # no further progress possible (round-off floor)
-    final = FieldSample(**cols)
-    return p, final, 2.0 * np.abs(final.g) <= tol, it
+    return p, cur, 2.0 * np.abs(cur.g) <= tol, it
 
 
 def correct_paper(

@@ -7,49 +7,82 @@ axis is ``g = 0`` with ``r = 1/2`` (then ``g = (d1 - d2) / 2``). Other ratios gi
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
+from medax.geometry._rows import points2d
 from medax.geometry._types import FloatArray
 from medax.geometry.curve import Closest, Curve, closest_near
 from medax.geometry.pair_search import PairSearch
 from medax.geometry.region import PairRoles, Region
 
 
-@dataclass(frozen=True)
 class FieldSample:
-    """The field at ``n`` parameter points.
+    """The field at ``n`` parameter points, its columns packed in one array ``data``
+    (n, 3 dim + 7) so that taking or joining rows is one operation.
 
     ``x`` (n, dim) space points; ``d1``, ``d2`` (n,) distances; ``q1``, ``q2`` (n, dim) foot
     points; ``t1``, ``t2`` (n,) foot parameters on A1, A2; ``g`` (n,) field value;
-    ``grad`` (n, 2) gradient of ``g`` in the parameter plane.
+    ``grad`` (n, 2) gradient of ``g`` in the parameter plane (views of ``data``).
     """
 
-    x: FloatArray
-    d1: FloatArray
-    d2: FloatArray
-    q1: FloatArray
-    q2: FloatArray
-    t1: FloatArray
-    t2: FloatArray
-    g: FloatArray
-    grad: FloatArray
+    __slots__ = ("data", "dim")
+
+    def __init__(self, data: FloatArray, dim: int) -> None:
+        self.data = data
+        self.dim = dim
+
+    @property
+    def x(self) -> FloatArray:
+        return self.data[:, : self.dim]
+
+    @property
+    def q1(self) -> FloatArray:
+        return self.data[:, self.dim : 2 * self.dim]
+
+    @property
+    def q2(self) -> FloatArray:
+        return self.data[:, 2 * self.dim : 3 * self.dim]
+
+    @property
+    def d1(self) -> FloatArray:
+        return self.data[:, 3 * self.dim]
+
+    @property
+    def d2(self) -> FloatArray:
+        return self.data[:, 3 * self.dim + 1]
+
+    @property
+    def t1(self) -> FloatArray:
+        return self.data[:, 3 * self.dim + 2]
+
+    @property
+    def t2(self) -> FloatArray:
+        return self.data[:, 3 * self.dim + 3]
+
+    @property
+    def g(self) -> FloatArray:
+        return self.data[:, 3 * self.dim + 4]
+
+    @property
+    def grad(self) -> FloatArray:
+        return self.data[:, 3 * self.dim + 5 :]
+
+    def __len__(self) -> int:
+        return len(self.data)
 
     def take(self, idx: np.ndarray) -> FieldSample:
         """The sample at rows ``idx`` (k,) (indices or a mask)."""
-        return FieldSample(*(getattr(self, f)[idx] for f in _FIELDS))
+        return FieldSample(self.data[idx], self.dim)
 
     @staticmethod
     def empty(dim: int) -> FieldSample:
         """No rows (points in ``dim`` dimensions)."""
-        v, s = np.zeros((0, dim)), np.zeros(0)
-        return FieldSample(v, s, s, v, v, s, s, s, np.zeros((0, 2)))
+        return FieldSample(np.zeros((0, 3 * dim + 7)), dim)
 
     @staticmethod
     def concat(samples: list[FieldSample]) -> FieldSample:
         """The samples' rows one after the other."""
-        return FieldSample(*(np.concatenate([getattr(s, f) for s in samples]) for f in _FIELDS))
+        return FieldSample(np.concatenate([s.data for s in samples]), samples[0].dim)
 
     @property
     def error(self) -> FloatArray:
@@ -57,7 +90,7 @@ class FieldSample:
         return np.abs(self.g) * 2.0
 
 
-_FIELDS = ("x", "d1", "d2", "q1", "q2", "t1", "t2", "g", "grad")
+_TINY = np.finfo(float).tiny
 
 
 class DistanceField:
@@ -101,19 +134,34 @@ class DistanceField:
 
     def __call__(self, p: FloatArray) -> FieldSample:
         """The field at parameter points ``p`` of shape ``(n, 2)``."""
-        p = np.atleast_2d(np.asarray(p, dtype=np.float64))
+        p = points2d(p)
         emb = self.region.embedding
         x = emb.evaluate(p)
-        c1, c2 = self.closest(x)
         self.evaluations += p.shape[0]
-        d1, d2 = c1.distance, c2.distance
-        tiny = np.finfo(float).tiny
-        u1 = (x - c1.foot) / np.maximum(d1, tiny)[:, None]
-        u2 = (x - c2.foot) / np.maximum(d2, tiny)[:, None]
+        if self._pair is False:
+            self._pair = PairSearch.build(self.a1, self.a2)
+        pair = self._pair
+        n, dim = x.shape
+        data = np.empty((n, 3 * dim + 7))
+        c = 3 * dim
+        data[:, :dim] = x
+        if isinstance(pair, PairSearch):  # both feet from one kernel call, packed at once
+            t, foot, dist = pair.search.closest(x)  # (n, 2), (n, 2, dim), (n, 2)
+            data[:, dim:c] = foot.reshape(n, 2 * dim)
+            data[:, c : c + 2] = dist
+            data[:, c + 2 : c + 4] = t
+        else:
+            c1, c2 = self.a1.closest(x), self.a2.closest(x)
+            data[:, dim : 2 * dim], data[:, 2 * dim : c] = c1.foot, c2.foot
+            data[:, c], data[:, c + 1], data[:, c + 2], data[:, c + 3] = (
+                c1.distance, c2.distance, c1.t, c2.t,
+            )  # fmt: skip
+            dist = data[:, c : c + 2]
+        # unit vectors from the feet, both at once: (x - q) / max(d, tiny)
+        feet = data[:, dim:c].reshape(n, 2, dim)
+        u = (x[:, None, :] - feet) / np.maximum(dist, _TINY)[:, :, None]
         r = self.ratio
-        gx = (1.0 - r) * u1 - r * u2
-        grad = gx if emb.is_identity else np.einsum("nij,ni->nj", emb.jacobian(p), gx)
-        g = (1.0 - r) * d1 - r * d2
-        return FieldSample(
-            x=x, d1=d1, d2=d2, q1=c1.foot, q2=c2.foot, t1=c1.t, t2=c2.t, g=g, grad=grad
-        )
+        gx = (1.0 - r) * u[:, 0] - r * u[:, 1]
+        data[:, c + 4] = (1.0 - r) * dist[:, 0] - r * dist[:, 1]
+        data[:, c + 5 :] = gx if emb.is_identity else np.einsum("nij,ni->nj", emb.jacobian(p), gx)
+        return FieldSample(data, dim)

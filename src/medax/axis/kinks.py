@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from medax.axis.field import DistanceField, FieldSample
+from medax.geometry._rows import row_norms, step_norms
 from medax.geometry._types import FloatArray
-from medax.geometry.curve import Closest
 
 #: a foot point moving this many times faster than the axis point marks a kink
 KINK_SPEED = 25.0
@@ -27,11 +27,23 @@ BRANCH_WIDTH = 0.02
 def kink_intervals(s: FieldSample, scale: float, speed: float = KINK_SPEED) -> np.ndarray:
     """Intervals ``i`` (between points i and i+1) across which a foot point moves more than
     ``speed`` times as far as the axis point (it jumps)."""
-    dx = np.linalg.norm(np.diff(s.x, axis=0), axis=1)
-    jump = np.maximum(
-        np.linalg.norm(np.diff(s.q1, axis=0), axis=1), np.linalg.norm(np.diff(s.q2, axis=0), axis=1)
-    )
+    dx, jump = _moves(s)
     return np.nonzero((jump > speed * dx) & (jump > 1e-6 * scale))[0]
+
+
+def kink_intervals2(
+    s: FieldSample, scale: float, speeds: tuple[float, float]
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`kink_intervals` at two speeds from one measurement of the moves."""
+    dx, jump = _moves(s)
+    far = jump > 1e-6 * scale
+    return tuple(np.nonzero((jump > v * dx) & far)[0] for v in speeds)  # type: ignore[return-value]
+
+
+def _moves(s: FieldSample) -> tuple[FloatArray, FloatArray]:
+    """How far the axis point (n - 1,) and the farther moving foot point (n - 1,) move
+    between consecutive points of ``s``."""
+    return step_norms(s.x), np.maximum(step_norms(s.q1), step_norms(s.q2))
 
 
 def locate_kinks(
@@ -62,9 +74,9 @@ def locate_kinks(
     if not intervals:
         return [], FieldSample.empty(field.a1.dim)
     idx = np.asarray(intervals, dtype=np.int64)
-    dx = np.linalg.norm(s.x[idx + 1] - s.x[idx], axis=1)
-    j1 = np.linalg.norm(s.q1[idx + 1] - s.q1[idx], axis=1)
-    j2 = np.linalg.norm(s.q2[idx + 1] - s.q2[idx], axis=1)
+    dx = row_norms(s.x[idx + 1] - s.x[idx])
+    j1 = row_norms(s.q1[idx + 1] - s.q1[idx])
+    j2 = row_norms(s.q2[idx + 1] - s.q2[idx])
     jumps_a1 = j1 >= j2
     both = (j1 > speed * dx) & (j2 > speed * dx)
     # groups (interval, jumping constraint); rows: each group from either end's other foot
@@ -90,16 +102,14 @@ def locate_kinks(
         rows2 = np.flatnonzero(ok2)
         found += [(int(g_int[again[r]]), q2[r]) for r in rows2.tolist()]
         samples.append(fs2.take(rows2))
-    out = []
-    for j, (i, qk) in enumerate(found):
-        along = _along(p, i, qk)
-        if along is not None:
-            out.append((i, along, j))
-    out.sort(key=lambda k: (k[0], k[1]))
+    ids = np.array([f[0] for f in found], dtype=np.int64)
+    along = _along(p, ids, np.array([f[1] for f in found]).reshape(-1, 2))
+    js = np.flatnonzero(np.isfinite(along))
+    js = js[np.lexsort((along[js], ids[js]))]  # by interval, then along it
     kept: list[tuple[int, FloatArray]] = []
     keep: list[int] = []
-    for i, _, j in out:  # (two kinks of one interval that coincide are one)
-        qk = found[j][1]
+    for j in js.tolist():  # (two kinks of one interval that coincide are one)
+        i, qk = found[j]
         if (
             kept
             and kept[-1][0] == i
@@ -120,14 +130,14 @@ def _start(p: FloatArray, s: FieldSample, ii: np.ndarray) -> FloatArray:
     ga, gb = s.grad[ii], s.grad[ii + 1]
     ta = np.column_stack((ga[:, 1], -ga[:, 0]))  # tangents: the gradients turned by -90 deg
     tb = np.column_stack((gb[:, 1], -gb[:, 0]))
-    ta /= np.maximum(np.linalg.norm(ta, axis=1), 1e-300)[:, None]
-    tb /= np.maximum(np.linalg.norm(tb, axis=1), 1e-300)[:, None]
+    ta /= np.maximum(row_norms(ta), 1e-300)[:, None]
+    tb /= np.maximum(row_norms(tb), 1e-300)[:, None]
     ab = b - a
     det = ta[:, 0] * (-tb[:, 1]) - ta[:, 1] * (-tb[:, 0])  # [ta, -tb] [u, v] = b - a
     with np.errstate(divide="ignore", invalid="ignore"):
         u = (ab[:, 0] * (-tb[:, 1]) - ab[:, 1] * (-tb[:, 0])) / det
         v = (ta[:, 0] * ab[:, 1] - ta[:, 1] * ab[:, 0]) / det
-        h = np.linalg.norm(ab, axis=1)
+        h = row_norms(ab)
         ok = (np.abs(det) > 1e-3) & (u > 0.0) & (v > 0.0) & (u < 2.0 * h) & (v < 2.0 * h)
     u = np.where(ok, u, 0.0)  # (NaN where det = 0: not carried into the product)
     return np.where(ok[:, None], a + u[:, None] * ta, 0.5 * (a + b))
@@ -154,9 +164,15 @@ def _solve(
     emb = field.region.embedding
     r = field.ratio
     k = ii.size
-    ta = np.where(on2, s.t2[ii], s.t1[ii])
-    tb = np.where(on2, s.t2[ii + 1], s.t1[ii + 1])
-    to = np.where(on2, s.t1[end], s.t2[end])
+    # the feet of each row's queries: the two branches, then the other constraint (rows of
+    # tt (3, k)), each on A2 where ``side`` (3, k)
+    tt = np.array((
+        np.where(on2, s.t2[ii], s.t1[ii]),
+        np.where(on2, s.t2[ii + 1], s.t1[ii + 1]),
+        np.where(on2, s.t1[end], s.t2[end]),
+    ))  # fmt: skip
+    m = 2 if global_other else 3  # local queries per row (the other constraint: global)
+    side = np.array((on2, on2, ~on2)[:m])
     wj = np.where(on2, r, 1.0 - r)[:, None]  # weights of the jumping / other distance
     wo = np.where(on2, 1.0 - r, r)[:, None]
     q = np.array(q0, dtype=np.float64, copy=True)
@@ -165,50 +181,36 @@ def _solve(
     for _ in range(iters):
         x = emb.evaluate(q[act])
         n = act.size
-        o2 = on2[act]
-        if global_other:  # both branches in one query, the other constraint global
-            c = field.closest_near(np.concatenate((o2, o2)), np.concatenate((x, x)),
-                                   np.concatenate((ta[act], tb[act])), BRANCH_WIDTH)  # fmt: skip
+        # the local queries of all rows in one call
+        c = field.closest_near(side[:, act].ravel(), np.concatenate((x,) * m), tt[:m, act].ravel(),
+                               BRANCH_WIDTH)  # fmt: skip
+        tt[:m, act] = c.t.reshape(m, n)
+        feet = c.foot.reshape(m, n, -1)
+        dist = c.distance.reshape(m, n)
+        if global_other:
             c1, c2 = field.closest(x)
-            co = Closest(
-                np.where(o2, c1.t, c2.t),
-                np.where(o2[:, None], c1.foot, c2.foot),
-                np.where(o2, c1.distance, c2.distance),
-            )
-        else:  # the two branches and the other constraint in one query
-            c = field.closest_near(
-                np.concatenate((o2, o2, ~o2)), np.concatenate((x, x, x)),
-                np.concatenate((ta[act], tb[act], to[act])), BRANCH_WIDTH,
-            )  # fmt: skip
-            co = Closest(c.t[2 * n :], c.foot[2 * n :], c.distance[2 * n :])
-            to[act] = co.t
-        ca = Closest(c.t[:n], c.foot[:n], c.distance[:n])
-        cb = Closest(c.t[n : 2 * n], c.foot[n : 2 * n], c.distance[n : 2 * n])
-        ta[act], tb[act] = ca.t, cb.t
-        ua, ub, uo = (
-            (x - cc.foot) / np.maximum(cc.distance, 1e-300)[:, None] for cc in (ca, cb, co)
-        )
+            o2 = on2[act]
+            feet = np.concatenate((feet, np.where(o2[:, None], c1.foot, c2.foot)[None]))
+            dist = np.concatenate((dist, np.where(o2, c1.distance, c2.distance)[None]))
+        u = (x - feet) / np.maximum(dist, 1e-300)[:, :, None]  # unit vectors (3, n, dim)
         wja, woa = wj[act], wo[act]
-        f0 = wja[:, 0] * ca.distance - woa[:, 0] * co.distance
-        f1 = wja[:, 0] * cb.distance - woa[:, 0] * co.distance
-        ga = wja * ua - woa * uo
-        gb = wja * ub - woa * uo
+        # both equations at once: values (2, n) and gradients (2, n, dim)
+        ff = wja[:, 0] * dist[:2] - woa[:, 0] * dist[2]
+        gg = wja * u[:2] - woa * u[2]
         if not emb.is_identity:
-            jac = emb.jacobian(q[act])
-            ga = np.einsum("mi,mij->mj", ga, jac)
-            gb = np.einsum("mi,mij->mj", gb, jac)
-        done = 2.0 * np.maximum(np.abs(f0), np.abs(f1)) <= tol
+            gg = np.einsum("kmi,mij->kmj", gg, emb.jacobian(q[act]))
+        f0, f1, ga, gb = ff[0], ff[1], gg[0], gg[1]
+        done = 2.0 * np.abs(ff).max(axis=0) <= tol
         conv[act[done]] = True
         det = ga[:, 0] * gb[:, 1] - ga[:, 1] * gb[:, 0]
         move = ~done & (det != 0.0) & np.isfinite(det)  # singular rows: no kink
-        with np.errstate(divide="ignore", invalid="ignore"):
-            step = np.column_stack((f0 * gb[:, 1] - f1 * ga[:, 1], ga[:, 0] * f1 - gb[:, 0] * f0))
-            step /= det[:, None]
-        q[act[move]] -= step[move]
+        f0, f1, ga, gb = f0[move], f1[move], ga[move], gb[move]
+        step = np.array((f0 * gb[:, 1] - f1 * ga[:, 1], ga[:, 0] * f1 - gb[:, 0] * f0)).T
+        q[act[move]] -= step / det[move, None]
         act = act[move]
         if act.size == 0:
             break
-    ok = conv & (np.abs(ta - tb) >= 1e-9)
+    ok = conv & (np.abs(tt[0] - tt[1]) >= 1e-9)
     # the kink must be on the axis of the full (global) field (one query for all rows:
     # the unconfirmed ones ride along)
     fs = field(q)
@@ -216,11 +218,13 @@ def _solve(
     return ok, q, fs
 
 
-def _along(p: FloatArray, i: int, q: FloatArray) -> float | None:
-    """Where ``q`` (2,) lies along the interval ``p[i]``, ``p[i+1]`` (its projection's
-    fraction), or ``None`` if it is not on this piece of the axis (Newton can also find a
-    crossing of the two branches' fields far away)."""
-    ab = p[i + 1] - p[i]
-    along = float((q - p[i]) @ ab / (ab @ ab))
-    near = bool(np.linalg.norm(q - p[i] - along * ab) <= np.linalg.norm(ab))
-    return along if 1e-9 < along < 1.0 - 1e-9 and near else None
+def _along(p: FloatArray, ii: np.ndarray, q: FloatArray) -> FloatArray:
+    """Where the points ``q`` (k, 2) lie along the intervals ``p[ii]``, ``p[ii + 1]`` (their
+    projections' fractions, (k,)), NaN where one is not on this piece of the axis (Newton
+    can also find a crossing of the two branches' fields far away)."""
+    a = p[ii]
+    ab = p[ii + 1] - a
+    aq = q - a
+    along = np.add.reduce(aq * ab, axis=1) / np.add.reduce(ab * ab, axis=1)
+    near = row_norms(aq - along[:, None] * ab) <= row_norms(ab)
+    return np.where((along > 1e-9) & (along < 1.0 - 1e-9) & near, along, np.nan)

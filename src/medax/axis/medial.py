@@ -173,9 +173,9 @@ def trace_axis(
     )
     # back to the caller's coordinates (identity for surface regions)
     pts_out = pts * scale + offset
-    sx = s.x * scale + offset if work.embedding.is_identity else s.x
-    q1 = s.q1 * scale + offset if work.embedding.is_identity else s.q1
-    q2 = s.q2 * scale + offset if work.embedding.is_identity else s.q2
+    sx = s.x * scale + offset if work.embedding.is_identity else s.x.copy()
+    q1 = s.q1 * scale + offset if work.embedding.is_identity else s.q1.copy()
+    q2 = s.q2 * scale + offset if work.embedding.is_identity else s.q2.copy()
     spline_out = (
         spline.transformed(-offset / scale, 1.0 / scale)
         if scale != 1.0 or np.any(offset)

@@ -17,8 +17,9 @@ import numpy as np
 
 from medax.axis.correct import correct_newton
 from medax.axis.field import DistanceField, FieldSample
-from medax.axis.kinks import KINK_TRY, kink_intervals, locate_kinks
+from medax.axis.kinks import KINK_SPEED, KINK_TRY, kink_intervals2, locate_kinks
 from medax.axis.transitions import locate_transitions, transition_intervals, vertex_crossings
+from medax.geometry._rows import row_norms
 from medax.geometry._types import FloatArray
 from medax.geometry.bspline import BSpline
 from medax.geometry.fitting import interpolate
@@ -54,16 +55,6 @@ class Fitted:
     curve_error: float
     rounds: int
     corrector_iterations: int
-
-
-def _take(s: FieldSample, idx: np.ndarray) -> FieldSample:
-    return FieldSample(*(getattr(s, f)[idx] for f in FieldSample.__dataclass_fields__))
-
-
-def _cat(a: FieldSample, b: FieldSample) -> FieldSample:
-    return FieldSample(
-        *(np.concatenate((getattr(a, f), getattr(b, f))) for f in FieldSample.__dataclass_fields__)
-    )
 
 
 def fit_and_refine(
@@ -104,8 +95,8 @@ def fit_and_refine(
         # (where the corrected points leave their interval, the piece stays short and is
         # fitted by a lower-degree polynomial: see interpolate)
         cuts = np.array([0, *sorted(breaks), len(pts) - 1])
-        span = np.diff(cuts)
-        if np.any(span < DEGREE):
+        span = cuts[1:] - cuts[:-1]
+        if (span < DEGREE).any():
             short = np.flatnonzero(span < DEGREE)
             intervals = np.concatenate([np.arange(cuts[j], cuts[j + 1]) for j in short])
             parts = np.repeat(-(-DEGREE // span[short]), span[short])  # ceil(DEGREE / span)
@@ -119,11 +110,9 @@ def fit_and_refine(
                 continue
         # 2. breaks where the axis is not smooth: kinks (a foot jumps between branches of a
         # constraint) and transitions (a foot reaches its constraint's end)
-        jumps = kink_intervals(s, scale)
+        jumps, tries = kink_intervals2(s, scale, (KINK_SPEED, KINK_TRY))
         kinks = [
-            i
-            for i in kink_intervals(s, scale, KINK_TRY)
-            if i not in tried and i not in breaks and i + 1 not in breaks
+            i for i in tries.tolist() if i not in tried and i not in breaks and i + 1 not in breaks
         ]
         found, kink_s = locate_kinks(
             field, s, pts, kinks, tol_point, speed=KINK_TRY if both_kinks else np.inf
@@ -146,20 +135,22 @@ def fit_and_refine(
             for f in vertex_crossings(field, s, vertices)
             if _key(pts, f) not in tried_t and f[0] not in jumps and f[0] not in kinked
         ]
-        tried_t |= {_key(pts, f) for f in trans + cross}
-        ti, tq, trans_s, rows_t = locate_transitions(field, pts, s, trans + cross, tol_point)
-        # new breaks: one transition per interval (found from a foot on a vertex) and the
-        # vertex crossings, and the kinks, in order along each interval; each with its row
-        # in the field samples of both (transitions, then kinks)
-        at = rows_t < len(trans)
-        one = {int(ti[j]): int(j) for j in np.flatnonzero(at)}  # one per interval
-        nt = len(ti)
-        cand = (
-            [(i, tq[j], j) for i, j in one.items()]
-            + [(int(ti[j]), tq[j], int(j)) for j in np.flatnonzero(~at)]
-            + [(i, q, nt + k) for k, (i, q) in enumerate(found)]
-        )
-        new_breaks = _ordered(pts, cand, 1e-12 * scale)
+        cand: list[tuple[int, FloatArray, int]] = []
+        trans_s = FieldSample.empty(s.dim)
+        if trans or cross:
+            tried_t |= {_key(pts, f) for f in trans + cross}
+            ti, tq, trans_s, rows_t = locate_transitions(field, pts, s, trans + cross, tol_point)
+            # new breaks: one transition per interval (found from a foot on a vertex) and
+            # the vertex crossings, and the kinks, in order along each interval; each with
+            # its row in the field samples of both (transitions, then kinks)
+            at = rows_t < len(trans)
+            one = {int(ti[j]): int(j) for j in np.flatnonzero(at)}  # one per interval
+            cand = [(i, tq[j], j) for i, j in one.items()] + [
+                (int(ti[j]), tq[j], int(j)) for j in np.flatnonzero(~at)
+            ]
+        nt = len(trans_s)
+        cand += [(i, q, nt + k) for k, (i, q) in enumerate(found)]
+        new_breaks = _ordered(pts, cand, 1e-12 * scale) if cand else []
         if new_breaks:
             idx = np.array([b[0] for b in new_breaks], dtype=np.int64)
             kp = np.array([b[1] for b in new_breaks])
@@ -172,7 +163,7 @@ def fit_and_refine(
             if np.any(fresh):
                 breaks |= marked
                 # (the field at the breaks is that of their global check: no evaluation)
-                ks = _take(_cat(trans_s, kink_s), rows[fresh])
+                ks = FieldSample.concat([trans_s, kink_s]).take(rows[fresh])
                 pts, s, breaks = _insert_at(pts, s, breaks, idx[fresh], kp[fresh], ks, True)
             elif marked:
                 breaks |= marked
@@ -191,7 +182,7 @@ def fit_and_refine(
         # intervals already shorter than the tracer's smallest step are not split again: no
         # smooth piece needs them, and at a singularity that no break describes (e.g. the
         # axis through a focal point of a constraint) splitting would never end
-        chord = np.linalg.norm(pts[bad + 1] - pts[bad], axis=1)
+        chord = row_norms(pts[bad + 1] - pts[bad])
         bad = bad[chord > MIN_INTERVAL * scale]
         history.append(curve_error)
         stalled = False
@@ -201,7 +192,8 @@ def fit_and_refine(
         if bad.size == 0 or stalled:
             break
         # cubic interpolation error ~ h^4: split each bad interval into enough pieces
-        pieces = np.clip(np.ceil(1.3 * (err[bad] / target) ** 0.25), 2, 8).astype(np.int64)
+        pieces = np.minimum(np.maximum(np.ceil(1.3 * (err[bad] / target) ** 0.25), 2), 8)
+        pieces = pieces.astype(np.int64)
         pts, s, breaks, it = _insert(
             field, pts, s, breaks, bad, spline, u, tol_point, pieces, checked
         )
@@ -248,12 +240,14 @@ def _existing(pts: FloatArray, idx: np.ndarray, q: FloatArray, eps: float) -> np
 
 @dataclass
 class _Checked:
-    """Check samples of the last round: per-interval endpoint keys, space points
-    (n_int, m, dim) and equidistance errors (n_int, m) (measured or bounded); the parameter
-    points (n_int, m, 2), and the field ``sample`` at the measured ones, row ``rows[i, j]``
-    ((n_int, m), -1 where only bounded)."""
+    """Check samples of the last round: per-interval endpoint keys (:func:`_ends`, sorted)
+    and the intervals they key (``order``), space points (n_int, m, dim) and equidistance
+    errors (n_int, m) (measured or bounded); the parameter points (n_int, m, 2), and the
+    field ``sample`` at the measured ones, row ``rows[i, j]`` ((n_int, m), -1 where only
+    bounded)."""
 
-    keys: dict[bytes, int]
+    keys: np.ndarray
+    order: np.ndarray
     x: FloatArray
     err: FloatArray
     y: FloatArray
@@ -281,23 +275,31 @@ def _check(
     frac = np.arange(1, CHECK_SAMPLES) / CHECK_SAMPLES
     m = CHECK_SAMPLES - 1
     uu = (u[:-1, None] + frac[None, :] * np.diff(u)[:, None]).ravel()
-    y = spline.evaluate(uu)
+    y = spline.evaluate_once(uu)
     x = field.region.embedding.evaluate(y).reshape(len(u) - 1, m, -1)
-    ends = [pts[i].tobytes() + pts[i + 1].tobytes() for i in range(len(pts) - 1)]
+    ends = _ends(pts)
     err = np.full((len(u) - 1, m), np.inf)
-    if prev is not None:
-        j = np.array([prev.keys.get(k, -1) for k in ends], dtype=np.int64)
-        same = np.nonzero(j >= 0)[0]
-        moved = np.linalg.norm(x[same] - prev.x[j[same]], axis=2)
-        err[same] = prev.err[j[same]] + 2.0 * moved
+    if prev is not None:  # the intervals whose two end points were checked last round
+        at = np.minimum(np.searchsorted(prev.keys, ends), prev.keys.size - 1)
+        same = np.flatnonzero(prev.keys[at] == ends)
+        j = prev.order[at[same]]
+        d = x[same] - prev.x[j]
+        err[same] = prev.err[j] + 2.0 * np.sqrt(np.add.reduce(d * d, axis=2))
     need = ~(err <= 0.5 * tol_curve)
     y = y.reshape(len(u) - 1, m, 2)
     rows = np.full(need.shape, -1, dtype=np.int64)
     rows[need] = np.arange(int(need.sum()))
     measured = field(y[need]) if np.any(need) else FieldSample.empty(x.shape[2])
     err[need] = measured.error
-    keys = {k: i for i, k in enumerate(ends)}
-    return err.max(axis=1), _Checked(keys, x, err, y, rows, measured)
+    order = np.argsort(ends)
+    return err.max(axis=1), _Checked(ends[order], order, x, err, y, rows, measured)
+
+
+def _ends(pts: FloatArray) -> np.ndarray:
+    """Keys (n - 1,) of the intervals of ``pts`` (n, dim): the bytes of their two end
+    points (opaque ``void`` items, sortable and exact; they survive re-indexing)."""
+    both = np.concatenate((pts[:-1], pts[1:]), axis=1)  # (n - 1, 2 dim), contiguous
+    return both.view(np.dtype((np.void, both.shape[1] * both.itemsize))).ravel()
 
 
 def _insert(
@@ -348,7 +350,7 @@ def _insert(
     same = intervals[1:] == intervals[:-1]
     keep[1:] &= ~same | (along[1:] > along[:-1] + 1e-9)
     if not np.all(keep):
-        intervals, new, sn = intervals[keep], new[keep], _take(sn, np.flatnonzero(keep))
+        intervals, new, sn = intervals[keep], new[keep], sn.take(keep)
     pts, s, breaks = _insert_at(pts, s, breaks, intervals, new, sn, as_break=False)
     return pts, s, breaks, it
 
@@ -368,7 +370,7 @@ def _insert_at(
     order = np.argsort(np.concatenate((np.arange(n, dtype=float), intervals + 0.5)), kind="stable")
     # several points in one interval keep their given order (stable sort, ascending input)
     pts = np.concatenate((pts, new))[order]
-    s = _take(_cat(s, sn), order)
+    s = FieldSample(np.concatenate((s.data, sn.data))[order], s.dim)
     pos = np.empty(n + len(intervals), dtype=np.int64)
     pos[order] = np.arange(n + len(intervals))
     new_breaks = {int(pos[b]) for b in breaks}

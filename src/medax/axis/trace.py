@@ -14,6 +14,7 @@ import numpy as np
 from medax.axis.correct import correct_newton, correct_paper
 from medax.axis.field import DistanceField, FieldSample
 from medax.errors import TraceError
+from medax.geometry._rows import row_norms
 from medax.geometry._types import FloatArray
 
 #: target turn of the axis tangent per step (radians) for the adaptive step
@@ -31,15 +32,21 @@ def tangent(sample: FieldSample) -> FloatArray:
     which points from B1 towards B2 when A1 is on the right... of the gradient."""
     gx, gy = sample.grad[:, 0], sample.grad[:, 1]
     t = np.column_stack((gy, -gx))
-    return t / np.maximum(np.linalg.norm(t, axis=1), 1e-300)[:, None]
+    return t / np.maximum(row_norms(t), 1e-300)[:, None]
 
 
 def _space_speed(field: DistanceField, p: FloatArray, v: FloatArray) -> FloatArray:
     """Length in space of parameter-plane vectors ``v`` (n, 2) at ``p`` (n, 2)."""
     emb = field.region.embedding
     if emb.is_identity:
-        return np.linalg.norm(v, axis=1)
-    return np.linalg.norm(np.einsum("nij,nj->ni", emb.jacobian(p), v), axis=1)
+        return row_norms(v)
+    return row_norms(np.einsum("nij,nj->ni", emb.jacobian(p), v))
+
+
+def _length(v: FloatArray) -> float:
+    """``np.linalg.norm`` of a vector (dim,) to the last bit (the same dot product), without
+    its argument handling (the frame trace measures two per step)."""
+    return math.sqrt(float(v.dot(v)))
 
 
 class TraceStats:
@@ -77,8 +84,7 @@ def trace_frame(
             raise TraceError(
                 f"region '{field.region.name}': no arrival at B2 after {MAX_STEPS} steps"
             )
-        to_end = x_end - s.x[0]
-        chord = float(np.linalg.norm(to_end))
+        chord = _length(x_end - s.x[0])
         if chord <= 1.5 * h:
             break
         speed = float(_space_speed(field, p, t)[0])
@@ -86,8 +92,8 @@ def trace_frame(
         q, sq, ok, it = correct_newton(field, pred, tol)
         stats.corrector_iterations += it
         tq = tangent(sq)
-        turn = float(np.arccos(np.clip(np.dot(t[0], tq[0]), -1.0, 1.0)))
-        moved = float(np.linalg.norm(sq.x[0] - field.region.embedding.evaluate(pred)[0]))
+        turn = float(np.arccos(min(max(float(np.dot(t[0], tq[0])), -1.0), 1.0)))
+        moved = _length(sq.x[0] - field.region.embedding.evaluate(pred)[0])
         inside = bool(field.region.contains(q)[0])
         good = ok[0] and inside and turn <= MAX_TURN and moved <= MAX_CORRECTION * h
         if not good and h > h_min:

@@ -41,13 +41,17 @@ def transition_intervals(
     """``(i, constraint, vertex, side)``: the foot on constraint 1 or 2 reaches a vertex
     (0.0, 1.0 or one of the constraint's ``breaks``) between points ``i`` and ``i + 1``,
     coming from the piece before it (``side = -1``) or after it (``+1``)."""
-    out = []
+    out: list[tuple[int, int, float, int]] = []
     for k, t, inner in ((1, s.t1, breaks[0]), (2, s.t2, breaks[1])):
-        for e in (0.0, *np.asarray(inner).tolist(), 1.0):
-            at = np.abs(t - e) <= AT_VERTEX
-            for i in np.nonzero(at[:-1] != at[1:])[0]:
-                off = t[i + 1] if at[i] else t[i]  # the foot not at the vertex
-                out.append((int(i), k, float(e), -1 if off < e else 1))
+        e = np.concatenate(([0.0], np.asarray(inner, dtype=np.float64), [1.0]))
+        at = np.abs(t[None, :] - e[:, None]) <= AT_VERTEX  # (vertices, points)
+        vi, ii = (at[:, :-1] != at[:, 1:]).nonzero()  # by vertex, then along the axis
+        if vi.size:
+            off = np.where(at[vi, ii], t[ii + 1], t[ii])  # the foot not at the vertex
+            ev = e[vi]
+            side = np.where(off < ev, -1, 1)
+            rows = zip(ii.tolist(), ev.tolist(), side.tolist(), strict=True)
+            out += [(i, k, v, d) for i, v, d in rows]
     return out
 
 

@@ -83,7 +83,7 @@ class BSpline(Curve):
         if knots is None:
             knots = clamped_uniform_knots(ctrl.shape[0], degree)
         kn = np.asarray(knots, dtype=np.float64)
-        if kn.size != ctrl.shape[0] + degree + 1 or np.any(np.diff(kn) < 0):
+        if kn.size != ctrl.shape[0] + degree + 1 or (kn[1:] < kn[:-1]).any():
             raise CurveError("B-spline knots must be non-decreasing, m + degree + 1 of them")
         lo, hi = kn[degree], kn[-degree - 1]
         if not hi > lo:
@@ -95,6 +95,16 @@ class BSpline(Curve):
             self.weights.shape != (ctrl.shape[0],) or np.any(self.weights <= 0)
         ):
             raise CurveError("B-spline weights must be positive, one per control point")
+
+    @classmethod
+    def on_unit_knots(cls, control_points: FloatArray, degree: int, knots: FloatArray) -> BSpline:
+        """The non-rational spline of ``control_points`` (m, dim) and a clamped knot vector
+        ``knots`` (m + degree + 1,) whose domain is already [0, 1] (as :meth:`__init__`
+        would map it), from trusted inputs (the fitter's): no checks."""
+        spline = cls.__new__(cls)
+        spline.control_points, spline.degree = control_points, int(degree)
+        spline.knots, spline.weights = knots, None
+        return spline
 
     @classmethod
     def from_bezier(cls, control_points: FloatArray, breaks: FloatArray, degree: int) -> BSpline:
@@ -139,7 +149,8 @@ class BSpline(Curve):
     def _spl(self) -> _ScipyBSpline:
         """scipy's B-spline of the same knots (de Boor; homogeneous for a NURBS)."""
         if self.weights is None:
-            return _ScipyBSpline(self.knots, self.control_points, self.degree, extrapolate=False)
+            ctrl = np.ascontiguousarray(self.control_points)  # (checked by __init__)
+            return _ScipyBSpline.construct_fast(self.knots, ctrl, self.degree, extrapolate=False)
         hom = np.column_stack((self.control_points * self.weights[:, None], self.weights))
         return _ScipyBSpline(self.knots, hom, self.degree, extrapolate=False)
 
@@ -151,7 +162,9 @@ class BSpline(Curve):
     def _runs(self) -> tuple[FloatArray, np.ndarray, FloatArray]:
         """The distinct knots (k,), their multiplicities (k,) and the C0 joints (read-only;
         the tracer asks for them at every query)."""
-        kn, mult = np.unique(self.knots, return_counts=True)
+        knots = self.knots  # (non-decreasing: np.unique's runs without its sort)
+        first = np.flatnonzero(np.concatenate(([True], knots[1:] != knots[:-1])))
+        kn, mult = knots[first], np.diff(np.append(first, knots.size))
         joints = kn[(kn > 0.0) & (kn < 1.0) & (mult >= self.degree)]
         for a in (kn, mult, joints):
             a.flags.writeable = False
@@ -173,7 +186,7 @@ class BSpline(Curve):
         Evaluating them by Horner's rule costs a few numpy operations for all points and
         orders at once, where scipy's BSpline call pays its overhead once per call and
         derivative."""
-        x = np.unique(self.knots)
+        x = self._runs[0].copy()  # the distinct knots
         k = self.degree
         # Taylor coefficients at each interval start (right limits: scipy evaluates a knot
         # with the interval to its right)
@@ -209,6 +222,18 @@ class BSpline(Curve):
         w = kernels.jet_rows(inner, x, rows, np.ascontiguousarray(t.ravel()), _NO_OFFSET)
         dim = rows.shape[1]
         return [w[nu * dim : (nu + 1) * dim].T for nu in orders]
+
+    def evaluate_once(self, t: FloatArray) -> FloatArray:
+        """:meth:`evaluate` (equal to rounding) at ``t`` (n,) in [0, 1] by scipy's de Boor
+        evaluation, without building the polynomial pieces of :meth:`evaluate`: for a
+        spline evaluated once (the fitter's check of each new spline), where building them
+        would cost more than the evaluation."""
+        if self.weights is not None:
+            return self.evaluate(t)
+        spl = _ScipyBSpline.construct_fast(
+            self.knots, self.control_points, self.degree, extrapolate=False
+        )
+        return np.asarray(spl(np.asarray(t, dtype=np.float64)))
 
     def jet(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         h0, h1, h2 = self._raw_many(t, (0, 1, 2))
@@ -333,7 +358,10 @@ class BSpline(Curve):
         return BSpline(self.control_points[::-1], self.degree, kn, w)
 
     def transformed(self, offset: FloatArray, scale: float) -> BSpline:
-        out = BSpline((self.control_points - offset) / scale, self.degree, self.knots, self.weights)
+        # (the checks of __init__ hold for the image: the same degree, knots and weights)
+        out = BSpline.__new__(BSpline)
+        out.control_points = (self.control_points - offset) / scale
+        out.degree, out.knots, out.weights = self.degree, self.knots, self.weights
         if self.weights is None and "_pieces" in self.__dict__:
             # the image's polynomial pieces in closed form (no de Boor evaluations): all
             # coefficients scaled, the value's constant term moved
@@ -341,6 +369,8 @@ class BSpline(Curve):
             moved = coefs / scale
             moved[:, -1, 0] -= np.asarray(offset, dtype=np.float64) / scale
             out.__dict__["_pieces"] = (x, moved)
+        if "_runs" in self.__dict__:  # (the same knots)
+            out.__dict__["_runs"] = self._runs
         return out
 
 

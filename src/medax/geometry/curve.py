@@ -9,13 +9,14 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from medax.geometry import kernels
+from medax.geometry._rows import row_norms
 from medax.geometry._types import FloatArray
 
 if TYPE_CHECKING:  # (pair_search imports this module)
@@ -36,6 +37,17 @@ class Closest:
     t: FloatArray
     foot: FloatArray
     distance: FloatArray
+
+
+def _unit_steps(n: int) -> FloatArray:
+    """``np.linspace(0, 1, n)`` (a fresh copy of one made once per ``n``: curves are
+    sampled again for every region and axis)."""
+    return _linspace(n).copy()
+
+
+@lru_cache(maxsize=64)
+def _linspace(n: int) -> FloatArray:
+    return np.linspace(0.0, 1.0, n)
 
 
 class Curve(ABC):
@@ -126,7 +138,7 @@ class Curve(ABC):
         """Arc length, by Gauss-Legendre quadrature on ``complexity()`` pieces."""
         pieces = max(self.complexity(), 1) * 8
         x, w = _GAUSS
-        edges = np.linspace(0.0, 1.0, pieces + 1)
+        edges = _unit_steps(pieces + 1)
         a, b = edges[:-1, None], edges[1:, None]
         t = (0.5 * (b - a) * x[None, :] + 0.5 * (a + b)).ravel()
         speed = np.linalg.norm(self.derivative(t), axis=1).reshape(pieces, -1)
@@ -134,13 +146,12 @@ class Curve(ABC):
 
     def sample(self, n: int) -> FloatArray:
         """``n`` points at equal parameter steps, shape ``(n, dim)``."""
-        return self.evaluate(np.linspace(0.0, 1.0, n))
+        return self.evaluate(_unit_steps(n))
 
     @cached_property
     def _search(self) -> tuple[FloatArray, FloatArray]:
         """The search samples: parameters (m,) and points (m, dim)."""
-        n = self.samples_per_piece * max(self.complexity(), 1) + 1
-        t = np.linspace(0.0, 1.0, n)
+        t = _unit_steps(self.samples_per_piece * max(self.complexity(), 1) + 1)
         return t, self.evaluate(t)
 
     @cached_property
@@ -399,13 +410,13 @@ def closest_by_search(curve: Curve, points: FloatArray, k: int = 2) -> Closest:
     t, foot, ta, tb, s0, interior, w_lo, w_hi = kernels.bracket_rows(
         ts, np.ascontiguousarray(pts), np.ascontiguousarray(curve._slopes), x, cand
     )
-    if np.any(interior):
+    if interior.any():
         t[interior], foot[interior] = _newton_in_brackets(
             curve, x[interior], ta[interior], tb[interior], s0[interior]
         )
     at_breaks(curve, curve.breaks(), x, w_lo, w_hi, t, foot)
-    dist = np.linalg.norm(foot - x, axis=1).reshape(n, k)
-    pick = np.argmin(dist, axis=1)
+    dist = row_norms(foot - x).reshape(n, k)
+    pick = dist.argmin(axis=1)
     r = np.arange(n)
     return Closest(
         t=t.reshape(n, k)[r, pick],
@@ -525,13 +536,15 @@ def _newton_in_brackets(
     its foot the second-order Taylor expansion of that step's jet (off by ``|C^(3)| s^3 / 6``):
     no separate evaluation of the feet.
     """
-    a = np.array(a, dtype=np.float64)
-    b = np.array(b, dtype=np.float64)
-    s = np.array(s, dtype=np.float64)
     x = np.ascontiguousarray(x, dtype=np.float64)
     table = curve.jet_table()
-    if table is not None:  # (the whole iteration compiled, the jets too)
+    if table is not None:  # (the whole iteration compiled, the jets too; the kernel keeps
+        # its inputs)
+        a, b, s = (np.ascontiguousarray(v, dtype=np.float64) for v in (a, b, s))
         return kernels.newton_table(*table, x, a, b, s, iters)  # type: ignore[no-any-return]
+    a = np.array(a, dtype=np.float64)  # (updated in place below)
+    b = np.array(b, dtype=np.float64)
+    s = np.array(s, dtype=np.float64)
     s = np.where(np.isfinite(s), s, 0.5 * (a + b))
     foot = np.empty_like(x)
     rows = np.arange(s.size)

@@ -6,15 +6,21 @@ from collections.abc import Sequence
 
 import numpy as np
 from scipy.interpolate import BarycentricInterpolator, make_interp_spline
+from scipy.linalg import get_lapack_funcs
 
 from medax.errors import CurveError
+from medax.geometry._rows import step_norms
 from medax.geometry._types import FloatArray
+from medax.geometry.basis_kernel import span_basis_rows
 from medax.geometry.bspline import BSpline
+
+#: LAPACK's banded solver (double precision)
+_GBSV = get_lapack_funcs(("gbsv",), (np.zeros((1, 1)),))[0]
 
 
 def chord_parameters(points: FloatArray) -> FloatArray:
     """Normalised cumulative chord length of ``points`` (n, dim), shape ``(n,)``."""
-    seg = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    seg = step_norms(points)
     u = np.concatenate(([0.0], np.cumsum(seg)))
     return u / u[-1]
 
@@ -33,14 +39,16 @@ def interpolate(
     """
     pts = np.asarray(points, dtype=np.float64)
     u = chord_parameters(pts)
-    if not np.all(np.diff(u) > 0.0):
-        i = int(np.argmin(np.diff(u)))
+    du = u[1:] - u[:-1]
+    if not (du > 0.0).all():
+        i = int(np.argmin(du))
         raise CurveError(f"cannot fit a spline: points {i} and {i + 1} of {len(pts)} coincide")
     cuts = [0, *sorted(int(b) for b in breaks), len(pts) - 1]
-    if np.any(np.diff(cuts) < 1):
+    gaps = np.diff(cuts)
+    if (gaps < 1).any():
         raise CurveError(f"cannot fit a spline: breaks {sorted(breaks)} of {len(pts)} points")
     u_all = u
-    if np.any(np.diff(cuts) < degree):
+    if (gaps < degree).any():
         u, pts, cuts = _fill_short(u, pts, cuts, degree)
     if degree % 2:
         return _interpolate_odd(pts, u, cuts, degree), u_all
@@ -102,10 +110,27 @@ def _interpolate_odd(pts: FloatArray, u: FloatArray, cuts: list[int], degree: in
     so the pieces decouple and one banded solve fits them all (the same spline as piece by
     piece)."""
     half = (degree - 1) // 2
-    knots: list[FloatArray] = [np.full(degree + 1, u[0])]
-    for j, (a, b) in enumerate(zip(cuts[:-1], cuts[1:], strict=True)):
-        knots.append(u[a + 1 + half : b - half])
-        knots.append(np.full(degree if j < len(cuts) - 2 else degree + 1, u[b]))
-    kn = np.concatenate(knots)
-    spl = make_interp_spline(u, pts, k=degree, t=kn)
-    return BSpline(np.asarray(spl.c), degree, kn)
+    # each site's multiplicity as a knot: 1 inside the pieces, 0 within ``half`` of a cut
+    mult = np.ones(u.size, dtype=np.int64)
+    c = np.asarray(cuts, dtype=np.int64)
+    mult[np.clip((c[:, None] + np.arange(-half, half + 1)).ravel(), 0, u.size - 1)] = 0
+    mult[c] = degree
+    mult[[0, -1]] = degree + 1
+    kn = np.repeat(u, mult)
+    return BSpline.on_unit_knots(_collocation_solve(u, pts, kn, degree), degree, kn)
+
+
+def _collocation_solve(u: FloatArray, pts: FloatArray, kn: FloatArray, k: int) -> FloatArray:
+    """Control points (n, dim) of the degree-``k`` spline on knots ``kn`` (n + k + 1,)
+    through ``pts`` (n, dim) at the sites ``u`` (n,): the banded collocation system (its
+    basis values from the compiled Cox-de Boor recursion) solved by LAPACK's ``gbsv``, as
+    scipy's ``make_interp_spline`` does, without its argument handling."""
+    n = u.size
+    span, values, _ = span_basis_rows(kn, np.zeros((0, k + 1, k + 1)), k, False, u)
+    cols = span[:, None] + np.arange(-k, 1)  # (n, k + 1): the non-zero basis functions
+    ab = np.zeros((3 * k + 1, n), order="F")  # LAPACK band storage, kl = ku = k
+    ab[2 * k + np.arange(n)[:, None] - cols, cols] = values
+    _, _, c, info = _GBSV(k, k, ab, np.array(pts, order="F"), overwrite_ab=True, overwrite_b=True)
+    if info != 0:
+        raise CurveError(f"cannot fit a spline: singular collocation system (info {info})")
+    return np.ascontiguousarray(c)

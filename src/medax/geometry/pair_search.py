@@ -17,6 +17,7 @@ import numpy as np
 
 from medax.errors import CurveError
 from medax.geometry import kernels
+from medax.geometry._rows import row_norms
 from medax.geometry._types import FloatArray
 from medax.geometry.bspline import POWER_BASIS_MAX_DEGREE, BSpline
 from medax.geometry.curve import Closest, Curve
@@ -122,4 +123,4 @@ class PairSearch:
         hi = np.minimum(np.maximum(t0 + width, 0.0), 1.0)
         start = np.minimum(np.maximum(t0, 0.0), 1.0)
         t, foot = self.search.closest_in(on2.astype(np.int64), x, lo, hi, start)
-        return Closest(t=t, foot=foot, distance=np.linalg.norm(foot - x, axis=1))
+        return Closest(t=t, foot=foot, distance=row_norms(foot - x))

@@ -11,6 +11,7 @@ import numpy as np
 from medax import tolerances
 from medax.errors import RegionError
 from medax.geometry import kernels
+from medax.geometry._rows import points2d
 from medax.geometry._types import FloatArray
 from medax.geometry.crossing_kernel import polylines_cross, self_crossing
 from medax.geometry.curve import Curve
@@ -229,17 +230,29 @@ class Region:
         ndarray
             Booleans (n,).
         """
-        q = np.atleast_2d(np.asarray(p, dtype=np.float64))
+        q = points2d(p)
+        ay, by, ax, dx, dy = self._edges
+        px, py = q[:, 0:1], q[:, 1:2]
+        # the edges each point's horizontal ray may cross (few of the n x m pairs), then
+        # where they cross it
+        i, j = ((ay > py) != (by > py)).nonzero()
+        x_cross = ax[j] + (py[i, 0] - ay[0, j]) * dx[j] / dy[j]
+        hits = np.bincount(i[px[i, 0] < x_cross], minlength=len(q))
+        return np.asarray(hits % 2 == 1)
+
+    @cached_property
+    def _edges(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+        """The closed boundary's edges for :meth:`contains`: start and end ``y`` (1, m)
+        each, start ``x``, ``dx`` and ``dy`` (m,) each."""
         a = self.boundary
         b = np.roll(a, -1, axis=0)
-        px, py = q[:, 0:1], q[:, 1:2]
-        straddle = (a[None, :, 1] > py) != (b[None, :, 1] > py)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            x_cross = a[None, :, 0] + (py - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0]) / (
-                b[None, :, 1] - a[None, :, 1]
-            )
-        hits = straddle & (px < x_cross)
-        return np.asarray(np.sum(hits, axis=1) % 2 == 1)
+        return (
+            a[None, :, 1].copy(),
+            b[None, :, 1].copy(),
+            a[:, 0].copy(),
+            b[:, 0] - a[:, 0],
+            b[:, 1] - a[:, 1],
+        )
 
     # ---- checks ---------------------------------------------------------------------------
     def check(self) -> None:

@@ -25,6 +25,7 @@ import numpy as np
 
 from medax.errors import InputError
 from medax.geometry import kernels
+from medax.geometry._rows import points2d
 from medax.geometry._types import FloatArray
 from medax.geometry.basis_kernel import span_basis_rows
 from medax.geometry.bspline import POWER_BASIS_MAX_DEGREE, BSpline
@@ -32,7 +33,7 @@ from medax.geometry.nurbs_kernel import jet_rows
 
 
 def _p(p: FloatArray) -> tuple[FloatArray, FloatArray]:
-    a = np.atleast_2d(np.asarray(p, dtype=np.float64))
+    a = points2d(p)
     return a[:, 0], a[:, 1]
 
 
@@ -86,7 +87,9 @@ class _Surface:
 
 
 def _stack(du: FloatArray, dv: FloatArray) -> FloatArray:
-    return np.stack((du, dv), axis=2)
+    out = np.empty((*np.shape(du), 2))
+    out[..., 0], out[..., 1] = du, dv
+    return out
 
 
 @dataclass(frozen=True)
@@ -423,7 +426,7 @@ class NurbsSurface(_Surface):
         return (self._hom, ukn, ucoef, vkn, vcoef, bool(self.extrapolate))
 
     def _jet(self, p: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        a = np.atleast_2d(np.asarray(p, dtype=np.float64))
+        a = points2d(p)
         kernels.announce_compile()
         if len(a) > PARTS_CHUNK:
             # in chunks (the compiled jet keeps no per-point temporaries; the chunks only
