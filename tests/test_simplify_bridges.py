@@ -110,3 +110,23 @@ def test_bridge_distances_to_curved_supports():
         f for f in planes if abs(BRepAdaptor_Surface(f).Plane().Location().Z() - 4.0) < 1e-12
     )
     assert np.max(np.abs(_distances(pts, top) - np.abs(pts[:, 2] - 4.0))) <= 1e-12
+
+
+def test_a_loose_smooth_edge_lets_the_medial_curve_end_within_its_tolerance():
+    """The base's medial curve may end as far from a rider's smooth edge as the edge's own
+    tolerance says its curve is known (a loose input: 0028's medial curves end 1.2e-5 -
+    3.0e-5 from edges of tolerance 2e-4 - 4e-3), but never farther than 10x the build
+    tolerance, and never nearer than the build tolerance on a tight edge."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge
+    from OCP.gp import gp_Pnt
+
+    from medax.cad.simplify.bridge import LOOSE_REACH, _reach
+
+    tol = 2.6e-5
+    edge = BRepBuilderAPI_MakeEdge(gp_Pnt(0, 0, 0), gp_Pnt(1, 0, 0)).Edge()  # 1e-7 tight
+    assert _reach(edge, tol) == tol
+    BRep_Builder().UpdateEdge(edge, 7e-5)
+    assert _reach(edge, tol) == 7e-5
+    BRep_Builder().UpdateEdge(edge, 4e-3)
+    assert _reach(edge, tol) == LOOSE_REACH * tol

@@ -30,6 +30,9 @@ from medax.cad.simplify.occ import Array, face_inside_point, pnt, xyz
 
 #: Samples along the bridge where its equidistance from the two supporting faces is measured.
 CHECK_SAMPLES = 11
+#: A loose smooth edge lets the base's medial curve end up to its tolerance from it, at most
+#: this many times the build tolerance (the rebuilt solid's checks have the last word).
+LOOSE_REACH = 10.0
 
 
 def bridge_edge(
@@ -46,14 +49,15 @@ def bridge_edge(
 
     ``smooth_edge``: the rider's smooth edge on the base fillet; ``supports``: the base
     fillet's two supporting faces; ``tol``: length tolerance for the bridge's start on
-    ``smooth_edge``. Returns a one-line reason when there is no such bridge.
+    ``smooth_edge`` (up to the edge's own, looser tolerance: :func:`_reach`). Returns a
+    one-line reason when there is no such bridge.
     """
     if rider_medial.iso not in ("u", "v"):
         return "the rider's medial curve is traced, not an iso-line (no bridge along it)"
     ext = BRepExtrema_DistShapeShape(base_medial.edge, smooth_edge)
     if not ext.IsDone() or ext.NbSolution() < 1:
         return "the medial curve of the fillet it rides on does not reach its smooth edge"
-    if ext.Value() > tol:
+    if ext.Value() > _reach(smooth_edge, tol):
         return (
             "the medial curve of the fillet it rides on does not reach its smooth edge "
             f"(gap {ext.Value():.2e})"
@@ -80,6 +84,13 @@ def bridge_edge(
     if not mk.IsDone():
         return "could not build the bridge edge"
     return mk.Edge(), err
+
+
+def _reach(edge: Any, tol: float) -> float:
+    """How far the base's medial curve may end from the rider's smooth ``edge``: ``tol``,
+    or the edge's own tolerance where the input is looser (its curve is only known to
+    that), at most ``LOOSE_REACH`` times ``tol``."""
+    return max(tol, min(BRep_Tool.Tolerance_s(edge), LOOSE_REACH * tol))
 
 
 def _equidistance(curve: Any, lo: float, hi: float, supports: tuple[Any, Any]) -> float:
