@@ -427,7 +427,7 @@ def _attempt(job: Job, sel: dict[int, FilletSpec]) -> Attempt | str:
         expected = fitted_dv / job.vol_ref if fit_err > 0 else None
         job.say(f"rebuilding: {len(groups)} faces")
         pieces = _pieces_before(split, groups)
-        shape, faces = build_solid(split, groups, used, job.btol)
+        shape, faces = build_solid(split, groups, used, job.btol, job.pcurves)
     except GroupError as err:  # traced to faces: blame their fillets (a corner's, its own)
         blamed = {f for c in err.faces if c in csel for f in csel[c].fillets}
         return Failure(str(err), blamed | (err.faces & set(sel)))
