@@ -498,6 +498,7 @@ def _validated(
     ``pieces``: the changed groups' split pieces as they were before the rebuild."""
     diag, tol = job.diag, job.tol
     job.say("validating (analyzer, shell, volume, area, deviation both ways)")
+    job.measures.new_round()  # (new faces: the keys of the last attempt's are not needed)
     merged = [(g, f) for g, f in zip(groups, faces, strict=True) if g.support is not None]
     c = check(shape, with_volume=False)
     if not c.valid:
