@@ -105,3 +105,36 @@ def test_second_attempt_reuses_the_pcurves_with_the_same_result(box4, monkeypatc
     )
     keys = _pcurve_keys(r.shape)
     assert any(k is not None for k in keys) and keys == _pcurve_keys(plain.shape)
+
+
+def test_loose_boundary_key_is_the_old_face_and_its_pcurve():
+    """The key of a boundary followed on an old face: the same for the face of a copy,
+    another for the other face of the edge and for the face moved by 1e-9."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy, BRepBuilderAPI_Transform
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.gp import gp_Trsf
+
+    from medax.cad.simplify.occ import edge_curve
+
+    def first(shape):  # type: ignore[no-untyped-def]
+        face = TopoDS.Face(next(iter(faces_of(shape))))
+        edge = TopoDS.Edge(next(iter(edges_of(face))))
+        return face, edge
+
+    box = BRepPrimAPI_MakeBox(2.0, 3.0, 4.0).Shape()
+    face, edge = first(box)
+    c = edge_curve(edge)[0]
+    key = rebuild._BoundaryOnFace(edge, face, c).key()
+    assert key is not None
+    cface, cedge = first(BRepBuilderAPI_Copy(box).Shape())
+    assert rebuild._BoundaryOnFace(cedge, cface, c).key() == key
+    other = next(
+        TopoDS.Face(f)
+        for f in faces_of(box)
+        if not f.IsSame(face) and any(e.IsSame(edge) for e in edges_of(f))
+    )
+    assert rebuild._BoundaryOnFace(edge, other, c).key() not in (None, key)
+    t = gp_Trsf()
+    t.SetTranslation(gp_Vec(1e-9, 0.0, 0.0))
+    mface, medge = first(BRepBuilderAPI_Transform(box, t, False).Shape())
+    assert rebuild._BoundaryOnFace(medge, mface, c).key() not in (None, key)
