@@ -4,8 +4,9 @@ same geometry to the bit, whatever their handles, so a value computed on one (a 
 pcurve, :func:`.rebuild._add_pcurves`) holds for the other. Kinds not handled give None:
 nothing is reused for them.
 
-A key costs a few Python calls per pole (about 1 ms for 500 poles), against the projection
-of a curve onto a surface that it stands for (10 - 100 ms).
+A key costs a few Python calls per pole (0.7 ms CPU for a surface of 500 poles; once per
+face), against 4 ms CPU on average per edge for the pcurve it stands for (its projection,
+fit and sampled error, on isolated_blends_test_13).
 """
 
 from __future__ import annotations
