@@ -128,6 +128,9 @@ class Job:
     # the integrals and deviations of the changed groups, kept from one attempt to the next
     # (keyed by the faces' geometry: :func:`.local_measure.face_key`)
     measures: Measures = field(default_factory=Measures)
+    # the new edges' pcurves, kept from one attempt to the next (keyed by the surface's and
+    # the curves' geometry: :func:`.rebuild._pcurve_key`)
+    pcurves: Measures = field(default_factory=Measures)
 
     @property
     def vol0(self) -> float:

@@ -81,6 +81,27 @@ class Measures:
     def __init__(self) -> None:
         self.values: dict[tuple[Any, ...], Any] = {}
         self.hits = 0
+        # (face hash, origin bytes) -> [(face, its key)]: the keys of the faces seen since
+        # :meth:`new_round`, by the faces themselves
+        self._keys: dict[tuple[int, bytes], list[tuple[Any, tuple[Any, ...]]]] = {}
+
+    def face_key(self, face: Any, origin: np.ndarray) -> tuple[Any, ...]:
+        """:func:`face_key` of ``face`` from ``origin`` (3,), computed once per face (the
+        same TopoDS face: shape, location and orientation) and point until
+        :meth:`new_round` (a validation looks a face up three times: its adaptive, default
+        and Gauss-Kronrod contributions; each key costs a default volume integral)."""
+        o = np.asarray(origin, dtype=np.float64)
+        slot = self._keys.setdefault((hash(face), o.tobytes()), [])
+        for f, key in slot:
+            if f.IsEqual(face):
+                return key
+        key = face_key(face, o)
+        slot.append((face, key))
+        return key
+
+    def new_round(self) -> None:
+        """Forget the faces' keys (the values stay): the faces of a new attempt."""
+        self._keys.clear()
 
     def get(self, key: tuple[Any, ...], compute: Callable[[], Any]) -> Any:
         """The value stored under ``key``, else ``compute()`` stored there."""
@@ -192,9 +213,12 @@ def _measured(
         f = _nurbs_faces([face])[0] if gk else face
         return _contribution(f, pnt(origin), eps, gk)
 
-    if cache is None or (eps is None and not gk):  # (the default integral is the key's own)
+    if cache is None:
         return compute()
-    return float(cache.get(("volume", eps, gk, *face_key(face, origin)), compute))
+    key = cache.face_key(face, origin)
+    if eps is None and not gk:  # the default integral is the key's own
+        return float(key[-1])
+    return float(cache.get(("volume", eps, gk, *key), compute))
 
 
 def local_volume_change(
@@ -323,7 +347,7 @@ def _area(faces: Sequence[Any], eps: float, cache: Measures | None = None) -> fl
     if cache is not None:  # face by face, added in order as OCCT does
         total = 0.0
         for f in faces:
-            key = ("area", eps, *face_key(f, _ZERO))
+            key = ("area", eps, *cache.face_key(f, _ZERO))
             total += float(cache.get(key, partial(_area, [f], eps)))
         return total
     props = GProp_GProps()

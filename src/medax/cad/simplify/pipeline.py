@@ -427,7 +427,7 @@ def _attempt(job: Job, sel: dict[int, FilletSpec]) -> Attempt | str:
         expected = fitted_dv / job.vol_ref if fit_err > 0 else None
         job.say(f"rebuilding: {len(groups)} faces")
         pieces = _pieces_before(split, groups)
-        shape, faces = build_solid(split, groups, used, job.btol)
+        shape, faces = build_solid(split, groups, used, job.btol, job.pcurves)
     except GroupError as err:  # traced to faces: blame their fillets (a corner's, its own)
         blamed = {f for c in err.faces if c in csel for f in csel[c].fillets}
         return Failure(str(err), blamed | (err.faces & set(sel)))
@@ -498,6 +498,7 @@ def _validated(
     ``pieces``: the changed groups' split pieces as they were before the rebuild."""
     diag, tol = job.diag, job.tol
     job.say("validating (analyzer, shell, volume, area, deviation both ways)")
+    job.measures.new_round()  # (new faces: the keys of the last attempt's are not needed)
     merged = [(g, f) for g, f in zip(groups, faces, strict=True) if g.support is not None]
     c = check(shape, with_volume=False)
     if not c.valid:

@@ -12,7 +12,8 @@ their (new or original) surface with pcurves projected explicitly, then healed
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -26,7 +27,9 @@ from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shell, TopoDS_Solid, TopoDS_Wire
 
+from medax.cad.simplify.geom_key import Key, curve2d_key, curve_key, location_key, surface_key
 from medax.cad.simplify.groups import Group, GroupError
+from medax.cad.simplify.local_measure import Measures
 from medax.cad.simplify.occ import (
     edge_curve,
     edge_ends,
@@ -162,45 +165,90 @@ def _concat_c0(curves: list[tuple[Any, float, float]]) -> Any:
     return Geom2d_BSplineCurve(ap, ak, am, deg)
 
 
-def _add_pcurves(face: Any, tol: float, old: Sequence[Any] = ()) -> None:
+def _add_pcurves(
+    face: Any, tol: float, old: Sequence[Any] = (), cache: Measures | None = None
+) -> None:
     """Explicit pcurves of every edge of ``face`` on its surface: OCCT's projection, replaced
     by a fitted one when that is closer (checked at samples against the 3-D curve).
 
     ``old``: the faces the new one replaces. Where one of them placed an edge's boundary
     farther than ``tol`` from its 3-D curve (an input whose pcurves lie within a loose edge
     tolerance of its curves), the new pcurve follows that boundary, not the 3-D curve: the
-    face then covers what the old faces covered, and the volume and area stay the same."""
+    face then covers what the old faces covered, and the volume and area stay the same.
+
+    ``cache``: each edge's pcurve and its measured error kept by what determines them
+    (:func:`_pcurve_key`), so that an attempt rebuilding a face on the same surface with
+    the same edges projects nothing again (each edge gets its own copy of the pcurve)."""
     builder = BRep_Builder()
     surf = BRep_Tool.Surface_s(face)  # placed by the face's location (its parameters kept)
-    grid: GridProjection | None = None
+    grids: list[GridProjection | None] = []
+
+    def grid() -> GridProjection | None:  # the surface's grid, made once when first needed
+        if not grids:
+            u0, u1, v0, v1 = (float(x) for x in surf.Bounds())
+            grids.append(GridProjection.of(surf, (u0, u1, v0, v1)))
+        return grids[0]
+
+    skey: list[Key | None] = []
     for e in edges_of(face):
-        if BRep_Tool.CurveOnSurface_s(TopoDS.Edge(e), face, 0.0, 0.0):
+        edge = TopoDS.Edge(e)
+        if BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0):
             continue  # an original edge of an original surface: its pcurve is there
         c, f, l = edge_curve(e)
-        loose = _loose_boundary(TopoDS.Edge(e), c, f, l, old, tol)
-        if loose is not None:
-            if grid is None:
-                u0, u1, v0, v1 = (float(x) for x in surf.Bounds())
-                grid = GridProjection.of(surf, (u0, u1, v0, v1))
-            pc = _fitted_pcurve(loose, surf, f, l, tol, grid)
-            if pc is not None:
-                _set_pcurve(
-                    builder, TopoDS.Edge(e), face, pc, f, l, _pcurve_error(pc, c, surf, f, l), tol
-                )
-                continue
-        pc = _projected_pcurve(c, f, l, surf, tol)
-        err = float("inf") if pc is None else _pcurve_error(pc, c, surf, f, l)
-        if err > 0.1 * tol:
-            if grid is None:
-                u0, u1, v0, v1 = (float(x) for x in surf.Bounds())
-                grid = GridProjection.of(surf, (u0, u1, v0, v1))
-            alt = _fitted_pcurve(c, surf, f, l, tol, grid)
-            alt_err = float("inf") if alt is None else _pcurve_error(alt, c, surf, f, l)
-            if alt_err < err:
-                pc, err = alt, alt_err
+        loose = _loose_boundary(edge, c, f, l, old, tol)
+        compute = partial(_edge_pcurve, c, f, l, surf, tol, loose, grid)
+        key = None
+        if cache is not None:
+            if not skey:
+                skey.append(surface_key(surf))
+            key = _pcurve_key(skey[0], c, f, l, tol, loose)
+        if cache is None or key is None:
+            pc, err = compute()
+        else:
+            pc, err = cache.get(key, compute)
+            pc = None if pc is None else pc.Copy()  # (OCP gives the concrete kind)
         if pc is None:
             raise CadError("projecting a boundary edge onto a new surface failed")
-        _set_pcurve(builder, TopoDS.Edge(e), face, pc, f, l, err, tol)  # (err measured above)
+        _set_pcurve(builder, edge, face, pc, f, l, err, tol)  # (err measured)
+
+
+def _edge_pcurve(
+    c: Any,
+    f: float,
+    l: float,
+    surf: Any,
+    tol: float,
+    loose: _BoundaryOnFace | None,
+    grid: Callable[[], GridProjection | None],
+) -> tuple[Any | None, float]:
+    """(pcurve, its error) of the 3-D curve ``c`` on ``[f, l]`` on ``surf``: fitted to the
+    ``loose`` boundary when given and that fit succeeds; else OCCT's projection, replaced
+    by a fitted one when that is closer (None, inf: both failed)."""
+    if loose is not None:
+        pc = _fitted_pcurve(loose, surf, f, l, tol, grid())
+        if pc is not None:
+            return pc, _pcurve_error(pc, c, surf, f, l)
+    pc = _projected_pcurve(c, f, l, surf, tol)
+    err = float("inf") if pc is None else _pcurve_error(pc, c, surf, f, l)
+    if err > 0.1 * tol:
+        alt = _fitted_pcurve(c, surf, f, l, tol, grid())
+        alt_err = float("inf") if alt is None else _pcurve_error(alt, c, surf, f, l)
+        if alt_err < err:
+            pc, err = alt, alt_err
+    return pc, err
+
+
+def _pcurve_key(
+    skey: Key | None, c: Any, f: float, l: float, tol: float, loose: _BoundaryOnFace | None
+) -> Key | None:
+    """What determines an edge's pcurve, as a key: the surface's key ``skey``, the 3-D
+    curve ``c`` and its range ``[f, l]``, ``tol`` and the ``loose`` boundary followed (the
+    old face's surface, location, pcurve and range); None where a part has no key."""
+    ckey = curve_key(c)
+    lkey = None if loose is None else loose.key()
+    if skey is None or ckey is None or (loose is not None and lkey is None):
+        return None
+    return ("pcurve", skey, ckey, np.array([f, l, tol], dtype=np.float64).tobytes(), lkey)
 
 
 def _set_pcurve(
@@ -223,6 +271,7 @@ class _BoundaryOnFace:
         from OCP.BRepAdaptor import BRepAdaptor_Curve
 
         self._on = BRepAdaptor_Curve(edge, face)
+        self._edge, self._face = edge, face
         self._curve = curve
         if hasattr(curve, "NbKnots"):
             self.NbKnots = curve.NbKnots
@@ -230,6 +279,19 @@ class _BoundaryOnFace:
 
     def Value(self, t: float) -> Any:  # noqa: N802 (OCCT's name, for _fitted_pcurve)
         return self._on.Value(t)
+
+    def key(self) -> Key | None:
+        """What places the boundary (as ``BRepAdaptor_Curve`` evaluates it: the old face's
+        surface moved by its location, along the edge's pcurve on it) as a key; None where
+        a part has no key."""
+        loc = TopLoc_Location()
+        skey = surface_key(BRep_Tool.Surface_s(self._face, loc))
+        pc = BRep_Tool.CurveOnSurface_s(self._edge, self._face, 0.0, 0.0)
+        a, b = BRep_Tool.Range_s(self._edge, self._face)
+        pkey = None if pc is None else curve2d_key(pc)
+        if skey is None or pkey is None:
+            return None
+        return (skey, location_key(loc), pkey, np.array([a, b], dtype=np.float64).tobytes())
 
 
 def _loose_boundary(
@@ -356,11 +418,17 @@ def _pole_face(surf: Any, g: Group, tol: float) -> Any | None:
 
 
 def build_solid(
-    split: SplitResult, groups: list[Group], surfaces: dict[int, Any], tol: float
+    split: SplitResult,
+    groups: list[Group],
+    surfaces: dict[int, Any],
+    tol: float,
+    pcurves: Measures | None = None,
 ) -> tuple[Any, list[Any]]:
     """The simplified solid and the new face of each group (same order as ``groups``).
 
-    ``surfaces`` maps a supporting face (original index) to its merged ``Geom_Surface``.
+    ``surfaces`` maps a supporting face (original index) to its merged ``Geom_Surface``;
+    ``pcurves``: the new edges' pcurves kept across the attempts of one simplification
+    (:func:`_add_pcurves`).
     """
     builder = BRep_Builder()
     faces: list[Any] = []
@@ -418,7 +486,7 @@ def build_solid(
             wire.Closed(True)
             builder.Add(face, wire)
         old = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
-        _add_pcurves(face, tol, old)
+        _add_pcurves(face, tol, old, pcurves)
         if flip:
             face.Reverse()
         faces.append(face)
