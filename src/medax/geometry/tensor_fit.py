@@ -54,6 +54,11 @@ HOPELESS = 100.0
 #: wide a band for MAX_BAND_ENTRIES: SuperLU) take about a second; a plate under many bosses
 #: would otherwise ask for 10^6.
 MAX_COEFFICIENTS = 80_000
+#: Long (flat) spans are sampled at most this many spacings apart, so that a span over a
+#: hole keeps data on both sides of it, and checked at half that.
+FLAT_GAP = 4.0
+#: Most extra probe lines per direction where the height is probed for curvature.
+MAX_PROBES = 200
 #: Weight of the second-difference penalty (data rows have weight 1). It only has to make
 #: the coefficients without data determinate: larger values bias the fit (measured on the
 #: 12-edge box: 1e-6 -> 1e-4 error, 1e-9 -> 1.5e-5, 1e-12 -> 3e-6 at the same knots).
@@ -92,8 +97,8 @@ class TensorFit:
 
     def check_samples(self) -> tuple[FloatArray, FloatArray]:
         """The x and y samples where the error is measured: CHECK_PER_SPAN per span, at most
-        half the spacing apart in long spans."""
-        gap = 0.5 * self.spacing
+        FLAT_GAP / 2 spacings apart in long spans."""
+        gap = 0.5 * FLAT_GAP * self.spacing
         return span_samples(self.tx, CHECK_PER_SPAN, gap), span_samples(
             self.ty, CHECK_PER_SPAN, gap
         )
@@ -322,12 +327,15 @@ class HeightFitter:
 
 def probe_lines(uniform: FloatArray, extra: FloatArray, spacing: float) -> FloatArray:
     """The probe coordinates ``uniform`` with ``extra`` ones (the caller's: where thin curved
-    parts lie, which 41 uniform lines can all miss), those within ``spacing / 2`` of one
-    already kept left out."""
+    parts lie, which 41 uniform lines can all miss), one per bin of ``spacing / 2`` (wider
+    where that would give more than ``MAX_PROBES``)."""
     extra = np.sort(np.asarray(extra, dtype=np.float64).ravel())
     if extra.size == 0:
         return uniform
-    keep = np.concatenate([[True], np.diff(np.floor(extra / (0.5 * spacing))) > 0])
+    # one line per bin: bins of half the spacing, at most MAX_PROBES over the range (each
+    # line is a row of height evaluations per interval)
+    width = max(0.5 * spacing, float(uniform[-1] - uniform[0]) / MAX_PROBES)
+    keep = np.concatenate([[True], np.diff(np.floor(extra / width)) > 0])
     return np.union1d(uniform, extra[keep])
 
 
@@ -462,8 +470,9 @@ def _fit_once(
     tx = knot_vector(x_range[0], x_range[1], xb, fine_x, sx)
     ty = knot_vector(y_range[0], y_range[1], yb, fine_y, sy)
     step = min(sx, sy)
-    # long (flat) spans sampled at most ``step`` apart, checked at most ``step / 2``
-    xs, ys = span_samples(tx, SAMPLES_PER_SPAN, step), span_samples(ty, SAMPLES_PER_SPAN, step)
+    # long (flat) spans sampled at most FLAT_GAP steps apart (checked at half that)
+    gap = FLAT_GAP * step
+    xs, ys = span_samples(tx, SAMPLES_PER_SPAN, gap), span_samples(ty, SAMPLES_PER_SPAN, gap)
     z, ok, _ = h(*np.meshgrid(xs, ys, indexing="ij"))
     bx = BSpline.design_matrix(xs, tx, DEGREE).tocsr()
     by = BSpline.design_matrix(ys, ty, DEGREE).tocsr()
@@ -477,8 +486,8 @@ def _fit_once(
     error = float("inf") if missing else float(np.abs(diff[use]).max(initial=0.0))
     # signed volume between fit and data over the face: midpoint rule on the check cells
     # (the samples sit at the centres of equal cells of every span)
-    wx = span_weights(tx, CHECK_PER_SPAN, 0.5 * step)
-    wy = span_weights(ty, CHECK_PER_SPAN, 0.5 * step)
+    wx = span_weights(tx, CHECK_PER_SPAN, 0.5 * gap)
+    wy = span_weights(ty, CHECK_PER_SPAN, 0.5 * gap)
     volume = float(np.sum(np.where(use, diff, 0.0) * np.outer(wx, wy)))
     return TensorFit(tx, ty, coef, error, step, volume)
 
