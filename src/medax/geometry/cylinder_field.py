@@ -41,6 +41,7 @@ from medax.geometry.tensor_fit import (
     DEGREE,
     MAX_COEFFICIENTS,
     SAMPLES_PER_SPAN,
+    UNIFORM_PROBES,
     HeightFn,
     _coefficient_count,
     curved_intervals,
@@ -277,7 +278,7 @@ class PointFitter:
         self.sb = sorted(b for b in set(s_breaks) if s0 < b < s1)
         self.fine_s = [True] * (len(self.sb) + 1)
         zb = sorted(b for b in set(z_breaks) if z0 < b < z1)
-        lines = np.linspace(s0, s1, 41)
+        lines = np.linspace(s0, s1, UNIFORM_PROBES)
         if probes is not None:  # and through the curved pieces (a thin one fits between)
             lines = probe_lines(lines, probes[(probes >= s0) & (probes <= s1)], spacing)
         self.zb, self.fine_z = curved_intervals(z0, z1, zb, height, lines, 1, spacing)

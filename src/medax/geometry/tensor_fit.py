@@ -57,7 +57,9 @@ MAX_COEFFICIENTS = 80_000
 #: Long (flat) spans are sampled at most this many spacings apart, so that a span over a
 #: hole keeps data on both sides of it, and checked at half that.
 FLAT_GAP = 4.0
-#: Most extra probe lines per direction where the height is probed for curvature.
+#: Uniform lines per direction along which the height is probed for curvature.
+UNIFORM_PROBES = 41
+#: Most extra probe lines per direction (through the curved pieces) besides those.
 MAX_PROBES = 200
 #: Weight of the second-difference penalty (data rows have weight 1). It only has to make
 #: the coefficients without data determinate: larger values bias the fit (measured on the
@@ -291,7 +293,7 @@ class HeightFitter:
         self.x_range, self.y_range, self.h, self.spacing = x_range, y_range, h, spacing
         xb = sorted(b for b in set(x_breaks) if x0 < b < x1)
         yb = sorted(b for b in set(y_breaks) if y0 < b < y1)
-        probe_x, probe_y = np.linspace(x0, x1, 41), np.linspace(y0, y1, 41)
+        probe_x, probe_y = np.linspace(x0, x1, UNIFORM_PROBES), np.linspace(y0, y1, UNIFORM_PROBES)
         if probes is not None:
             probe_x = probe_lines(probe_x, probes[0], spacing)
             probe_y = probe_lines(probe_y, probes[1], spacing)

@@ -386,13 +386,15 @@ def _periodic(
 ) -> PeriodicFit | None:
     """The periodic fit in ``(theta, z)`` (``theta`` from ``theta0``): z knot lines at the
     circles, one span in z where the offset is linear (see :class:`PointFitter`)."""
-    from medax.geometry.tensor_fit import curved_intervals, probe_lines
+    from medax.geometry.tensor_fit import UNIFORM_PROBES, curved_intervals, probe_lines
 
     r = fld.frame.radius
     z0, z1 = fld.z_range
     zb = sorted(b for b in fld.z_breaks if z0 < b < z1)
     period = PERIOD * r
-    lines = probe_lines(np.linspace(0.0, period, 41), np.mod(_rims(fld), period), spacing)
+    lines = probe_lines(
+        np.linspace(0.0, period, UNIFORM_PROBES), np.mod(_rims(fld), period), spacing
+    )
     zb, fine = curved_intervals(z0, z1, zb, height, lines, 1, spacing)
 
     def by_angle(th: Array, zz: Array) -> tuple[Array, np.ndarray, np.ndarray]:
