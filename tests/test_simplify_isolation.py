@@ -215,3 +215,39 @@ def test_fillet_merged_whole_where_one_face_has_no_surface_for_its_half():
     assert group.halves == (fillet.face,) and group.surface == "extrusion"
     assert any(f"fillet {fillet.face} merged whole" in n for n in r.notes)
     assert_same_solid(cls.shape, r, 6, 6, volume_tol=1e-9, deviation_tol=1e-9)
+
+
+def _rect(x0: float, y0: float, x1: float, y1: float):
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+    from OCP.gp import gp_Pln
+
+    return BRepBuilderAPI_MakeFace(gp_Pln(), x0, x1, y0, y1).Face()
+
+
+def test_an_area_refusal_is_traced_to_the_group_that_changed_it():
+    """Two merged groups: one new face covers exactly its two pieces, the other 1e-3 more
+    than its piece (a face trimmed past its edge). The refusal names the second group's
+    fillets only (truth: the rectangles' areas)."""
+    from types import SimpleNamespace
+
+    from medax.cad.simplify.groups import Group
+    from medax.cad.simplify.job import AREA_TOL
+    from medax.cad.simplify.pipeline import _area_refused
+
+    pieces = {0: _rect(0, 0, 0.5, 1), 1: _rect(0.5, 0, 1, 1), 2: _rect(2, 0, 3, 1)}
+    changed = [
+        (Group(0, [0, 1], support=7, halves=[0, 1]), _rect(0, 0, 1, 1)),
+        (Group(1, [2], support=8, halves=[2]), _rect(2, 0, 3, 1.001)),
+    ]
+    job = SimpleNamespace(area0=100.0, measures=None)
+    split = SimpleNamespace(origin={0: 40, 1: 41, 2: 42})
+    sel = {f: FilletSpec(f, (0, 1), (7, 8), 1.0) for f in (40, 41, 42)}
+    da = 1e-3 / 100.0
+    assert da > AREA_TOL
+    got = _area_refused("area changed", da, changed, pieces, job, split, sel)  # type: ignore[arg-type]
+    assert isinstance(got, Failure)
+    assert got.blamed == {42}
+    assert "fillets 42" in got
+    # shares that do not account for the measured change blame nothing: bisect instead
+    got = _area_refused("area changed", 10 * da, changed, pieces, job, split, sel)  # type: ignore[arg-type]
+    assert got.blamed == frozenset()

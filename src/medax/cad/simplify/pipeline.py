@@ -47,6 +47,7 @@ from medax.cad.simplify.job import (
     Job,
 )
 from medax.cad.simplify.local_measure import (
+    area_delta,
     component_origins,
     contributions,
     group_key,
@@ -581,10 +582,38 @@ def _validated(
     if da_local is None:
         da, why = area_change(shape, job.area0, AREA_TOL)
         if why:
-            return why
+            return _area_refused(why, da, changed, pieces, job, split, sel)
     else:
         da = da_local
     return dv, da, dev, kinds, base
+
+
+def _area_refused(
+    why: str,
+    da: float,
+    changed: list[tuple[Group, Any]],
+    pieces: dict[int, Any],
+    job: Job,
+    split: Any,
+    sel: dict[int, FilletSpec],
+) -> Failure:
+    """The area refusal, blamed on the groups whose own area change (new face against its
+    pieces, relative to the input's area) accounts for ``da``, the measured change; no
+    fillets blamed when the groups' changes do not account for it."""
+    assert job.area0 is not None
+    shares = np.array(
+        [
+            area_delta([f], [pieces[k] for k in g.members], 1e-2 * AREA_TOL, job.measures)
+            / job.area0
+            for g, f in changed
+        ]
+    )
+    picked = volume_blame(shares, da, AREA_TOL)
+    fillets = _fillets_of(split, [changed[i][0] for i in picked], sel)
+    if fillets:
+        names = ", ".join(map(str, sorted(fillets)[:5])) + (", ..." if len(fillets) > 5 else "")
+        why += f"; {float(shares[picked].sum()):.1e} of it on the faces of fillets {names}"
+    return Failure(why, fillets)
 
 
 def _gap_settled(
