@@ -232,7 +232,23 @@ def local_volume_change(
     cache: Measures | None = None,
 ) -> float | None:
     """Relative volume change, when two measures settle it; None otherwise (measure the
-    whole solid).
+    whole solid). See :func:`local_volume_shares`."""
+    settled = local_volume_shares(new, old, before, tol, expected, shares, origins, cache)
+    return None if settled is None else settled[0]
+
+
+def local_volume_shares(
+    new: Sequence[Any],
+    old: Sequence[Any],
+    before: float,
+    tol: float,
+    expected: float | None = None,
+    shares: np.ndarray | None = None,
+    origins: np.ndarray | None = None,
+    cache: Measures | None = None,
+) -> tuple[float, np.ndarray] | None:
+    """Relative volume change and each face's confirmed share of it (as ``shares``), when
+    two measures settle it; None otherwise (measure the whole solid).
 
     The adaptive integrator gives each face's contribution (``shares``: those of
     :func:`contributions`, when already measured). A second measure must agree with their
@@ -256,7 +272,7 @@ def local_volume_change(
     refusal = abs(d_ad) > tol
     budget = 0.1 * (abs(d_ad) if refusal else tol)
     if expected is not None and np.isfinite(expected) and abs(d_ad - expected) <= budget:
-        return d_ad  # (a refusal too: the fits measured the same change themselves)
+        return d_ad, ad  # (a refusal too: the fits measured the same change themselves)
     dflt = sign * np.array([_measured(f, o[i], None, False, cache) for i, f in enumerate(faces)])
     dflt /= before
     best = dflt.copy()
@@ -286,9 +302,9 @@ def local_volume_change(
     # knot spans) when the total agrees with the fits' own measure
     d = float(best.sum())
     if gap.sum() <= allowed():
-        return d
+        return d, best
     if expected is not None and np.isfinite(expected) and abs(d - expected) <= allowed():
-        return d
+        return d, best
     return None
 
 

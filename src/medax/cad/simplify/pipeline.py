@@ -53,6 +53,7 @@ from medax.cad.simplify.local_measure import (
     group_key,
     local_area_change,
     local_volume_change,
+    local_volume_shares,
 )
 from medax.cad.simplify.medial import Medial, medial_curve
 from medax.cad.simplify.merging import (
@@ -563,9 +564,14 @@ def _validated(
         job, changed, pieces, kinds, devs, shares, owner, per_group, expected, origins
     )
     if dv_local is None:
-        dv_local = local_volume_change(
+        settled = local_volume_shares(
             new, old, job.vol_ref, VOLUME_TOL, expected, shares, origins, job.measures
         )
+        if settled is not None:
+            # the refusal is blamed by the measure that settled it (the adaptive shares
+            # are off on fitted and swept faces, and then account for nothing)
+            dv_local, confirmed = settled
+            per_group[:] = np.bincount(owner, weights=confirmed, minlength=len(changed))
     base = job.vol_ref  # the volume the change is relative to
     if dv_local is None:
         base = job.vol0
