@@ -269,6 +269,28 @@ def test_area_change_keeps_the_fillets(monkeypatch):
     assert r.valid and r.volume_rel_change == 0.0 and r.area_rel_change == 0.0
 
 
+@pytest.mark.slow
+def test_area_measures_of_opposite_signs_do_not_refuse(monkeypatch):
+    """The two area measures of a rebuilt solid with swept faces (its NURBS copy, the faces
+    as built), both beyond the tolerance but on opposite sides are the integrators' own
+    error: the fillets go (a real change has one sign in both: the test above)."""
+    from medax.cad.simplify import pipeline, validate
+
+    true_area = validate.area
+
+    def split(shape, nurbs=None):  # the copy 1e-5 over, the faces as built 2e-5 under
+        return true_area(shape, nurbs) * (1.0 + (1e-5 if nurbs else -2e-5))
+
+    monkeypatch.setattr(validate, "area", split)
+    monkeypatch.setattr(pipeline, "local_area_change", lambda *args: None)
+    # (the merged box faces are planes: taken for swept faces, so both measures are made)
+    monkeypatch.setattr(validate, "_has_swept_faces", lambda shape: True)
+    r = _run(P.box_vertical_fillets(40.0, 30.0, 20.0, 5.0))
+    assert len(r.blends_removed) == 4 and r.faces_after == 6
+    assert abs(r.area_rel_change - 1e-5) <= 1e-7  # the smaller measure reported
+    assert r.valid
+
+
 def test_search_stops_within_the_run_budget(monkeypatch):
     """When one more attempt, as long as the first, would end past the run's budget, the
     search starts none: the fillets are kept with that reason and the input is returned."""
