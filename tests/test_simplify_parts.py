@@ -449,10 +449,9 @@ def test_refusal_is_not_taken_from_the_adaptive_integrator_alone_on_bspline_face
     assert d is not None and abs(d - true) <= 1e-9
     # each face's share as settled: the spoilt face's is Gauss-Kronrod's, not the adaptive
     # one's, and the shares add up to the change (what a refusal is blamed by)
-    settled = L.local_volume_shares(new, old, v_old, 1e-6, None, off)
-    assert settled is not None
-    assert settled[0] == d and abs(float(settled[1].sum()) - d) <= 1e-15
-    assert abs(settled[1][k] - shares[k]) <= 1e-9
+    settled, best = L.local_volume_shares(new, old, v_old, 1e-6, None, off)
+    assert settled == d and abs(float(best.sum()) - d) <= 1e-15
+    assert abs(best[k] - shares[k]) <= 1e-9
     # the default integrator off there as well (otherwise): Gauss-Kronrod's value stands when the
     # fits' own measure (``expected``) agrees with the total, else the whole solid decides
     real = L._contribution
@@ -464,6 +463,9 @@ def test_refusal_is_not_taken_from_the_adaptive_integrator_alone_on_bspline_face
 
     monkeypatch.setattr(L, "_contribution", default_off)
     assert L.local_volume_change(new, old, v_old, 1e-6, None, off) is None
+    # unsettled, the shares are still the best measured: Gauss-Kronrod's on that face
+    settled, best = L.local_volume_shares(new, old, v_old, 1e-6, None, off)
+    assert settled is None and abs(best[k] - shares[k]) <= 1e-9
     d = L.local_volume_change(new, old, v_old, 1e-6, true, off)
     assert d is not None and abs(d - true) <= 1e-9
     assert L.local_volume_change(new, old, v_old, 1e-6, true + 3e-6, off) is None

@@ -233,8 +233,7 @@ def local_volume_change(
 ) -> float | None:
     """Relative volume change, when two measures settle it; None otherwise (measure the
     whole solid). See :func:`local_volume_shares`."""
-    settled = local_volume_shares(new, old, before, tol, expected, shares, origins, cache)
-    return None if settled is None else settled[0]
+    return local_volume_shares(new, old, before, tol, expected, shares, origins, cache)[0]
 
 
 def local_volume_shares(
@@ -246,9 +245,10 @@ def local_volume_shares(
     shares: np.ndarray | None = None,
     origins: np.ndarray | None = None,
     cache: Measures | None = None,
-) -> tuple[float, np.ndarray] | None:
-    """Relative volume change and each face's confirmed share of it (as ``shares``), when
-    two measures settle it; None otherwise (measure the whole solid).
+) -> tuple[float | None, np.ndarray]:
+    """Relative volume change, when two measures settle it (None otherwise: measure the
+    whole solid), and each face's share of it as best measured (as ``shares``: confirmed
+    where it is settled; where not, Gauss-Kronrod's on the most disputed faces).
 
     The adaptive integrator gives each face's contribution (``shares``: those of
     :func:`contributions`, when already measured). A second measure must agree with their
@@ -305,7 +305,7 @@ def local_volume_shares(
         return d, best
     if expected is not None and np.isfinite(expected) and abs(d - expected) <= allowed():
         return d, best
-    return None
+    return None, best
 
 
 def local_area_change(

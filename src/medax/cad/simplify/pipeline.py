@@ -564,14 +564,12 @@ def _validated(
         job, changed, pieces, kinds, devs, shares, owner, per_group, expected, origins
     )
     if dv_local is None:
-        settled = local_volume_shares(
+        dv_local, best = local_volume_shares(
             new, old, job.vol_ref, VOLUME_TOL, expected, shares, origins, job.measures
         )
-        if settled is not None:
-            # the refusal is blamed by the measure that settled it (the adaptive shares
-            # are off on fitted and swept faces, and then account for nothing)
-            dv_local, confirmed = settled
-            per_group[:] = np.bincount(owner, weights=confirmed, minlength=len(changed))
+        # a refusal is blamed by the best measure of each face (the adaptive shares are
+        # off on fitted and swept faces, and then account for nothing)
+        per_group[:] = np.bincount(owner, weights=best, minlength=len(changed))
     base = job.vol_ref  # the volume the change is relative to
     if dv_local is None:
         base = job.vol0
