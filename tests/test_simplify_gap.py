@@ -92,3 +92,55 @@ def test_fitted_faces_measured_from_the_gap_when_the_integrators_are_off(monkeyp
     assert (r.faces_before, r.faces_after) == (7, 6) and not r.blends_kept
     assert r.volume_rel_change == pytest.approx(measured.volume_rel_change, abs=1e-8)
     assert_same_solid(cls.shape, r, 9, 16)
+
+
+@pytest.mark.parametrize(
+    ("gap", "expected", "settled"),
+    [
+        (1.0e-8, 1.2e-8, True),  # within a tenth of the tolerance of each other
+        (1.4e-7, 1.2e-8, True),  # apart, but both far within the tolerance
+        (4.0e-7, 1.0e-8, False),  # apart, and one of them could be near the tolerance
+        (-3e-7, 3e-7, False),
+    ],
+)
+def test_fitted_gap_and_fits_settle_a_change_both_put_well_within(gap, expected, settled):
+    assert P._fits_agree(gap, expected, 0.1 * P.VOLUME_TOL) is settled
+
+
+def test_gap_and_fits_apart_but_both_small_still_settle_it(monkeypatch):
+    """The gap 1.2e-7 of the volume off the fit's own measure on each fitted face (beyond a
+    tenth of the tolerance), OCCT's integrators 3e-6 off face by face and on the whole
+    solid: the fillet still goes, its change within the tolerance by both independent
+    measures."""
+    from medax.cad.parts import variable_radius_box
+    from medax.cad.simplify import gap_measure
+    from medax.cad.simplify.validate import volume
+    from truth import classified_and_simplified
+
+    real, real_gap = P.contributions, gap_measure.gap_volume
+    part = variable_radius_box()
+    v = volume(part.shape)
+
+    def off(new, old, before, tol, *points):  # type: ignore[no-untyped-def]
+        shares = real(new, old, before, tol, *points)
+        bad = [BRepAdaptor_Surface(f).GetType() == GeomAbs_BSplineSurface for f in new]
+        return shares + np.array(bad + [False] * len(old)) * 3e-6
+
+    def gap_off(new, old):  # type: ignore[no-untyped-def]
+        got = real_gap(new, old)
+        fitted = BRepAdaptor_Surface(new).GetType() == GeomAbs_BSplineSurface
+        return None if got is None else (got[0] + (1.2e-7 * v if fitted else 0.0), got[1])
+
+    def unsettled(new, old, before, tol, expected, shares, *rest):  # type: ignore[no-untyped-def]
+        return None, shares  # Gauss-Kronrod face by face no help either
+
+    def whole(*args, **kw):  # type: ignore[no-untyped-def]
+        return 3e-6, "volume changed by 3.00e-06 (> 1e-06)"  # nor the whole solid's
+
+    monkeypatch.setattr(P, "contributions", off)
+    monkeypatch.setattr(P, "gap_volume", gap_off)
+    monkeypatch.setattr(P, "local_volume_shares", unsettled)
+    monkeypatch.setattr(P, "volume_change", whole)
+    _, r = classified_and_simplified(part.shape)
+    assert (r.faces_before, r.faces_after) == (7, 6) and not r.blends_kept, r.blends_kept
+    assert abs(r.volume_rel_change) <= 0.5e-6
