@@ -553,12 +553,7 @@ def _validated(
     def refused(why: str, dv: float) -> Failure:
         """The volume refusal, blamed on the groups that account for the change (the
         change is the whole attempt's: a fillet tried with accepted ones shares it)."""
-        picked = volume_blame(per_group, dv, VOLUME_TOL)
-        fillets = _fillets_of(split, [changed[i][0] for i in picked], sel)
-        if fillets:
-            names = ", ".join(map(str, sorted(fillets)[:5])) + (", ..." if len(fillets) > 5 else "")
-            why += f"; {float(per_group[picked].sum()):.1e} of it on the faces of fillets {names}"
-        return Failure(why, fillets)
+        return _blamed(why, per_group, dv, VOLUME_TOL, changed, split, sel)
 
     dv_local = _gap_settled(
         job, changed, pieces, kinds, devs, shares, owner, per_group, expected, origins
@@ -612,7 +607,22 @@ def _area_refused(
             for g, f in changed
         ]
     )
-    picked = volume_blame(shares, da, AREA_TOL)
+    return _blamed(why, shares, da, AREA_TOL, changed, split, sel)
+
+
+def _blamed(
+    why: str,
+    shares: np.ndarray,
+    change: float,
+    tol: float,
+    changed: list[tuple[Group, Any]],
+    split: Any,
+    sel: dict[int, FilletSpec],
+) -> Failure:
+    """The refusal ``why`` of a measured ``change`` (relative) naming the fillets of the
+    changed groups whose ``shares`` (one per group) account for it (:func:`volume_blame`
+    with ``tol``); none when they do not."""
+    picked = volume_blame(shares, change, tol)
     fillets = _fillets_of(split, [changed[i][0] for i in picked], sel)
     if fillets:
         names = ", ".join(map(str, sorted(fillets)[:5])) + (", ..." if len(fillets) > 5 else "")
