@@ -403,18 +403,18 @@ def test_local_measures_match_whole_solids(box4):
     old, new = list(faces_of(part.shape)), list(faces_of(r.shape))
     v_old = volumes(part.shape)[0]
     assert abs(L.volume_delta(new, old) - (volumes(r.shape)[0] - v_old)) <= 1e-9 * v_old
-    assert abs(L.local_volume_change(new, old, v_old, 1e-6)) <= 1e-12
+    assert abs(L.local_volume_shares(new, old, v_old, 1e-6)[0]) <= 1e-12
     assert abs(L.local_area_change(new, old, L._area(old, 1e-9), 5e-6)) <= 1e-9
     t = gp_Trsf()
     t.SetScale(gp_Pnt(0.0, 0.0, 0.0), 1.001)
     big = list(faces_of(BRepBuilderAPI_Transform(r.shape, t, True).Shape()))
     d = L.volume_delta(big, old) / v_old
     assert abs(d - (1.001**3 - 1.0)) <= 1e-9
-    assert abs(L.local_volume_change(big, old, v_old, 1e-6) - (1.001**3 - 1.0)) <= 1e-9
+    assert abs(L.local_volume_shares(big, old, v_old, 1e-6)[0] - (1.001**3 - 1.0)) <= 1e-9
     # a refusal the fits' own measure agrees with is settled by it; one it does not agree
     # with is confirmed face by face all the same
     for expected in (1.001**3 - 1.0, 0.0):
-        d = L.local_volume_change(big, old, v_old, 1e-6, expected)
+        d = L.local_volume_shares(big, old, v_old, 1e-6, expected)[0]
         assert d is not None and abs(d - (1.001**3 - 1.0)) <= 1e-9
     shares = L.contributions(big, old, v_old, 1e-6)  # per face, one common point
     assert shares.shape == (len(big) + len(old),)
@@ -439,13 +439,13 @@ def test_refusal_is_not_taken_from_the_adaptive_integrator_alone_on_bspline_face
     new = L._nurbs_faces(list(faces_of(r.shape)))
     v_old = volumes(part.shape)[0]
     shares = L.contributions(new, old, v_old, 1e-6)
-    true = L.local_volume_change(new, old, v_old, 1e-6, None, shares)
+    true = L.local_volume_shares(new, old, v_old, 1e-6, None, shares)[0]
     assert true is not None and abs(true) <= 1e-9
     k = max(range(len(new)), key=lambda i: abs(shares[i]))  # a face with a share to spoil
     assert L._bspline(new[k])
     off = shares.copy()
     off[k] += 5e-6  # the adaptive integrator 5e-6 off on that face
-    d = L.local_volume_change(new, old, v_old, 1e-6, None, off)
+    d = L.local_volume_shares(new, old, v_old, 1e-6, None, off)[0]
     assert d is not None and abs(d - true) <= 1e-9
     # each face's share as settled: the spoilt face's is Gauss-Kronrod's, not the adaptive
     # one's, and the shares add up to the change (what a refusal is blamed by)
@@ -462,13 +462,13 @@ def test_refusal_is_not_taken_from_the_adaptive_integrator_alone_on_bspline_face
         return real(face, origin, eps, gk) + bias
 
     monkeypatch.setattr(L, "_contribution", default_off)
-    assert L.local_volume_change(new, old, v_old, 1e-6, None, off) is None
+    assert L.local_volume_shares(new, old, v_old, 1e-6, None, off)[0] is None
     # unsettled, the shares are still the best measured: Gauss-Kronrod's on that face
     settled, best = L.local_volume_shares(new, old, v_old, 1e-6, None, off)
     assert settled is None and abs(best[k] - shares[k]) <= 1e-9
-    d = L.local_volume_change(new, old, v_old, 1e-6, true, off)
+    d = L.local_volume_shares(new, old, v_old, 1e-6, true, off)[0]
     assert d is not None and abs(d - true) <= 1e-9
-    assert L.local_volume_change(new, old, v_old, 1e-6, true + 3e-6, off) is None
+    assert L.local_volume_shares(new, old, v_old, 1e-6, true + 3e-6, off)[0] is None
 
 
 def test_whole_solid_refusal_by_two_integrators(box4):

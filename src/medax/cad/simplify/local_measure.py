@@ -221,21 +221,6 @@ def _measured(
     return float(cache.get(("volume", eps, gk, *key), compute))
 
 
-def local_volume_change(
-    new: Sequence[Any],
-    old: Sequence[Any],
-    before: float,
-    tol: float,
-    expected: float | None = None,
-    shares: np.ndarray | None = None,
-    origins: np.ndarray | None = None,
-    cache: Measures | None = None,
-) -> float | None:
-    """Relative volume change, when two measures settle it; None otherwise (measure the
-    whole solid). See :func:`local_volume_shares`."""
-    return local_volume_shares(new, old, before, tol, expected, shares, origins, cache)[0]
-
-
 def local_volume_shares(
     new: Sequence[Any],
     old: Sequence[Any],

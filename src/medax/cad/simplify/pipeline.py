@@ -52,7 +52,6 @@ from medax.cad.simplify.local_measure import (
     contributions,
     group_key,
     local_area_change,
-    local_volume_change,
     local_volume_shares,
 )
 from medax.cad.simplify.medial import Medial, medial_curve
@@ -680,11 +679,11 @@ def _gap_settled(
     agree = abs(float(gaps[rest].sum() - per_group[rest].sum())) <= budget
     if not agree and bound > budget:
         # the adaptive integrator is off on some exact faces too (swept ones as built):
-        # their change settled face by face (:func:`.local_measure.local_volume_change`)
+        # their change settled face by face (:func:`.local_measure.local_volume_shares`)
         mask = np.isin(np.asarray(owner), rest)
         new = [changed[i][1] for i in rest]
         old = [pieces[k] for i in rest for k in changed[i][0].members]
-        settled = local_volume_change(
+        settled, _ = local_volume_shares(
             new, old, job.vol_ref, VOLUME_TOL, None, shares[mask], origins[mask], job.measures
         )
         if settled is None or abs(float(gaps[rest].sum()) - settled) > budget:
