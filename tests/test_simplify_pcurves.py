@@ -138,3 +138,86 @@ def test_loose_boundary_key_is_the_old_face_and_its_pcurve():
     t.SetTranslation(gp_Vec(1e-9, 0.0, 0.0))
     mface, medge = first(BRepBuilderAPI_Transform(box, t, False).Shape())
     assert rebuild._BoundaryOnFace(medge, mface, c).key() not in (None, key)
+
+
+def _loose_square(pcurve_of_right_side):
+    """A 10 x 10 square face on the plane z = 0 (a B-spline surface, as fitted faces are)
+    whose right side (x = 10, y from 0 to 10) has the given pcurve and the tolerance 5e-3;
+    the other sides' pcurves are exact."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeVertex
+    from OCP.Geom import Geom_RectangularTrimmedSurface
+    from OCP.Geom2d import Geom2d_Line
+    from OCP.gp import gp_Dir2d, gp_Pnt2d
+    from OCP.TopoDS import TopoDS_Face, TopoDS_Wire
+
+    plane = GeomConvert.SurfaceToBSplineSurface_s(
+        Geom_RectangularTrimmedSurface(
+            Geom_Plane(gp_Ax3(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(0.0, 0.0, 1.0))),
+            -5.0,
+            15.0,
+            -5.0,
+            15.0,
+        )
+    )
+    corners = [(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0)]
+    builder = BRep_Builder()
+    face, wire = TopoDS_Face(), TopoDS_Wire()
+    builder.MakeFace(face, plane, 1e-7)
+    builder.MakeWire(wire)
+    edges = []
+    vertices = [BRepBuilderAPI_MakeVertex(gp_Pnt(*c, 0.0)).Vertex() for c in corners]
+    for i, (a, b) in enumerate(zip(corners, corners[1:] + corners[:1], strict=True)):
+        edge = BRepBuilderAPI_MakeEdge(vertices[i], vertices[(i + 1) % 4]).Edge()
+        d = gp_Dir2d(b[0] - a[0], b[1] - a[1])
+        pc = pcurve_of_right_side if i == 1 else Geom2d_Line(gp_Pnt2d(*a), d)
+        builder.UpdateEdge(edge, pc, face, 5e-3 if i == 1 else 1e-7)
+        builder.Range(edge, face, 0.0, 10.0)
+        builder.Add(wire, edge)
+        edges.append(edge)
+    wire.Closed(True)
+    builder.Add(face, wire)
+    return face, edges
+
+
+def _area(face):
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(face, props, 1e-12, False)
+    return props.Mass()
+
+
+@pytest.mark.parametrize("kind", ["bspline", "line"])
+def test_pcurves_that_miss_each_other_are_joined(kind):
+    """A pcurve that runs up to 3e-3 off its edge and misses the next one by as much
+    (within its edge's tolerance, as on loose inputs) gives the face another area (by
+    1.5 - 3e-2); its ends moved onto its neighbours', the face is the square again
+    (truth: the square's area 100; the pcurves end where the next ones start; the
+    tolerances are not tightened and the exact sides are not touched)."""
+    from OCP.collections import Array1_double, Array1_gp_Pnt2d, Array1_int
+    from OCP.Geom2d import Geom2d_BSplineCurve, Geom2d_Line
+    from OCP.gp import gp_Dir2d, gp_Pnt2d
+
+    if kind == "bspline":  # ends at (9.997, 10)
+        poles, knots, mults = Array1_gp_Pnt2d(1, 2), Array1_double(1, 2), Array1_int(1, 2)
+        poles.SetValue(1, gp_Pnt2d(10.0, 0.0))
+        poles.SetValue(2, gp_Pnt2d(9.997, 10.0))
+        for i, k in enumerate((0.0, 10.0)):
+            knots.SetValue(i + 1, k)
+            mults.SetValue(i + 1, 2)
+        pc = Geom2d_BSplineCurve(poles, knots, mults, 1)
+    else:  # from (10.003, 0) to (10.003, 10): misses at both ends
+        pc = Geom2d_Line(gp_Pnt2d(10.003, 0.0), gp_Dir2d(0.0, 1.0))
+    face, edges = _loose_square(pc)
+    assert abs(_area(face) - 100.0) > 1e-2
+    rebuild._close_uv_gaps(face, [edges[1]], BRep_Tool.Surface_s(face), 1e-7)
+    assert _area(face) == pytest.approx(100.0, abs=1e-9)
+    moved = BRep_Tool.CurveOnSurface_s(edges[1], face, 0.0, 0.0)
+    assert moved.Value(0.0).Distance(gp_Pnt2d(10.0, 0.0)) < 1e-12
+    assert moved.Value(10.0).Distance(gp_Pnt2d(10.0, 10.0)) < 1e-12
+    assert BRep_Tool.Tolerance_s(edges[1]) >= 5e-3  # not tightened
+    # the exact sides' pcurves are not touched
+    for e in (edges[0], edges[2]):
+        assert BRep_Tool.Tolerance_s(e) == 1e-7

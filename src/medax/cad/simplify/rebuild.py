@@ -21,7 +21,7 @@ from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepLib import BRepLib
 from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
 from OCP.GeomProjLib import GeomProjLib
-from OCP.gp import gp_Pnt
+from OCP.gp import gp_Pnt, gp_Pnt2d
 from OCP.ShapeFix import ShapeFix_Shape
 from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED
 from OCP.TopLoc import TopLoc_Location
@@ -190,10 +190,12 @@ def _add_pcurves(
         return grids[0]
 
     skey: list[Key | None] = []
+    mine: list[Any] = []
     for e in edges_of(face):
         edge = TopoDS.Edge(e)
         if BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0):
             continue  # an original edge of an original surface: its pcurve is there
+        mine.append(edge)
         c, f, l = edge_curve(e)
         loose = _loose_boundary(edge, c, f, l, old, tol)
         compute = partial(_edge_pcurve, c, f, l, surf, tol, loose, grid)
@@ -210,6 +212,83 @@ def _add_pcurves(
         if pc is None:
             raise CadError("projecting a boundary edge onto a new surface failed")
         _set_pcurve(builder, edge, face, pc, f, l, err, tol)  # (err measured)
+    _close_uv_gaps(face, mine, surf, tol)
+
+
+def _close_uv_gaps(face: Any, mine: Sequence[Any], surf: Any, tol: float) -> None:
+    """Make consecutive pcurves of ``face``'s wires meet where they miss by more than
+    ``tol`` on the surface ``surf``: the ends of the pcurves of ``mine`` (the edges given a
+    pcurve on the new surface) are moved onto the end they miss (to the midpoint where
+    both are in ``mine``) by the B-spline's end pole, the edge's tolerance kept or raised.
+
+    OCCT's area and volume integrals run along the pcurves and need the loops closed. On a
+    loose input whose pcurves missed each other by 2 - 3e-3 mm at the vertices (within
+    the tolerances), the area integrator read a merged face 1.4e-3 smaller than its
+    points measure (a grid in its parameters, a triangulation), and the volume integrator
+    was 1.4e-4 of the part off the gaps' measure; joined, 5e-7. Pcurves that are not
+    B-splines or lines (whose parameter a conversion would change) and seams stay."""
+    from OCP.BRepTools import BRepTools_WireExplorer
+    from OCP.TopAbs import TopAbs_WIRE
+    from OCP.TopExp import TopExp_Explorer
+
+    movable = [e for e in mine if not BRep_Tool.IsClosed_s(e, face)]
+
+    def index(e: Any) -> int:  # the edge's place in ``movable``, -1 when not there
+        return next((i for i, m in enumerate(movable) if m.IsSame(e)), -1)
+
+    moves: dict[tuple[int, bool], np.ndarray] = {}  # (edge, its pcurve's last end): target
+    exp = TopExp_Explorer(face, TopAbs_WIRE)
+    while exp.More():
+        ends = []  # per edge in wire order: (edge, start uv, end uv) as oriented
+        walk = BRepTools_WireExplorer(TopoDS.Wire(exp.Current()), face)
+        while walk.More():
+            e = walk.Current()
+            pc = BRep_Tool.CurveOnSurface_s(e, face, 0.0, 0.0)
+            f, l = BRep_Tool.Range_s(e, face)
+            a, b = np.array(pc.Value(f).Coord()), np.array(pc.Value(l).Coord())
+            ends.append((e, *((b, a) if e.Orientation() == TopAbs_REVERSED else (a, b))))
+            walk.Next()
+        exp.Next()
+        for (e1, _, p), (e2, q, _) in zip(ends, ends[1:] + ends[:1], strict=True):
+            if e1.IsSame(e2) or surf.Value(*p).Distance(surf.Value(*q)) <= tol:
+                continue
+            i1, i2 = index(e1), index(e2)
+            if i1 < 0 and i2 < 0:
+                continue
+            target = 0.5 * (p + q) if i1 >= 0 and i2 >= 0 else (q if i1 >= 0 else p)
+            if i1 >= 0:  # e1's end as oriented: its pcurve's last point unless reversed
+                moves[(i1, e1.Orientation() != TopAbs_REVERSED)] = target
+            if i2 >= 0:
+                moves[(i2, e2.Orientation() == TopAbs_REVERSED)] = target
+    builder = BRep_Builder()
+    for (i, last), target in moves.items():
+        edge = movable[i]
+        f, l = BRep_Tool.Range_s(edge, face)
+        pc = _pole_movable(BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0), f, l)
+        if pc is None:
+            continue
+        pc.SetPole(pc.NbPoles() if last else 1, gp_Pnt2d(float(target[0]), float(target[1])))
+        c, cf, cl = edge_curve(edge)
+        _set_pcurve(builder, edge, face, pc, f, l, _pcurve_error(pc, c, surf, cf, cl), tol)
+
+
+def _pole_movable(pc: Any, f: float, l: float) -> Any | None:
+    """A B-spline copy of the pcurve ``pc`` on ``[f, l]``, its own parameter kept (clamped:
+    its end poles are its end points); None unless ``pc`` is a non-periodic B-spline or a
+    line."""
+    from OCP.Geom2d import Geom2d_BSplineCurve, Geom2d_Line, Geom2d_TrimmedCurve
+    from OCP.Geom2dConvert import Geom2dConvert
+
+    if isinstance(pc, Geom2d_TrimmedCurve):
+        pc = pc.BasisCurve()
+    if isinstance(pc, Geom2d_BSplineCurve) and not pc.IsPeriodic():
+        copy = pc.Copy()
+        if f != copy.FirstParameter() or l != copy.LastParameter():
+            copy.Segment(f, l)
+        return copy
+    if isinstance(pc, Geom2d_Line):
+        return Geom2dConvert.CurveToBSplineCurve_s(Geom2d_TrimmedCurve(pc, f, l))
+    return None
 
 
 def _edge_pcurve(
