@@ -191,9 +191,3 @@ def curve2d_key(c: Any) -> Key | None:
     else:
         return None
     return (name, _bytes(nums))
-
-
-def location_key(loc: Any) -> bytes:
-    """The key of a ``TopLoc_Location``: its transformation's 3 x 4 matrix."""
-    t = loc.Transformation()
-    return _bytes([t.Value(i, j) for i in range(1, 4) for j in range(1, 5)])

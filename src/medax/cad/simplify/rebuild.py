@@ -12,7 +12,7 @@ their (new or original) surface with pcurves projected explicitly, then healed
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from functools import partial
 from typing import Any
 
@@ -21,13 +21,13 @@ from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepLib import BRepLib
 from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
 from OCP.GeomProjLib import GeomProjLib
-from OCP.gp import gp_Pnt, gp_Pnt2d
+from OCP.gp import gp_Pnt
 from OCP.ShapeFix import ShapeFix_Shape
 from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Shell, TopoDS_Solid, TopoDS_Wire
 
-from medax.cad.simplify.geom_key import Key, curve2d_key, curve_key, location_key, surface_key
+from medax.cad.simplify.geom_key import Key, curve_key, surface_key
 from medax.cad.simplify.groups import Group, GroupError
 from medax.cad.simplify.local_measure import Measures
 from medax.cad.simplify.occ import (
@@ -165,16 +165,19 @@ def _concat_c0(curves: list[tuple[Any, float, float]]) -> Any:
     return Geom2d_BSplineCurve(ap, ak, am, deg)
 
 
-def _add_pcurves(
-    face: Any, tol: float, old: Sequence[Any] = (), cache: Measures | None = None
-) -> None:
+def _add_pcurves(face: Any, tol: float, cache: Measures | None = None) -> None:
     """Explicit pcurves of every edge of ``face`` on its surface: OCCT's projection, replaced
     by a fitted one when that is closer (checked at samples against the 3-D curve).
 
-    ``old``: the faces the new one replaces. Where one of them placed an edge's boundary
-    farther than ``tol`` from its 3-D curve (an input whose pcurves lie within a loose edge
-    tolerance of its curves), the new pcurve follows that boundary, not the 3-D curve: the
-    face then covers what the old faces covered, and the volume and area stay the same.
+    The pcurves follow the 3-D curves, also where the input's old faces place a loose edge
+    up to its tolerance away. Following those old boundaries instead, adjacent pcurves
+    taken from different old faces missed each other at the vertices (2 - 3e-3 on a loose
+    52-fillet part): OCCT's integrators then read the merged faces 1.4e-3 short in area
+    (their points, a parameter grid and a triangulation, agreed with each other) and the
+    attempts were refused. A STEP file keeps no tolerances either, and OCCT's reader
+    projects such pcurves again: that part's file read 8.5e-5 off in volume, the shape
+    unchanged by rays (5e-9). Following the 3-D curves, the file reads 8.0e-7 (Gauss-
+    Kronrod on a NURBS copy) and the rays 7e-9.
 
     ``cache``: each edge's pcurve and its measured error kept by what determines them
     (:func:`_pcurve_key`), so that an attempt rebuilding a face on the same surface with
@@ -190,20 +193,17 @@ def _add_pcurves(
         return grids[0]
 
     skey: list[Key | None] = []
-    mine: list[Any] = []
     for e in edges_of(face):
         edge = TopoDS.Edge(e)
         if BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0):
             continue  # an original edge of an original surface: its pcurve is there
-        mine.append(edge)
         c, f, l = edge_curve(e)
-        loose = _loose_boundary(edge, c, f, l, old, tol)
-        compute = partial(_edge_pcurve, c, f, l, surf, tol, loose, grid)
+        compute = partial(_edge_pcurve, c, f, l, surf, tol, grid)
         key = None
         if cache is not None:
             if not skey:
                 skey.append(surface_key(surf))
-            key = _pcurve_key(skey[0], c, f, l, tol, loose)
+            key = _pcurve_key(skey[0], c, f, l, tol)
         if cache is None or key is None:
             pc, err = compute()
         else:
@@ -212,83 +212,6 @@ def _add_pcurves(
         if pc is None:
             raise CadError("projecting a boundary edge onto a new surface failed")
         _set_pcurve(builder, edge, face, pc, f, l, err, tol)  # (err measured)
-    _close_uv_gaps(face, mine, surf, tol)
-
-
-def _close_uv_gaps(face: Any, mine: Sequence[Any], surf: Any, tol: float) -> None:
-    """Make consecutive pcurves of ``face``'s wires meet where they miss by more than
-    ``tol`` on the surface ``surf``: the ends of the pcurves of ``mine`` (the edges given a
-    pcurve on the new surface) are moved onto the end they miss (to the midpoint where
-    both are in ``mine``) by the B-spline's end pole, the edge's tolerance kept or raised.
-
-    OCCT's area and volume integrals run along the pcurves and need the loops closed. On a
-    loose input whose pcurves missed each other by 2 - 3e-3 mm at the vertices (within
-    the tolerances), the area integrator read a merged face 1.4e-3 smaller than its
-    points measure (a grid in its parameters, a triangulation), and the volume integrator
-    was 1.4e-4 of the part off the gaps' measure; joined, 5e-7. Pcurves that are not
-    B-splines or lines (whose parameter a conversion would change) and seams stay."""
-    from OCP.BRepTools import BRepTools_WireExplorer
-    from OCP.TopAbs import TopAbs_WIRE
-    from OCP.TopExp import TopExp_Explorer
-
-    movable = [e for e in mine if not BRep_Tool.IsClosed_s(e, face)]
-
-    def index(e: Any) -> int:  # the edge's place in ``movable``, -1 when not there
-        return next((i for i, m in enumerate(movable) if m.IsSame(e)), -1)
-
-    moves: dict[tuple[int, bool], np.ndarray] = {}  # (edge, its pcurve's last end): target
-    exp = TopExp_Explorer(face, TopAbs_WIRE)
-    while exp.More():
-        ends = []  # per edge in wire order: (edge, start uv, end uv) as oriented
-        walk = BRepTools_WireExplorer(TopoDS.Wire(exp.Current()), face)
-        while walk.More():
-            e = walk.Current()
-            pc = BRep_Tool.CurveOnSurface_s(e, face, 0.0, 0.0)
-            f, l = BRep_Tool.Range_s(e, face)
-            a, b = np.array(pc.Value(f).Coord()), np.array(pc.Value(l).Coord())
-            ends.append((e, *((b, a) if e.Orientation() == TopAbs_REVERSED else (a, b))))
-            walk.Next()
-        exp.Next()
-        for (e1, _, p), (e2, q, _) in zip(ends, ends[1:] + ends[:1], strict=True):
-            if e1.IsSame(e2) or surf.Value(*p).Distance(surf.Value(*q)) <= tol:
-                continue
-            i1, i2 = index(e1), index(e2)
-            if i1 < 0 and i2 < 0:
-                continue
-            target = 0.5 * (p + q) if i1 >= 0 and i2 >= 0 else (q if i1 >= 0 else p)
-            if i1 >= 0:  # e1's end as oriented: its pcurve's last point unless reversed
-                moves[(i1, e1.Orientation() != TopAbs_REVERSED)] = target
-            if i2 >= 0:
-                moves[(i2, e2.Orientation() == TopAbs_REVERSED)] = target
-    builder = BRep_Builder()
-    for (i, last), target in moves.items():
-        edge = movable[i]
-        f, l = BRep_Tool.Range_s(edge, face)
-        pc = _pole_movable(BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0), f, l)
-        if pc is None:
-            continue
-        pc.SetPole(pc.NbPoles() if last else 1, gp_Pnt2d(float(target[0]), float(target[1])))
-        c, cf, cl = edge_curve(edge)
-        _set_pcurve(builder, edge, face, pc, f, l, _pcurve_error(pc, c, surf, cf, cl), tol)
-
-
-def _pole_movable(pc: Any, f: float, l: float) -> Any | None:
-    """A B-spline copy of the pcurve ``pc`` on ``[f, l]``, its own parameter kept (clamped:
-    its end poles are its end points); None unless ``pc`` is a non-periodic B-spline or a
-    line."""
-    from OCP.Geom2d import Geom2d_BSplineCurve, Geom2d_Line, Geom2d_TrimmedCurve
-    from OCP.Geom2dConvert import Geom2dConvert
-
-    if isinstance(pc, Geom2d_TrimmedCurve):
-        pc = pc.BasisCurve()
-    if isinstance(pc, Geom2d_BSplineCurve) and not pc.IsPeriodic():
-        copy = pc.Copy()
-        if f != copy.FirstParameter() or l != copy.LastParameter():
-            copy.Segment(f, l)
-        return copy
-    if isinstance(pc, Geom2d_Line):
-        return Geom2dConvert.CurveToBSplineCurve_s(Geom2d_TrimmedCurve(pc, f, l))
-    return None
 
 
 def _edge_pcurve(
@@ -297,16 +220,10 @@ def _edge_pcurve(
     l: float,
     surf: Any,
     tol: float,
-    loose: _BoundaryOnFace | None,
     grid: Callable[[], GridProjection | None],
 ) -> tuple[Any | None, float]:
-    """(pcurve, its error) of the 3-D curve ``c`` on ``[f, l]`` on ``surf``: fitted to the
-    ``loose`` boundary when given and that fit succeeds; else OCCT's projection, replaced
-    by a fitted one when that is closer (None, inf: both failed)."""
-    if loose is not None:
-        pc = _fitted_pcurve(loose, surf, f, l, tol, grid())
-        if pc is not None:
-            return pc, _pcurve_error(pc, c, surf, f, l)
+    """(pcurve, its error) of the 3-D curve ``c`` on ``[f, l]`` on ``surf``: OCCT's
+    projection, replaced by a fitted one when that is closer (None, inf: both failed)."""
     pc = _projected_pcurve(c, f, l, surf, tol)
     err = float("inf") if pc is None else _pcurve_error(pc, c, surf, f, l)
     if err > 0.1 * tol:
@@ -317,17 +234,13 @@ def _edge_pcurve(
     return pc, err
 
 
-def _pcurve_key(
-    skey: Key | None, c: Any, f: float, l: float, tol: float, loose: _BoundaryOnFace | None
-) -> Key | None:
+def _pcurve_key(skey: Key | None, c: Any, f: float, l: float, tol: float) -> Key | None:
     """What determines an edge's pcurve, as a key: the surface's key ``skey``, the 3-D
-    curve ``c`` and its range ``[f, l]``, ``tol`` and the ``loose`` boundary followed (the
-    old face's surface, location, pcurve and range); None where a part has no key."""
+    curve ``c``, its range ``[f, l]`` and ``tol``; None where a part has no key."""
     ckey = curve_key(c)
-    lkey = None if loose is None else loose.key()
-    if skey is None or ckey is None or (loose is not None and lkey is None):
+    if skey is None or ckey is None:
         return None
-    return ("pcurve", skey, ckey, np.array([f, l, tol], dtype=np.float64).tobytes(), lkey)
+    return ("pcurve", skey, ckey, np.array([f, l, tol], dtype=np.float64).tobytes())
 
 
 def _set_pcurve(
@@ -340,65 +253,6 @@ def _set_pcurve(
     builder.Range(edge, face, f, l)
     builder.SameRange(edge, True)
     builder.SameParameter(edge, True)
-
-
-class _BoundaryOnFace:
-    """An edge as an old face's pcurve places it (``Value(t)``: a ``gp_Pnt``), with the
-    3-D curve's knots (``NbKnots``/``Knot``) for :func:`_fitted_pcurve`'s spans."""
-
-    def __init__(self, edge: Any, face: Any, curve: Any) -> None:
-        from OCP.BRepAdaptor import BRepAdaptor_Curve
-
-        self._on = BRepAdaptor_Curve(edge, face)
-        self._edge, self._face = edge, face
-        self._curve = curve
-        if hasattr(curve, "NbKnots"):
-            self.NbKnots = curve.NbKnots
-            self.Knot = curve.Knot
-
-    def Value(self, t: float) -> Any:  # noqa: N802 (OCCT's name, for _fitted_pcurve)
-        return self._on.Value(t)
-
-    def key(self) -> Key | None:
-        """What places the boundary (as ``BRepAdaptor_Curve`` evaluates it: the old face's
-        surface moved by its location, along the edge's pcurve on it) as a key; None where
-        a part has no key."""
-        loc = TopLoc_Location()
-        skey = surface_key(BRep_Tool.Surface_s(self._face, loc))
-        pc = BRep_Tool.CurveOnSurface_s(self._edge, self._face, 0.0, 0.0)
-        a, b = BRep_Tool.Range_s(self._edge, self._face)
-        pkey = None if pc is None else curve2d_key(pc)
-        if skey is None or pkey is None:
-            return None
-        return (skey, location_key(loc), pkey, np.array([a, b], dtype=np.float64).tobytes())
-
-
-def _loose_boundary(
-    edge: Any, c: Any, f: float, l: float, old: Sequence[Any], tol: float
-) -> _BoundaryOnFace | None:
-    """The edge as the face of ``old`` it bounds places it, when that boundary lies
-    farther than ``tol`` from the 3-D curve ``c`` on ``[f, l]`` but within the edge's own
-    tolerance (a loose input edge; else None). Only faces that have the edge in their
-    boundary count: OCCT finds a pcurve by the surface, and a face sharing its surface
-    with another face the edge bounds returns that one (seen 1.0 off the edge)."""
-    if not BRep_Tool.Tolerance_s(edge) > tol:
-        return None
-    for face in old:
-        if not any(edge.IsSame(e) for e in edges_of(face)):
-            continue
-        pc = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
-        if pc is None:
-            continue
-        a, b = BRep_Tool.Range_s(edge, face)
-        if abs(a - f) > 1e-9 * (1 + abs(f)) or abs(b - l) > 1e-9 * (1 + abs(l)):
-            continue  # not on the 3-D curve's parameter
-        on = _BoundaryOnFace(edge, face, c)
-        far = max(on.Value(float(t)).Distance(c.Value(float(t))) for t in np.linspace(f, l, 9))
-        # (beyond the edge's own tolerance the two do not describe one boundary; that
-        # tolerance is OCCT's own sampled measure of the same distance: 5 % slack)
-        if tol < far <= 1.05 * BRep_Tool.Tolerance_s(edge):
-            return on
-    return None
 
 
 def _projected_pcurve(c: Any, f: float, l: float, surf: Any, tol: float) -> Any:
@@ -564,8 +418,7 @@ def build_solid(
                 builder.Add(wire, e)
             wire.Closed(True)
             builder.Add(face, wire)
-        old = [TopoDS.Face(split.face_map.FindKey(k + 1)) for k in g.members]
-        _add_pcurves(face, tol, old, pcurves)
+        _add_pcurves(face, tol, pcurves)
         if flip:
             face.Reverse()
         faces.append(face)
