@@ -244,10 +244,10 @@ def test_an_area_refusal_is_traced_to_the_group_that_changed_it():
     sel = {f: FilletSpec(f, (0, 1), (7, 8), 1.0) for f in (40, 41, 42)}
     da = 1e-3 / 100.0
     assert da > AREA_TOL
-    got = _area_refused("area changed", da, changed, pieces, job, split, sel)  # type: ignore[arg-type]
+    got = _area_refused("area changed", da, AREA_TOL, changed, pieces, job, split, sel)  # type: ignore[arg-type]
     assert isinstance(got, Failure)
     assert got.blamed == {42}
     assert "fillets 42" in got
     # shares that do not account for the measured change blame nothing: bisect instead
-    got = _area_refused("area changed", 10 * da, changed, pieces, job, split, sel)  # type: ignore[arg-type]
+    got = _area_refused("area changed", 10 * da, AREA_TOL, changed, pieces, job, split, sel)  # type: ignore[arg-type]
     assert got.blamed == frozenset()

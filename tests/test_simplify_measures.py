@@ -131,3 +131,22 @@ def test_component_origins_are_the_centres_of_connected_sets():
         L._contribution = saved
     assert (again == shares).all() and (third == shares).all()
     assert calls == [None] * 12  # the keys' default integrals only, no adaptive integral
+
+
+def test_tolerance_band_is_tolerance_times_length_over_distinct_edges():
+    """The band of a box's faces: each distinct edge's tolerance x length once, also where
+    two faces share it (truth: the box's edge lengths)."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.TopoDS import TopoDS
+
+    from medax.cad.simplify.occ import edges_of
+
+    box = BRepPrimAPI_MakeBox(10.0, 20.0, 30.0).Shape()
+    builder = BRep_Builder()
+    for e in edges_of(box):
+        builder.UpdateEdge(TopoDS.Edge(e), 2e-3)
+    faces = list(faces_of(box))
+    assert L.tolerance_band(faces) == pytest.approx(4 * (10 + 20 + 30) * 2e-3, rel=1e-12)
+    one = min(faces, key=lambda f: L._area([f], 1e-9))  # the 10 x 20 face
+    assert L.tolerance_band([one]) == pytest.approx(2 * (10 + 20) * 2e-3, rel=1e-12)

@@ -260,7 +260,7 @@ def test_area_change_keeps_the_fillets(monkeypatch):
     # (the input's area is measured through the pipeline's own name: unchanged); the
     # measure on the changed faces alone cannot settle it, the whole solid's decides
     monkeypatch.setattr(validate, "area", inflated)
-    monkeypatch.setattr(pipeline, "local_area_change", lambda *args: None)
+    monkeypatch.setattr(pipeline, "local_area_change", lambda *args, **kwargs: None)
     part = P.box_vertical_fillets(40.0, 30.0, 20.0, 5.0)
     r = _run(part)
     assert (r.faces_before, r.faces_after) == (10, 10) and not r.blends_removed
@@ -282,7 +282,7 @@ def test_area_measures_of_opposite_signs_do_not_refuse(monkeypatch):
         return true_area(shape, nurbs) * (1.0 + (1e-5 if nurbs else -2e-5))
 
     monkeypatch.setattr(validate, "area", split)
-    monkeypatch.setattr(pipeline, "local_area_change", lambda *args: None)
+    monkeypatch.setattr(pipeline, "local_area_change", lambda *args, **kwargs: None)
     # (the merged box faces are planes: taken for swept faces, so both measures are made)
     monkeypatch.setattr(validate, "_has_swept_faces", lambda shape: True)
     r = _run(P.box_vertical_fillets(40.0, 30.0, 20.0, 5.0))
@@ -298,7 +298,7 @@ def test_search_stops_within_the_run_budget(monkeypatch):
 
     true_area = validate.area
     monkeypatch.setattr(validate, "area", lambda s, nurbs=None: true_area(s, nurbs) * 1.00001)
-    monkeypatch.setattr(pipeline, "local_area_change", lambda *args: None)
+    monkeypatch.setattr(pipeline, "local_area_change", lambda *args, **kwargs: None)
     monkeypatch.setattr(pipeline, "RUN_BUDGET", 0.0)
     r = _run(P.box_vertical_fillets(40.0, 30.0, 20.0, 5.0))
     assert not r.blends_removed and len(r.blends_kept) == 4

@@ -53,6 +53,7 @@ from medax.cad.simplify.local_measure import (
     group_key,
     local_area_change,
     local_volume_shares,
+    tolerance_band,
 )
 from medax.cad.simplify.medial import Medial, medial_curve
 from medax.cad.simplify.merging import (
@@ -576,11 +577,13 @@ def _validated(
         dv = dv_local
     if job.area0 is None:
         job.area0 = area(job.work)
-    da_local = local_area_change(new, old, job.area0, AREA_TOL, job.measures)
+    # the replaced faces' areas are known to their edges' tolerances only (loose inputs)
+    area_tol = AREA_TOL + tolerance_band(old) / job.area0
+    da_local = local_area_change(new, old, job.area0, area_tol, job.measures, eps=1e-2 * AREA_TOL)
     if da_local is None:
-        da, why = area_change(shape, job.area0, AREA_TOL)
+        da, why = area_change(shape, job.area0, area_tol)
         if why:
-            return _area_refused(why, da, changed, pieces, job, split, sel)
+            return _area_refused(why, da, area_tol, changed, pieces, job, split, sel)
     else:
         da = da_local
     return dv, da, dev, kinds, base
@@ -589,6 +592,7 @@ def _validated(
 def _area_refused(
     why: str,
     da: float,
+    tol: float,
     changed: list[tuple[Group, Any]],
     pieces: dict[int, Any],
     job: Job,
@@ -596,8 +600,8 @@ def _area_refused(
     sel: dict[int, FilletSpec],
 ) -> Failure:
     """The area refusal, blamed on the groups whose own area change (new face against its
-    pieces, relative to the input's area) accounts for ``da``, the measured change; no
-    fillets blamed when the groups' changes do not account for it."""
+    pieces, relative to the input's area) accounts for ``da``, the measured change beyond
+    ``tol``; no fillets blamed when the groups' changes do not account for it."""
     assert job.area0 is not None
     shares = np.array(
         [
@@ -606,7 +610,7 @@ def _area_refused(
             for g, f in changed
         ]
     )
-    return _blamed(why, shares, da, AREA_TOL, changed, split, sel)
+    return _blamed(why, shares, da, tol, changed, split, sel)
 
 
 def _blamed(
