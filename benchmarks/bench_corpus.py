@@ -153,8 +153,8 @@ def add_round_trip(part: Path, rec: dict[str, Any], out_dir: Path, timeout: floa
             s.update(extra)
 
 
-def child(part: str, out_dir: str) -> dict[str, Any]:
-    """Run one part (in the child process); its record."""
+def child(part: str, out_dir: str, strict_volume: bool = False) -> dict[str, Any]:
+    """Run one part (in the child process); its record (``strict_volume``: simplify's)."""
     from OCP.BRepCheck import BRepCheck_Analyzer
     from OCP.TopAbs import TopAbs_SHELL
 
@@ -172,7 +172,7 @@ def child(part: str, out_dir: str) -> dict[str, Any]:
     solids: list[dict[str, Any]] = []
     for k, cls in enumerate(classes):
         specs = specs_from_classification(cls)
-        r = simplify(cls.shape, specs)
+        r = simplify(cls.shape, specs, strict_volume=strict_volume)
         s: dict[str, Any] = {
             "solid": k,
             "faces_before": r.faces_before,
@@ -215,7 +215,12 @@ def child(part: str, out_dir: str) -> dict[str, Any]:
 
 
 def run_part(
-    part: Path, out_dir: Path, timeout: float, checks: float, wall_factor: float = 1.0
+    part: Path,
+    out_dir: Path,
+    timeout: float,
+    checks: float,
+    wall_factor: float = 1.0,
+    strict_volume: bool = False,
 ) -> dict[str, Any]:
     """The record of ``part`` from a child process (``status`` says how it ended): the part
     has ``timeout`` CPU seconds to be simplified, the file checks ``checks`` more; the child
@@ -223,7 +228,8 @@ def run_part(
     t0 = time.perf_counter()
     try:
         p = subprocess.run(
-            [sys.executable, __file__, "--child", str(part), str(out_dir)],
+            [sys.executable, __file__, "--child", str(part), str(out_dir)]
+            + (["--strict-volume"] if strict_volume else []),
             capture_output=True,
             text=True,
             timeout=wall_factor * (timeout + checks),
@@ -340,7 +346,7 @@ def report(records: list[dict[str, Any]]) -> None:
 
 def main(argv: list[str]) -> int:
     if argv[:1] == ["--child"]:
-        print(json.dumps(child(argv[1], argv[2])))
+        print(json.dumps(child(argv[1], argv[2], "--strict-volume" in argv[3:])))
         return 0
     if argv[:1] == ["--round-trip-child"]:
         print(json.dumps(round_trip_child(argv[1], argv[2])))
@@ -366,6 +372,11 @@ def main(argv: list[str]) -> int:
         help="fill the input's round-trip comparison into finished records that lack it",
     )
     ap.add_argument("--markdown", action="store_true", help="also print the table as Markdown")
+    ap.add_argument(
+        "--strict-volume",
+        action="store_true",
+        help="simplify with strict_volume (merges OCCT's default integrator misreads are kept)",
+    )
     args = ap.parse_args(argv)
     parts: list[Path] = []
     for a in map(Path, args.inputs):
@@ -386,7 +397,9 @@ def main(argv: list[str]) -> int:
             records.append(rec)
             continue
         print(f"[{i + 1}/{len(parts)}] {part.name}", file=sys.stderr, flush=True)
-        rec = run_part(part, rec_dir, args.timeout, args.check_timeout, args.wall_factor)
+        rec = run_part(
+            part, rec_dir, args.timeout, args.check_timeout, args.wall_factor, args.strict_volume
+        )
         path.write_text(json.dumps(rec) + "\n")
         records.append(rec)
     report(records)

@@ -131,6 +131,21 @@ def test_finished_parts_are_found_by_hash_and_options(tmp_path):
     assert options_key(["classify"], {"tol": 1e-6}) != options_key(["classify"], {"tol": 1e-5})
 
 
+def test_strict_volume_reaches_simplify_and_keeps_old_records_valid(tmp_path):
+    """``--strict-volume`` is passed to each part's simplify; off, the options (and so the
+    keys of the records written before it existed) are as they were."""
+    from medax.batch.part import PartTask, step_argv
+
+    plain = BatchOptions(do=("simplify",)).step_options()
+    strict = BatchOptions(do=("simplify",), strict_volume=True).step_options()
+    assert "strict_volume" not in plain and strict["strict_volume"] is True
+    assert options_key(["simplify"], plain) != options_key(["simplify"], strict)
+    for opts, want in ((plain, False), (strict, True)):
+        task = PartTask("p.step", "0", "k", str(tmp_path), "p", ("simplify",), opts)
+        argv, _ = step_argv("simplify", task, {})
+        assert ("--strict-volume" in argv) is want
+
+
 def test_journal_skips_a_torn_line(tmp_path):
     append_record(tmp_path, {"sha256": "a", "options_key": "k", "status": "ok"})
     with open(tmp_path / RECORDS, "a") as f:

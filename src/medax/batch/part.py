@@ -60,8 +60,9 @@ PRELOAD = ["medax.batch.preload"]
 class PartTask:
     """What a worker needs for one part: paths and plain options, nothing else.
 
-    ``options``: ``angle``, ``tol`` (classify), ``simplify_tol``, ``mesh_size`` and
-    ``pictures`` (bool). ``hook``: ``"module:function"`` called with the part's path in the
+    ``options``: ``angle``, ``tol`` (classify), ``simplify_tol``, ``strict_volume``
+    (simplify's ``--strict-volume``, present only when set), ``mesh_size`` and ``pictures``
+    (bool). ``hook``: ``"module:function"`` called with the part's path in the
     child before the work (tests use it to make a part hang or crash)."""
 
     path: str
@@ -291,6 +292,8 @@ def step_argv(
         argv = ["simplify", task.path, "-o", names["simplified"]]
         argv += ["--report", names["simplify_report"], "--tol", repr(opts["simplify_tol"])]
         argv += ["--view3d", names["simplify_view"]]
+        if opts.get("strict_volume"):
+            argv.append("--strict-volume")
         if pictures:
             argv += ["--png", names["simplify_png"]]
     elif step == "mesh":

@@ -58,6 +58,7 @@ class BatchOptions:
     (default: the CPU count). ``scheduler``: ``tcp://host:port`` of a running Dask
     scheduler (then ``workers`` is ignored). ``timeout``: seconds per part (None: no
     limit). ``angle``, ``tol``: classify's; ``simplify_tol``: simplify's ``--tol``;
+    ``strict_volume``: simplify's ``--strict-volume``;
     ``mesh_size``: the mesh's ``--size`` (model units, needed for ``mesh``); ``pictures``:
     also write the PNG views. ``hook``: ``"module:function"`` called with each part's path
     in its process before the work (for tests)."""
@@ -69,6 +70,7 @@ class BatchOptions:
     angle: float = tolerances.TANGENT_ANGLE
     tol: float = tolerances.CURVE_TOL
     simplify_tol: float = 1e-5
+    strict_volume: bool = False
     mesh_size: float | None = None
     pictures: bool = False
     hook: str | None = None
@@ -80,6 +82,8 @@ class BatchOptions:
             opts.update(angle=self.angle, tol=self.tol)
         if "simplify" in self.do:
             opts["simplify_tol"] = self.simplify_tol
+            if self.strict_volume:  # (absent when off: the records of before stay valid)
+                opts["strict_volume"] = True
         if "mesh" in self.do:
             opts["mesh_size"] = self.mesh_size
         return opts

@@ -59,6 +59,7 @@ def simplify(
     tol: float = pipeline.DEVIATION_TOL,
     progress: Callable[[str], None] | None = None,
     time_budget: float = pipeline.ISOLATION_BUDGET,
+    strict_volume: bool = False,
 ) -> pipeline.SimplifyResult:
     """Remove the fillets of a classified part.
 
@@ -79,6 +80,9 @@ def simplify(
         Called with one message per stage.
     time_budget : float
         Bound (s) on the search for the fillets that fail.
+    strict_volume : bool
+        Also keep the fillets whose merged faces OCCT's default mass properties (FreeCAD,
+        CadQuery) would read as a volume change above 1e-6.
 
     Returns
     -------
@@ -97,4 +101,4 @@ def simplify(
         shape, found = part, None
     if blends is None:
         blends = specs_from_classification(found or classify_solid(shape))
-    return pipeline.simplify(shape, blends, tol, progress, time_budget)
+    return pipeline.simplify(shape, blends, tol, progress, time_budget, strict_volume)

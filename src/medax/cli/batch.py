@@ -77,6 +77,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--simplify-tol", type=float, default=1e-5, help="simplify: deviation tolerance (1e-5)"
     )
+    p.add_argument(
+        "--strict-volume",
+        action="store_true",
+        help="simplify: keep the fillets whose merged faces OCCT's default mass properties "
+        "would misread (see 'medax simplify --help')",
+    )
     p.add_argument("--mesh-size", type=float, help="mesh: target edge length (model units)")
     p.add_argument("--pictures", action="store_true", help="also write each step's PNG view")
     p.set_defaults(run=run)
@@ -98,6 +104,7 @@ def run(args: argparse.Namespace) -> int:
         angle=args.angle,
         tol=args.tol,
         simplify_tol=args.simplify_tol,
+        strict_volume=args.strict_volume,
         mesh_size=args.mesh_size,
         pictures=args.pictures,
     )

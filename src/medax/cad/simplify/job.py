@@ -131,6 +131,9 @@ class Job:
     # the new edges' pcurves, kept from one attempt to the next (keyed by the surface's and
     # the curves' geometry: :func:`.rebuild._pcurve_key`)
     pcurves: Measures = field(default_factory=Measures)
+    # whether an attempt is also refused when OCCT's default mass properties would read its
+    # merged faces as a volume change above VOLUME_TOL (``simplify(strict_volume=True)``)
+    strict_volume: bool = False
 
     @property
     def vol0(self) -> float:

@@ -225,6 +225,14 @@ def _measured(
     return float(cache.get(("volume", eps, gk, *key), compute))
 
 
+def default_reading(faces: Sequence[Any], cache: Measures | None = None) -> float:
+    """The volume contribution of ``faces`` as OCCT's default mass properties read it
+    (``BRepGProp.VolumeProperties_s`` without a tolerance, what FreeCAD and CadQuery report:
+    fixed-order Gauss from the world origin, no subdivision at the surface's knots), length
+    unit cubed; through ``cache`` when given."""
+    return sum(_measured(f, _ZERO, None, False, cache) for f in faces)
+
+
 def local_volume_shares(
     new: Sequence[Any],
     old: Sequence[Any],
