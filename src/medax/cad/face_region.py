@@ -13,6 +13,7 @@ constraints (0, 2): no second copy of the tracer.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -506,21 +507,36 @@ def face_region(face: Any, name: str = "face", angle_tol: float = CORNER_ANGLE) 
 def fillet_sides(c: Classification, rec: FilletRecord) -> list[list[Any]]:
     """The oriented edges of each of the 4 sides of fillet ``rec``, in outer-wire order
     (smooth side 0, a cross edge, smooth side 1, the other cross edge)."""
-    face = c.face(rec.face)
+    smooth = [[c.edge_map.FindKey(j + 1) for j in side] for side in rec.smooth_edges]
+    return smooth_cross_sides(c.face(rec.face), smooth[0], smooth[1], f"face {rec.face}")
+
+
+def smooth_cross_sides(
+    face: Any, smooth0: Sequence[Any], smooth1: Sequence[Any], where: str
+) -> list[list[Any]]:
+    """The oriented edges of each of the 4 sides of the fillet ``face`` whose smooth sides
+    are the edges ``smooth0`` and ``smooth1``, in outer-wire order (smooth side 0, a cross
+    edge, smooth side 1, the other cross edge); :class:`CadError` naming ``where`` when the
+    outer wire is not so."""
     wire = BRepTools.OuterWire_s(face)
     occ: list[tuple[str, Any]] = []
-    s0, s1 = set(rec.smooth_edges[0]), set(rec.smooth_edges[1])
     exp = BRepTools_WireExplorer(wire, face)
     while exp.More():
         e = exp.Current()
         exp.Next()
         if BRep_Tool.Degenerated_s(e):
             continue
-        j = c.edge_map.FindIndex(e) - 1
-        occ.append(("S0" if j in s0 else "S1" if j in s1 else "C", e))
+        label = (
+            "S0"
+            if any(e.IsSame(x) for x in smooth0)
+            else "S1"
+            if any(e.IsSame(x) for x in smooth1)
+            else "C"
+        )
+        occ.append((label, e))
     k = next((i for i in range(len(occ)) if occ[i][0] == "S0" and occ[i - 1][0] != "S0"), None)
     if k is None:
-        raise CadError(f"face {rec.face}: smooth side 0 not found in its outer wire")
+        raise CadError(f"{where}: smooth side 0 not found in its outer wire")
     occ = occ[k:] + occ[:k]
     sides: list[list[Any]] = []
     for label, e in occ:
@@ -529,7 +545,7 @@ def fillet_sides(c: Classification, rec: FilletRecord) -> list[list[Any]]:
         else:
             sides.append((label, [e]))  # type: ignore[arg-type]
     if [s[0] for s in sides] != ["S0", "C", "S1", "C"]:
-        raise CadError(f"face {rec.face}: outer wire is not smooth/cross/smooth/cross")
+        raise CadError(f"{where}: outer wire is not smooth/cross/smooth/cross")
     return [s[1] for s in sides]
 
 

@@ -24,6 +24,7 @@ from OCP.GeomAbs import GeomAbs_BSplineSurface, GeomAbs_Cylinder, GeomAbs_Torus
 from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
 from OCP.gp import gp_Pnt
 
+from medax.cad.simplify.axis_medial import axis_medial_edge
 from medax.cad.simplify.occ import compound, edge_points, uv_bounds
 from medax.cad.simplify.traced import traced_medial_edge
 
@@ -32,6 +33,8 @@ from medax.cad.simplify.traced import traced_medial_edge
 EXTEND = 0.02
 #: ``Medial.iso`` of a traced medial curve (no iso-line; see :mod:`.traced`).
 TRACED = "traced"
+#: ``Medial.iso`` of the paper's medial axis traced across the face (:mod:`.axis_medial`).
+AXIS = "axis"
 
 
 @dataclass(frozen=True)
@@ -139,8 +142,11 @@ def medial_curve(
         iso, k, lo, hi, closed_dir = "u", 0, v0, v1, ad.IsVPeriodic()
     elif all(s[1] <= slack for s in spread):
         iso, k, lo, hi, closed_dir = "v", 1, u0, u1, ad.IsUPeriodic()
-    else:
-        return "smooth edges are not iso-lines of the fillet surface: not supported"
+    else:  # the paper's medial axis, traced across the face between the smooth sides
+        accept = max(rel_tol * (radius or 0.0), 2 * slack)
+        return _by_axis(
+            face, sides, accept, radius, "smooth edges are not iso-lines of the fillet surface"
+        )
     # mid between the smooth edges' own parameters (the face may reach past them)
     c1, c2 = float(ends[0][0, k]), float(ends[1][0, k])
     # periods: 2 pi on cylinders and tori, the knot range on periodic B-splines
@@ -184,21 +190,30 @@ def medial_curve(
     if radius is None:  # a variable-radius or freeform blend: the scale is its half-width
         radius = near
     accept = max(rel_tol * radius, 2 * slack)  # the iso-line may be as off as the input
-    if err > accept and freeform and kind == GeomAbs_BSplineSurface:
-        if max(len(side) for side in sides) > 1:
-            return (
-                f"mid iso-line not equidistant ({err:.2e} > {rel_tol:g} x radius) on a blend "
-                "whose constraint side is a chain of edges (the traced route takes one edge)"
-            )
+    if err <= accept:
+        return Medial(edge, iso, float(mid), float(err), float(radius), (float(c1), float(c2)))
+    why = f"mid iso-line not equidistant ({err:.2e} > {accept / radius:.2g} x radius)"
+    if freeform and kind == GeomAbs_BSplineSurface and max(len(side) for side in sides) == 1:
         # a B-spline blend whose mid iso-line is off (a rolling ball between a plane and a
         # slanted cylinder): the medial curve traced per cross-section, to rel_tol x radius,
         # or (with the most nodes) to the tolerance an iso-line is accepted with
         traced = traced_medial_edge(
             face, (edge1, edge2), k, cross, (lo, hi), rel_tol * radius, accept, tol
         )
-        if isinstance(traced, str):
-            return f"mid iso-line not equidistant ({err:.2e} > {rel_tol:g} x radius), {traced}"
-        return Medial(traced[0], TRACED, float("nan"), traced[1], float(radius))
-    if err > accept:
-        return f"mid iso-line not equidistant ({err:.2e} > {accept / radius:.2g} x radius)"
-    return Medial(edge, iso, float(mid), float(err), float(radius), (float(c1), float(c2)))
+        if not isinstance(traced, str):
+            return Medial(traced[0], TRACED, float("nan"), traced[1], float(radius))
+        why += f", {traced}"
+    return _by_axis(face, sides, accept, radius, why)
+
+
+def _by_axis(
+    face: Any, sides: list[list[Any]], accept: float, radius: float | None, why: str
+) -> Medial | str:
+    """The medial curve of ``face`` as the paper's axis between the smooth ``sides``
+    (:func:`.axis_medial.axis_medial_edge`, equidistant to ``accept``), or ``why`` with
+    the reason it failed too."""
+    by_axis = axis_medial_edge(face, sides[0], sides[1], accept)
+    if isinstance(by_axis, str):
+        return f"{why}; {by_axis}"
+    edge, err, near = by_axis
+    return Medial(edge, AXIS, float("nan"), err, float(radius or near))

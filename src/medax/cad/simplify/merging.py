@@ -29,7 +29,7 @@ from medax.cad.simplify.job import (
     FITTED,
     Job,
 )
-from medax.cad.simplify.medial import TRACED
+from medax.cad.simplify.medial import AXIS, TRACED
 from medax.cad.simplify.occ import edges_of
 from medax.cad.simplify.ring import NOT_A_RING, ring_surface
 from medax.cad.simplify.rounded import rounded_surface
@@ -119,15 +119,12 @@ def surfaces_for(
     return surfaces, {}
 
 
-def surface_of(
-    job: Job, sup: int, hs: list[tuple[int, int]], with_corner: bool
+def _exact_surface(
+    job: Job, support: Any, sup: int, hs: list[tuple[int, int]]
 ) -> MergedSurface | str:
-    """The merged surface of supporting face ``sup`` with the halves ``hs`` ((fillet, smooth
-    edge) pairs): exact, ``FITTED``, or the reason there is none."""
-    support = job.face(sup)
-    planar = BRepAdaptor_Surface(support).GetType() == GeomAbs_Plane
-    if with_corner:
-        return FITTED if planar else "corner or bridged pieces on a curved face"
+    """The exact merged surface of ``support`` (face ``sup``) with the halves ``hs``, or
+    why there is none (a chain member with no iso-line section, a profile no exact route
+    takes, an OCCT construction failure)."""
     halves = []
     for f, e in hs:
         half = Half(job.face(f), job.medials[f], TopoDS.Edge(job.emap.FindKey(e + 1)))
@@ -146,9 +143,21 @@ def surface_of(
             half = replace(half, chain=tuple(others), arcs=tuple(arcs))
         halves.append(half)
     try:
-        ms = merged_surface(support, halves, job.btol)
+        return merged_surface(support, halves, job.btol)
     except (ValueError, RuntimeError) as err:  # OCCT construction failures
-        ms = f"surface construction failed: {err}"
+        return f"surface construction failed: {err}"
+
+
+def surface_of(
+    job: Job, sup: int, hs: list[tuple[int, int]], with_corner: bool
+) -> MergedSurface | str:
+    """The merged surface of supporting face ``sup`` with the halves ``hs`` ((fillet, smooth
+    edge) pairs): exact, ``FITTED``, or the reason there is none."""
+    support = job.face(sup)
+    planar = BRepAdaptor_Surface(support).GetType() == GeomAbs_Plane
+    if with_corner:
+        return FITTED if planar else "corner or bridged pieces on a curved face"
+    ms = _exact_surface(job, support, sup, hs)
     if isinstance(ms, str) and (planar or ring_kind(support) or graph_kind(support)):
         return FITTED
     if isinstance(ms, str):
@@ -175,7 +184,7 @@ def one_sided(job: Job, blends: BlendInput) -> None:
     for f, why in sorted(job.kept.items()):
         bad = job.no_surface.get(f)
         spec, m = by_face.get(f), job.medials.get(f)
-        if bad is None or spec is None or m is None or f in linked or m.iso == TRACED:
+        if bad is None or spec is None or m is None or f in linked or m.iso in (TRACED, AXIS):
             continue
         if bad not in spec.supporting:
             continue

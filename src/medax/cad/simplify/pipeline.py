@@ -56,7 +56,7 @@ from medax.cad.simplify.local_measure import (
     local_volume_shares,
     tolerance_band,
 )
-from medax.cad.simplify.medial import Medial, medial_curve
+from medax.cad.simplify.medial import AXIS, Medial, medial_curve
 from medax.cad.simplify.merging import (
     cascade,
     cylinder_pass,
@@ -165,6 +165,7 @@ def simplify(
             kept[spec.face] = m
         else:
             job.medials[spec.face] = m
+    _unlinked_axes(job, blends)
     _chains(job, blends)
     _corners(job, blends)
     _bridges(job, blends)
@@ -262,6 +263,25 @@ def simplify(
         notes=notes,
         radii={spec.face: spec.radius for spec in blends.fillets},
     )
+
+
+def _unlinked_axes(job: Job, blends: BlendInput) -> None:
+    """Keep the fillets whose medial curve is the paper's axis (:data:`.medial.AXIS`) where
+    they are linked to other blends (in a chain, ridden on, riding, at a corner blend):
+    the chain, bridge and corner routes need iso-line sections across them, and the
+    fillets linked to such a one then go as they go beside a kept fillet."""
+    fillets = {s.face for s in blends.fillets}
+    linked = {f for cs in blends.corners for f in cs.fillets}
+    linked |= {b for s in blends.fillets for b in s.supporting if b in fillets}
+    linked |= {s.face for s in blends.fillets if set(s.supporting) & fillets}
+    for f in sorted(linked):
+        m = job.medials.get(f)
+        if m is not None and m.iso == AXIS:
+            del job.medials[f]
+            job.kept[f] = (
+                "smooth edges are not iso-lines of the fillet surface, and it meets other "
+                "blends (the chain, bridge and corner routes need an iso-line medial curve)"
+            )
 
 
 def _corners(job: Job, blends: BlendInput) -> None:

@@ -141,9 +141,9 @@ def _joined(splines: list[BSpline]) -> tuple[Array, Array]:
     return np.concatenate([t, splines[-1].t[-1:]]), c
 
 
-def _geom_bspline(t: Array, c: Array) -> Any:
-    """A ``Geom_BSplineCurve`` (degree ``DEGREE``) or ``Geom2d_BSplineCurve`` of knots
-    ``t``, poles ``c``."""
+def geom_bspline(t: Array, c: Array, degree: int = DEGREE) -> Any:
+    """A ``Geom_BSplineCurve`` or ``Geom2d_BSplineCurve`` (by the poles' dimension) of
+    knots ``t`` (with repeats), poles ``c`` (n, 3) or (n, 2) and ``degree``."""
     from OCP.collections import Array1_double, Array1_gp_Pnt, Array1_gp_Pnt2d, Array1_int
     from OCP.Geom import Geom_BSplineCurve
     from OCP.Geom2d import Geom2d_BSplineCurve
@@ -158,11 +158,11 @@ def _geom_bspline(t: Array, c: Array) -> Any:
         poles = Array1_gp_Pnt(1, len(c))
         for i, p in enumerate(c):
             poles.SetValue(i + 1, gp_Pnt(*map(float, p)))
-        return Geom_BSplineCurve(poles, ak, am, DEGREE)
+        return Geom_BSplineCurve(poles, ak, am, degree)
     poles2 = Array1_gp_Pnt2d(1, len(c))
     for i, p in enumerate(c):
         poles2.SetValue(i + 1, gp_Pnt2d(float(p[0]), float(p[1])))
-    return Geom2d_BSplineCurve(poles2, ak, am, DEGREE)
+    return Geom2d_BSplineCurve(poles2, ak, am, degree)
 
 
 def traced_medial_edge(
@@ -218,7 +218,7 @@ def traced_medial_edge(
         n *= 2
     if err > max(tol, accept):
         return f"traced medial curve error {err:.2e} above {tol:.2e} with {n // 2} nodes per span"
-    curve3, curve2 = _geom_bspline(t3, c3), _geom_bspline(t2, c2)
+    curve3, curve2 = geom_bspline(t3, c3), geom_bspline(t2, c2)
     mk = BRepBuilderAPI_MakeEdge(curve3, lo, hi)
     if not mk.IsDone():
         return "could not build the traced medial edge"
