@@ -111,3 +111,19 @@ def test_a_fillet_on_the_axis_route_goes_only_where_it_meets_no_other_blend():
     assert sorted(job.medials) == [2, 3]
     assert sorted(job.kept) == [1, 4]
     assert all("not iso-lines" in why for why in job.kept.values())
+
+
+def test_no_exact_surface_is_swept_from_a_half_whose_medial_curve_is_the_axis(medial):
+    """The exact routes sweep a half's section between its smooth edge and its mid
+    iso-line; a cylinder half whose medial curve is the traced axis has none (a nan
+    parameter reached OCCT and crashed it): it is refused with the reason, the fitted
+    routes take it."""
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+
+    from medax.cad.simplify.occ import faces_of
+    from medax.cad.simplify.surfaces import Half, merged_surface
+
+    face, s0, _ = _helix_face()
+    plane = next(iter(faces_of(BRepPrimAPI_MakeBox(10.0, 10.0, 10.0).Shape())))
+    why = merged_surface(plane, [Half(face, medial, s0)], 1e-7 * L)
+    assert isinstance(why, str) and "no iso-line" in why

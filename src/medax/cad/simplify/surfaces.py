@@ -246,6 +246,8 @@ def merged_surface(support: Any, halves: list[Half], tol: float) -> MergedSurfac
 
     ``tol`` is the length tolerance of the geometric tests (e.g. 1e-7 x the part diagonal).
     """
+    if any(h.medial.iso not in ("u", "v") for h in halves):  # traced: no profile to sweep
+        return "a half's medial curve is no iso-line (no exact surface sweeps it)"
     sad = canonical_adaptor(support, tol)
     hads = [canonical_adaptor(f, tol) for h in halves for f in (h.face, *h.chain)]
     kinds = {a.GetType() for a in hads}
