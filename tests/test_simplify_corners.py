@@ -103,8 +103,9 @@ def test_box12_face_groups(box12):
 
 
 def test_box12_exact_surfaces(box12):
-    """The rounded-box route: every merged face on one C1 rational bicubic with 8 x 8 poles
-    (the fit needs about 34 x 34), the volume the closed form's to rounding."""
+    """The rounded-box route: every merged face on one C1 rational bicubic with 8 poles
+    across (the fit needs about 34; along it, knots inserted for OCCT's default mass
+    properties: :func:`.occ.reader_spans`), the volume the closed form's to rounding."""
     from OCP.BRep import BRep_Tool
 
     from medax.cad.simplify.occ import faces_of
@@ -114,7 +115,8 @@ def test_box12_exact_surfaces(box12):
         pytest.skip("the exact route only")
     for f in faces_of(r.shape):
         s = BRep_Tool.Surface_s(f)
-        assert (s.NbUPoles(), s.NbVPoles(), s.UDegree(), s.VDegree()) == (8, 8, 3, 3)
+        assert (s.NbUPoles(), s.UDegree(), s.VDegree()) == (8, 3, 3)
+        assert s.NbVKnots() - 1 >= 8
         assert s.IsURational() and s.IsVRational()
         assert s.IsCNu(1) and s.IsCNv(1)
     exact = _rounded_box_volume(A, B, H, R)

@@ -38,6 +38,7 @@ from medax.cad.simplify.occ import (
     face_inside_point,
     face_normal_at,
     faces_of,
+    reader_spans,
     xyz,
 )
 from medax.cad.simplify.projection import GridProjection
@@ -372,7 +373,7 @@ def build_solid(
             continue
         loc = TopLoc_Location()
         if g.support is not None:
-            surf = surfaces[g.support]
+            surf = reader_spans(surfaces[g.support])
             ref = next(
                 TopoDS.Face(split.face_map.FindKey(k + 1))
                 for k in g.members
