@@ -136,6 +136,8 @@ def test_cli_strict_volume_keeps_what_the_default_integrator_misreads(box_step, 
     report = json.loads(rep.read_text())
     assert abs(report["default_integrator_volume_rel_change"]) <= 1e-6
     assert any("default mass properties" in k for k in report["kept_reasons"])
+    assert report["strict_volume"] is True
+    assert not validation_errors(report, "simplify-report")
     out4, rep4 = tmp_path / "o4.step", tmp_path / "r4.json"
     assert (
         main(["simplify", str(box_step), "-o", str(out4), "--report", str(rep4), "--strict-volume"])

@@ -118,6 +118,7 @@ def run(args: argparse.Namespace) -> int:
     report = _combine([r.report() for r in results])
     report["input"] = str(args.part)
     report["output"] = str(args.output)
+    report["strict_volume"] = bool(args.strict_volume)
     tols = simplify_tolerances(args.tol)
     report = stamp("simplify-report", report, classes[0].unit, tols, time="s")
     with staged_outputs() as out:  # all outputs or none
