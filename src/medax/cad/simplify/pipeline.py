@@ -630,9 +630,9 @@ def _misread(
     sel: dict[int, FilletSpec],
 ) -> Failure | None:
     """The refusal of a rebuilt ``shape`` that OCCT's default mass properties read as a
-    volume change above ``VOLUME_TOL`` from the input (both whole: splitting a fillet moves
-    that integrator's reading of it too), blamed on the groups whose new faces account for
-    it; None when the reading is within it."""
+    volume change above ``VOLUME_TOL`` from the input (both read whole: the changed groups'
+    own readings, new faces against their pieces, need not add up to it), blamed on the
+    groups whose new faces account for it; None when the reading is within it."""
     change = default_volume(shape) / job.vol_ref - 1.0
     if abs(change) <= VOLUME_TOL:
         return None
