@@ -225,12 +225,23 @@ def _measured(
     return float(cache.get(("volume", eps, gk, *key), compute))
 
 
-def default_reading(faces: Sequence[Any], cache: Measures | None = None) -> float:
+def default_reading(
+    faces: Sequence[Any], origin: np.ndarray, cache: Measures | None = None
+) -> float:
     """The volume contribution of ``faces`` as OCCT's default mass properties read it
     (``BRepGProp.VolumeProperties_s`` without a tolerance, what FreeCAD and CadQuery report:
-    fixed-order Gauss from the world origin, no subdivision at the surface's knots), length
-    unit cubed; through ``cache`` when given."""
-    return sum(_measured(f, _ZERO, None, False, cache) for f in faces)
+    fixed-order Gauss, no subdivision at the surface's knots) from ``origin`` (3,), length
+    unit cubed; through ``cache`` when given. That integrator's error depends on the point:
+    a solid's reading is from its :func:`rough_centre`."""
+    return sum(_measured(f, origin, None, False, cache) for f in faces)
+
+
+def rough_centre(shape: Any) -> np.ndarray:
+    """The point OCCT's default mass properties integrate a solid from (its
+    ``roughBaryCenter``): the mean of its vertices as the explorer visits them, once per
+    edge end (3,)."""
+    pts = [vertex_point(v) for v in vertices_of(shape)]
+    return np.mean(pts, axis=0) if pts else np.zeros(3)
 
 
 def local_volume_shares(

@@ -54,6 +54,7 @@ from medax.cad.simplify.local_measure import (
     group_key,
     local_area_change,
     local_volume_shares,
+    rough_centre,
     tolerance_band,
 )
 from medax.cad.simplify.medial import AXIS, Medial, medial_curve
@@ -630,17 +631,18 @@ def _misread(
     sel: dict[int, FilletSpec],
 ) -> Failure | None:
     """The refusal of a rebuilt ``shape`` that OCCT's default mass properties read as a
-    volume change above ``VOLUME_TOL`` from the input (both read whole: the changed groups'
-    own readings, new faces against their pieces, need not add up to it), blamed on the
-    groups whose new faces account for it; None when the reading is within it."""
+    volume change above ``VOLUME_TOL`` from the input (both read whole, each from its own
+    point), blamed on the groups whose new faces, read from the new solid's point against
+    their pieces, account for it; None when the reading is within it."""
     change = default_volume(shape) / job.vol_ref - 1.0
     if abs(change) <= VOLUME_TOL:
         return None
+    o = rough_centre(shape)  # (the reading's own point: its error depends on it)
     shares = (
         np.array(
             [
-                default_reading([f], job.measures)
-                - default_reading([pieces[k] for k in g.members], job.measures)
+                default_reading([f], o, job.measures)
+                - default_reading([pieces[k] for k in g.members], o, job.measures)
                 for g, f in changed
             ]
         )
