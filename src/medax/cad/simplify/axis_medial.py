@@ -46,11 +46,11 @@ def axis_medial_edge(
         sides = smooth_cross_sides(face, smooth0, smooth1, "fillet")
         region, _ = side_region(face, sides, "fillet")
         rel = max(TRACE_SHARE * accept / region.diagonal, tolerances.MIN_CURVE_TOL)
-        axis = trace_axis_quietly(region, rel)
+        axis = _trace_axis_quietly(region, rel)
     except MedaxError as why:
         return f"medial axis not traced ({why})"
-    except Exception as why:  # OCCT raising from deep inside the region's construction
-        return f"medial axis not traced (OCCT: {type(why).__name__})"
+    except Exception as why:  # a region the tracer was not built for: keep the fillet
+        return f"medial axis not traced ({type(why).__name__}: {why})"
     spline = axis.spline
     if spline.weights is not None:
         return "medial axis not traced (a rational axis spline)"
@@ -69,7 +69,7 @@ def axis_medial_edge(
     return edge, err, near
 
 
-def trace_axis_quietly(region: Any, rel: float) -> Any:
+def _trace_axis_quietly(region: Any, rel: float) -> Any:
     """:func:`medax.axis.trace_axis` of ``region``'s pair (0, 2) to ``rel`` x diagonal,
     its warning (a fit slightly above ``rel``) silenced: the edge is measured after."""
     import logging

@@ -178,9 +178,7 @@ def one_sided(job: Job, blends: BlendInput) -> None:
     goes and the shape is the same. Not for
     fillets meeting corner blends, riding on or ridden by fillets, or traced ones."""
     by_face = {s.face: s for s in blends.fillets}
-    linked = {f for cs in blends.corners for f in cs.fillets}
-    linked |= {b for s in blends.fillets for b in s.supporting if b in by_face}
-    linked |= {s.face for s in blends.fillets if set(s.supporting) & set(by_face)}
+    linked = blends.linked
     for f, why in sorted(job.kept.items()):
         bad = job.no_surface.get(f)
         spec, m = by_face.get(f), job.medials.get(f)

@@ -271,11 +271,7 @@ def _unlinked_axes(job: Job, blends: BlendInput) -> None:
     they are linked to other blends (in a chain, ridden on, riding, at a corner blend):
     the chain, bridge and corner routes need iso-line sections across them, and the
     fillets linked to such a one then go as they go beside a kept fillet."""
-    fillets = {s.face for s in blends.fillets}
-    linked = {f for cs in blends.corners for f in cs.fillets}
-    linked |= {b for s in blends.fillets for b in s.supporting if b in fillets}
-    linked |= {s.face for s in blends.fillets if set(s.supporting) & fillets}
-    for f in sorted(linked):
+    for f in sorted(blends.linked):
         m = job.medials.get(f)
         if m is not None and m.iso == AXIS:
             del job.medials[f]

@@ -68,6 +68,16 @@ class BlendInput:
     corners: tuple[CornerSpec, ...] = ()
 
     @property
+    def linked(self) -> frozenset[int]:
+        """The fillets linked to other blends: meeting a corner blend, ridden on by a
+        fillet (its supporting face), or riding on one."""
+        fillets = {s.face for s in self.fillets}
+        out = {f for cs in self.corners for f in cs.fillets}
+        out |= {b for s in self.fillets for b in s.supporting if b in fillets}
+        out |= {s.face for s in self.fillets if set(s.supporting) & fillets}
+        return frozenset(out)
+
+    @property
     def blend_faces(self) -> tuple[int, ...]:
         """All blend face indices (tried and refused), sorted."""
         return tuple(
