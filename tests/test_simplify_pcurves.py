@@ -5,7 +5,14 @@ from __future__ import annotations
 
 import pytest
 from OCP.BRep import BRep_Tool
-from OCP.Geom import Geom_BSplineCurve, Geom_Circle, Geom_CylindricalSurface, Geom_Plane
+from OCP.Geom import (
+    Geom_BSplineCurve,
+    Geom_Circle,
+    Geom_CylindricalSurface,
+    Geom_Plane,
+    Geom_RectangularTrimmedSurface,
+)
+from OCP.Geom2d import Geom2d_Circle
 from OCP.GeomConvert import GeomConvert
 from OCP.gp import gp_Ax2, gp_Ax3, gp_Dir, gp_Pnt, gp_Vec
 from OCP.TopoDS import TopoDS
@@ -156,3 +163,84 @@ def test_new_pcurves_follow_the_edges_not_an_old_loose_boundary():
         f, l = BRep_Tool.Range_s(TopoDS.Edge(e), new)
         ends = [pc.Value(f).Coord(), pc.Value(l).Coord()]
         assert all(min(abs(x - c[0]) + abs(y - c[1]) for c in corners) < 1e-9 for x, y in ends)
+
+
+def _graph_surface(heights):  # type: ignore[no-untyped-def]
+    """A cubic B-spline graph ``o + u ex + v ey + c(u, v) n`` in a tilted frame: poles at
+    the Greville abscissae of non-uniform knots, heights ``heights(gu, gv)``."""
+    import numpy as np
+    from OCP.collections import Array1_double, Array1_int, Array2_gp_Pnt
+    from OCP.Geom import Geom_BSplineSurface
+
+    from medax.geometry.tensor_fit import greville
+
+    o = np.array([1.0, -2.0, 0.5])
+    ex = np.array([np.cos(0.3), np.sin(0.3), 0.0])
+    n = np.array([0.0, -np.sin(0.2), np.cos(0.2)])
+    n -= (n @ ex) * ex
+    n /= np.linalg.norm(n)
+    ey = np.cross(n, ex)
+    tu = np.r_[[0.0] * 4, 1.0, 2.5, 3.0, [5.0] * 4]
+    tv = np.r_[[-1.0] * 4, 0.5, 2.0, [4.0] * 4]
+    gu, gv = greville(tu), greville(tv)
+    c = heights(*np.meshgrid(gu, gv, indexing="ij"))
+    poles = Array2_gp_Pnt(1, len(gu), 1, len(gv))
+    for i, a in enumerate(gu):
+        for j, b in enumerate(gv):
+            poles.SetValue(i + 1, j + 1, gp_Pnt(*map(float, o + a * ex + b * ey + c[i, j] * n)))
+
+    def knots(t):  # type: ignore[no-untyped-def]
+        u, m = np.unique(t, return_counts=True)
+        ak, am = Array1_double(1, len(u)), Array1_int(1, len(u))
+        for k, (kv, mult) in enumerate(zip(u, m, strict=True)):
+            ak.SetValue(k + 1, float(kv))
+            am.SetValue(k + 1, int(mult))
+        return ak, am
+
+    (uk, um), (vk, vm) = knots(tu), knots(tv)
+    return Geom_BSplineSurface(poles, uk, vk, um, vm, 3, 3), (o, ex, ey, n)
+
+
+def test_a_curve_on_a_graph_surface_has_its_affine_image_as_pcurve():
+    """On a fitted (graph) surface the pcurve of a curve on it is its image along the
+    normal, on the curve's own parameter: an iso-curve's pcurve is the iso-line (to
+    1e-12), a circle's in a plane parallel to the frame a circle; an oblique circle (an
+    ellipse in the plane) has none. Not graphs: a rational surface, perturbed poles."""
+    import numpy as np
+    from OCP.Geom import Geom_BSplineSurface
+
+    from medax.cad.simplify.occ import xyz
+    from medax.cad.simplify.projection import graph_frame
+
+    surf, (o, ex, ey, n) = _graph_surface(lambda u, v: 0.3 * u * u - 0.2 * u * v + np.sin(v))
+    frame = graph_frame(surf)
+    assert frame is not None
+    for iso, fixed in ((surf.UIso(2.2), "u"), (surf.VIso(0.7), "v")):
+        pc = rebuild._affine_pcurve(iso, iso.FirstParameter(), iso.LastParameter(), *frame)
+        for t in np.linspace(iso.FirstParameter(), iso.LastParameter(), 13):
+            uv = pc.Value(float(t))
+            want = (2.2, t) if fixed == "u" else (t, 0.7)
+            assert abs(uv.X() - want[0]) < 1e-12 and abs(uv.Y() - want[1]) < 1e-12
+        assert (
+            rebuild._pcurve_error(pc, iso, surf, iso.FirstParameter(), iso.LastParameter()) < 1e-12
+        )
+    flat, (o, ex, ey, n) = _graph_surface(lambda u, v: 0.25 + 0 * u)
+    frame = graph_frame(flat)
+    assert frame is not None
+    centre = o + 2.0 * ex + 1.5 * ey + 0.25 * n
+    circle = Geom_Circle(gp_Ax2(gp_Pnt(*centre), gp_Dir(*n), gp_Dir(*ey)), 0.8)
+    pc = rebuild._affine_pcurve(circle, 0.3, 2.9, *frame)
+    assert isinstance(pc, Geom2d_Circle) and abs(pc.Radius() - 0.8) < 1e-12
+    for t in np.linspace(0.3, 2.9, 9):
+        uv = pc.Value(float(t))
+        assert np.linalg.norm(xyz(flat.Value(uv.X(), uv.Y())) - xyz(circle.Value(float(t)))) < 1e-12
+    tilted = Geom_Circle(gp_Ax2(gp_Pnt(*centre), gp_Dir(*(n + 0.3 * ex))), 0.8)
+    assert rebuild._affine_pcurve(tilted, 0.0, 1.0, *frame) is None
+    cylinder = Geom_CylindricalSurface(gp_Ax3(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(0.0, 0.0, 1.0)), 2.0)
+    rational = GeomConvert.SurfaceToBSplineSurface_s(
+        Geom_RectangularTrimmedSurface(cylinder, 0.0, 1.5, 0.0, 3.0)
+    )
+    assert isinstance(rational, Geom_BSplineSurface) and graph_frame(rational) is None
+    bent = surf.Copy()
+    bent.SetPole(3, 2, bent.Pole(3, 2).Translated(gp_Vec(*(1e-6 * ex))))
+    assert graph_frame(bent) is None

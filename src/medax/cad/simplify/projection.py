@@ -215,3 +215,55 @@ def extrusion_parts(surf: Any) -> tuple[Any, Array, bool] | None:
         return None
     bc = bc.Translated(gp_Vec(*map(float, -a0 * d)))
     return bc, d, True
+
+
+#: Largest relative residual of a surface's poles off ``A + u X + v Y + c N`` for it to be
+#: taken as a graph over its parameter plane (the fitted merged faces: 1e-15 measured).
+GRAPH_RTOL = 1e-12
+
+
+def graph_frame(surf: Any) -> tuple[Array, Array] | None:
+    """``(a, m)`` such that a point ``p`` (3,) of ``surf`` has the parameters ``m @ (p - a)``
+    ((2, 3) @ (3,)), when ``surf`` is a polynomial B-spline surface that is a graph over its
+    parameter plane: ``S(u, v) = a + u X + v Y + c(u, v) N`` for fixed vectors ``X``, ``Y``,
+    ``N`` (the fitted merged faces: poles at the Greville abscissae of their knots, heights
+    along the plane's normal). Then the projection along ``N`` is the surface's inverse,
+    exact and affine. None for any other surface."""
+    from OCP.Geom import Geom_BSplineSurface
+
+    if not isinstance(surf, Geom_BSplineSurface) or surf.IsURational() or surf.IsVRational():
+        return None
+    if surf.IsUPeriodic() or surf.IsVPeriodic():
+        return None
+    emb = bspline_embedding(surf)
+    gu, gv = _greville(emb.uknots, emb.udeg), _greville(emb.vknots, emb.vdeg)
+    u, v = np.meshgrid(gu, gv, indexing="ij")
+    design = np.column_stack([np.ones(u.size), u.ravel(), v.ravel()])
+    poles = emb.poles.reshape(-1, 3)
+    coef, *_ = np.linalg.lstsq(design, poles, rcond=None)
+    rest = poles - design @ coef
+    sv = np.linalg.svd(rest, compute_uv=False)
+    size = float(np.abs(poles - poles.mean(axis=0)).max())
+    if not sv[1] <= GRAPH_RTOL * size * np.sqrt(len(poles)):
+        return None
+    a, x, y = coef
+    if sv[0] > GRAPH_RTOL * size * np.sqrt(len(poles)):
+        n = np.linalg.svd(rest, full_matrices=False)[2][0]
+    else:  # a plane: any direction off it
+        n = np.cross(x, y)
+    basis = np.column_stack([x, y, n])
+    if abs(np.linalg.det(basis)) <= 1e-9 * np.linalg.norm(x) * np.linalg.norm(y) * np.linalg.norm(
+        n
+    ):
+        return None
+    return a, np.linalg.inv(basis)[:2]
+
+
+def _greville(t: Array, deg: int) -> Array:
+    """Greville abscissae of the full knot vector ``t`` of degree ``deg`` (one per pole)."""
+    n = len(t) - deg - 1
+    if deg == 0:
+        return np.asarray(t[:n], dtype=np.float64)
+    cs = np.concatenate([[0.0], np.cumsum(t)])
+    i = np.arange(n)
+    return (cs[i + deg + 1] - cs[i + 1]) / deg

@@ -41,7 +41,7 @@ from medax.cad.simplify.occ import (
     reader_spans,
     xyz,
 )
-from medax.cad.simplify.projection import GridProjection
+from medax.cad.simplify.projection import GridProjection, graph_frame
 from medax.cad.simplify.split import SplitResult
 from medax.errors import CadError
 
@@ -167,8 +167,10 @@ def _concat_c0(curves: list[tuple[Any, float, float]]) -> Any:
 
 
 def _add_pcurves(face: Any, tol: float, cache: Measures | None = None) -> None:
-    """Explicit pcurves of every edge of ``face`` on its surface: OCCT's projection, replaced
-    by a fitted one when that is closer (checked at samples against the 3-D curve).
+    """Explicit pcurves of every edge of ``face`` on its surface: on a graph surface (the
+    fitted faces) the affine image of the 3-D curve where it is exact; else OCCT's
+    projection, replaced by a fitted one when that is closer (each checked at samples
+    against the 3-D curve).
 
     The pcurves follow the 3-D curves, also where the input's old faces place a loose edge
     up to its tolerance away. Following those old boundaries instead, adjacent pcurves
@@ -186,6 +188,12 @@ def _add_pcurves(face: Any, tol: float, cache: Measures | None = None) -> None:
     builder = BRep_Builder()
     surf = BRep_Tool.Surface_s(face)  # placed by the face's location (its parameters kept)
     grids: list[GridProjection | None] = []
+    frames: list[tuple[np.ndarray, np.ndarray] | None] = []
+
+    def frame() -> tuple[np.ndarray, np.ndarray] | None:  # made once when first needed
+        if not frames:
+            frames.append(graph_frame(surf))
+        return frames[0]
 
     def grid() -> GridProjection | None:  # the surface's grid, made once when first needed
         if not grids:
@@ -199,7 +207,7 @@ def _add_pcurves(face: Any, tol: float, cache: Measures | None = None) -> None:
         if BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0):
             continue  # an original edge of an original surface: its pcurve is there
         c, f, l = edge_curve(e)
-        compute = partial(_edge_pcurve, c, f, l, surf, tol, grid)
+        compute = partial(_edge_pcurve, c, f, l, surf, tol, grid, frame)
         key = None
         if cache is not None:
             if not skey:
@@ -222,9 +230,19 @@ def _edge_pcurve(
     surf: Any,
     tol: float,
     grid: Callable[[], GridProjection | None],
+    frame: Callable[[], tuple[np.ndarray, np.ndarray] | None] = lambda: None,
 ) -> tuple[Any | None, float]:
-    """(pcurve, its error) of the 3-D curve ``c`` on ``[f, l]`` on ``surf``: OCCT's
-    projection, replaced by a fitted one when that is closer (None, inf: both failed)."""
+    """(pcurve, its error) of the 3-D curve ``c`` on ``[f, l]`` on ``surf``: its affine
+    image when ``surf`` is a graph over its parameter plane (``frame``:
+    :func:`.projection.graph_frame`) and the curve has one on its own parameter; else, or
+    when that is farther than a tenth of ``tol``, OCCT's projection, replaced by a fitted
+    one when that is closer (None, inf: all failed)."""
+    g = frame()
+    pc = None if g is None else _affine_pcurve(c, f, l, *g)
+    if pc is not None:
+        err = _pcurve_error(pc, c, surf, f, l)
+        if err <= 0.1 * tol:
+            return pc, err
     pc = _projected_pcurve(c, f, l, surf, tol)
     err = float("inf") if pc is None else _pcurve_error(pc, c, surf, f, l)
     if err > 0.1 * tol:
@@ -233,6 +251,62 @@ def _edge_pcurve(
         if alt_err < err:
             pc, err = alt, alt_err
     return pc, err
+
+
+def _affine_pcurve(c: Any, f: float, l: float, a: np.ndarray, m: np.ndarray) -> Any | None:
+    """The pcurve ``t -> m @ (c(t) - a)`` of the 3-D curve ``c`` on ``[f, l]`` ((3,),
+    (2, 3): :func:`.projection.graph_frame`), on the curve's own parameter: a B-spline's
+    poles mapped (weights and knots kept), a line's end points (a degree-1 B-spline), a
+    circle whose image is a circle; None for other curves (their affine image has no
+    2-D curve on the same parameter here). Exact: an affine map commutes with the
+    B-spline's rational combination of its poles."""
+    from OCP.collections import Array1_double, Array1_gp_Pnt2d, Array1_int
+    from OCP.Geom import Geom_BSplineCurve, Geom_Circle, Geom_Line, Geom_TrimmedCurve
+    from OCP.Geom2d import Geom2d_BSplineCurve, Geom2d_Circle
+    from OCP.gp import gp_Ax22d, gp_Dir2d, gp_Pnt2d
+
+    if isinstance(c, Geom_TrimmedCurve):
+        c = c.BasisCurve()
+
+    def image(p: Any) -> np.ndarray:
+        return m @ (xyz(p) - a)
+
+    if isinstance(c, Geom_BSplineCurve):
+        n = c.NbPoles()
+        poles = Array1_gp_Pnt2d(1, n)
+        for i in range(1, n + 1):
+            poles.SetValue(i, gp_Pnt2d(*map(float, image(c.Pole(i)))))
+        nk = c.NbKnots()
+        knots, mults = Array1_double(1, nk), Array1_int(1, nk)
+        for i in range(1, nk + 1):
+            knots.SetValue(i, c.Knot(i))
+            mults.SetValue(i, c.Multiplicity(i))
+        periodic = bool(c.IsPeriodic())
+        if c.IsRational():
+            weights = Array1_double(1, n)
+            for i in range(1, n + 1):
+                weights.SetValue(i, c.Weight(i))
+            return Geom2d_BSplineCurve(poles, weights, knots, mults, c.Degree(), periodic)
+        return Geom2d_BSplineCurve(poles, knots, mults, c.Degree(), periodic)
+    if isinstance(c, Geom_Line):
+        poles = Array1_gp_Pnt2d(1, 2)
+        poles.SetValue(1, gp_Pnt2d(*map(float, image(c.Value(f)))))
+        poles.SetValue(2, gp_Pnt2d(*map(float, image(c.Value(l)))))
+        knots, mults = Array1_double(1, 2), Array1_int(1, 2)
+        for i, t in ((1, f), (2, l)):
+            knots.SetValue(i, float(t))
+            mults.SetValue(i, 2)
+        return Geom2d_BSplineCurve(poles, knots, mults, 1)
+    if isinstance(c, Geom_Circle):
+        pos = c.Position()
+        centre = image(pos.Location())
+        ex, ey = m @ xyz(pos.XDirection()), m @ xyz(pos.YDirection())
+        rx, ry = float(np.linalg.norm(ex)), float(np.linalg.norm(ey))
+        if abs(rx - ry) > 1e-12 * rx or abs(float(ex @ ey)) > 1e-12 * rx * ry:
+            return None  # an ellipse, whose own angle is not the circle's
+        ax = gp_Ax22d(gp_Pnt2d(*map(float, centre)), gp_Dir2d(*ex), gp_Dir2d(*ey))
+        return Geom2d_Circle(ax, c.Radius() * rx)
+    return None
 
 
 def _pcurve_key(skey: Key | None, c: Any, f: float, l: float, tol: float) -> Key | None:
