@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from medax.geometry.tensor_fit import fit_height, greville
+from medax.geometry.tensor_fit import HeightFitter, fit_height, greville
 
 R = 4.0  # fillet radius; the flat part starts at x = y = R
 
@@ -273,3 +273,15 @@ def test_a_flat_span_over_a_hole_keeps_samples_on_both_sides():
     s, w = span_samples(t, 4, 2.0), span_weights(t, 4, 2.0)
     assert np.diff(s).max() <= 2.0 + 1e-12 and abs(w.sum() - 42.0) < 1e-12
     assert np.allclose(s, np.cumsum(w) - w / 2)
+
+
+def test_the_fit_does_not_run_off_where_it_has_no_data():
+    """The corner's heights continue to at most R where the face ends (the sphere's own
+    continuation); the fit there must not run off: the coefficients whose functions only
+    touch the face with their tails are held by the penalty (unheld: 29 = 7 R, and a
+    larger error inside)."""
+    fitter = HeightFitter((0.9, 20.0), (0.9, 20.0), [1.1716, R], [1.1716, R], _h, R / 4)
+    fit = fitter.fit_at(R / 16, R / 16)
+    assert fit is not None and fit.error <= 2e-5
+    xs = np.linspace(0.9, 20.0, 300)
+    assert np.abs(fit(xs, xs)).max() <= 1.5 * R
