@@ -131,11 +131,14 @@ class TensorFit:
         return np.asarray(bx @ (by @ self.coef.T).T)
 
 
-def greville(t: FloatArray) -> FloatArray:
-    """Greville abscissae of a cubic knot vector (one per coefficient): placing control
-    points there reproduces ``x`` itself exactly."""
-    n = t.size - DEGREE - 1
-    return np.array([t[i + 1 : i + DEGREE + 1].mean() for i in range(n)])
+def greville(t: FloatArray, degree: int = DEGREE) -> FloatArray:
+    """Greville abscissae of a full knot vector ``t`` of ``degree`` (one per coefficient):
+    placing control points there reproduces ``x`` itself exactly."""
+    t = np.asarray(t, dtype=np.float64)
+    n = t.size - degree - 1
+    if degree == 0:
+        return t[:n].copy()
+    return np.lib.stride_tricks.sliding_window_view(t[1:], degree)[:n].mean(axis=1)
 
 
 def _coefficient_count(

@@ -22,6 +22,7 @@ from scipy.spatial import cKDTree
 
 from medax.cad.face_region import bspline_embedding
 from medax.cad.simplify.occ import Array, xyz
+from medax.geometry.tensor_fit import greville
 
 #: Grid samples per direction: at least MIN_SAMPLES, one per knot span, at most MAX_SAMPLES.
 MIN_SAMPLES, MAX_SAMPLES = 40, 240
@@ -236,7 +237,7 @@ def graph_frame(surf: Any) -> tuple[Array, Array] | None:
     if surf.IsUPeriodic() or surf.IsVPeriodic():
         return None
     emb = bspline_embedding(surf)
-    gu, gv = _greville(emb.uknots, emb.udeg), _greville(emb.vknots, emb.vdeg)
+    gu, gv = greville(emb.uknots, emb.udeg), greville(emb.vknots, emb.vdeg)
     u, v = np.meshgrid(gu, gv, indexing="ij")
     design = np.column_stack([np.ones(u.size), u.ravel(), v.ravel()])
     poles = emb.poles.reshape(-1, 3)
@@ -257,13 +258,3 @@ def graph_frame(surf: Any) -> tuple[Array, Array] | None:
     ):
         return None
     return a, np.linalg.inv(basis)[:2]
-
-
-def _greville(t: Array, deg: int) -> Array:
-    """Greville abscissae of the full knot vector ``t`` of degree ``deg`` (one per pole)."""
-    n = len(t) - deg - 1
-    if deg == 0:
-        return np.asarray(t[:n], dtype=np.float64)
-    cs = np.concatenate([[0.0], np.cumsum(t)])
-    i = np.arange(n)
-    return (cs[i + deg + 1] - cs[i + 1]) / deg
