@@ -28,8 +28,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import queue
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -209,6 +211,7 @@ def child(part: str, out_dir: str, strict_volume: bool = False) -> dict[str, Any
         s.update(round_trip_changes(cls.shape, stem, (v_out, n_out), (v_in, n_in)))
         s["defeaturing"] = _defeature(cls.shape, sorted(r.blends_removed))
         solids.append(s)
+        print(json.dumps({"checked": k}), flush=True)
     rec["solids"] = solids
     rec["time_s"] = time.perf_counter() - t0
     return rec
@@ -223,34 +226,64 @@ def run_part(
     strict_volume: bool = False,
 ) -> dict[str, Any]:
     """The record of ``part`` from a child process (``status`` says how it ended): the part
-    has ``timeout`` CPU seconds to be simplified, the file checks ``checks`` more; the child
-    is stopped after ``wall_factor * (timeout + checks)`` wall seconds."""
+    has ``timeout`` CPU seconds to be simplified, the file checks of each solid ``checks``
+    more; the child is stopped after ``wall_factor * (timeout + checks)`` wall seconds in
+    all, or ``wall_factor * checks`` after a solid's file checks began."""
     t0 = time.perf_counter()
-    try:
-        p = subprocess.run(
-            [sys.executable, __file__, "--child", str(part), str(out_dir)]
-            + (["--strict-volume"] if strict_volume else []),
-            capture_output=True,
-            text=True,
-            timeout=wall_factor * (timeout + checks),
-        )
-    except subprocess.TimeoutExpired as err:
-        out = err.stdout.decode() if isinstance(err.stdout, bytes) else (err.stdout or "")
-        partial = [ln for ln in out.splitlines() if ln.startswith("{")]
-        if not partial or json.loads(partial[-1])["job_cpu_s"] > timeout:
-            return {"part": part.name, "status": f"timeout after {timeout:.0f} s"}
-        rec = json.loads(partial[-1])
-        rec["status"] = (
-            f"simplified in {rec['job_cpu_s']:.0f} s CPU; file checks past {checks:.0f} s"
-        )
-        return rec
-    lines = [ln for ln in p.stdout.splitlines() if ln.startswith("{")]
-    if p.returncode != 0 or not lines:
-        tail = (p.stderr.strip().splitlines() or ["no output"])[-1]
-        return {"part": part.name, "status": f"exit {p.returncode}: {tail[:200]}"}
-    rec = json.loads(lines[-1])
+    cmd = [sys.executable, __file__, "--child", str(part), str(out_dir)]
+    proc = subprocess.Popen(
+        cmd + (["--strict-volume"] if strict_volume else []),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    lines: queue.Queue[str | None] = queue.Queue()
+    errors: list[str] = []
+
+    def pump(stream: Any, sink: Any, last: bool) -> None:
+        for ln in stream:
+            sink(ln.rstrip("\n"))
+        if last:  # the child closed its output
+            lines.put(None)
+
+    threading.Thread(target=pump, args=(proc.stdout, lines.put, True), daemon=True).start()
+    threading.Thread(target=pump, args=(proc.stderr, errors.append, False), daemon=True).start()
+    end, checks_end = t0 + wall_factor * (timeout + checks), float("inf")
+    out: list[str] = []
+    while True:
+        try:
+            ln = lines.get(timeout=max(0.0, min(end, checks_end) - time.perf_counter()))
+        except queue.Empty:  # past a deadline
+            proc.kill()
+            proc.wait()
+            return _stopped(part, out, timeout, checks)
+        if ln is None:
+            break
+        if ln.startswith("{"):
+            out.append(ln)
+            if '"partial": true' in ln:  # a solid simplified: its file checks begin
+                checks_end = time.perf_counter() + wall_factor * checks
+            elif '"checked"' in ln:
+                checks_end = float("inf")
+    proc.wait()
+    records = [ln for ln in out if '"checked"' not in ln]
+    if proc.returncode != 0 or not records:
+        tail = (errors or ["no output"])[-1]
+        return {"part": part.name, "status": f"exit {proc.returncode}: {tail[:200]}"}
+    rec = json.loads(records[-1])
     rec["status"] = "done" if rec["job_cpu_s"] <= timeout else f"simplified past {timeout:.0f} s"
     rec["wall_s"] = time.perf_counter() - t0
+    return rec
+
+
+def _stopped(part: Path, out: list[str], timeout: float, checks: float) -> dict[str, Any]:
+    """The record of a child stopped at a deadline: what simplify did, from its last
+    partial record, or a timeout."""
+    partial = [ln for ln in out if '"partial": true' in ln]
+    if not partial or json.loads(partial[-1])["job_cpu_s"] > timeout:
+        return {"part": part.name, "status": f"timeout after {timeout:.0f} s"}
+    rec = json.loads(partial[-1])
+    rec["status"] = f"simplified in {rec['job_cpu_s']:.0f} s CPU; file checks past {checks:.0f} s"
     return rec
 
 
