@@ -172,26 +172,32 @@ def child(part: str, out_dir: str, strict_volume: bool = False) -> dict[str, Any
     rec["classify_s"] = time.perf_counter() - t0
     rec["job_cpu_s"] = time.process_time()  # the child's CPU time through the last simplify
     solids: list[dict[str, Any]] = []
-    for k, cls in enumerate(classes):
+    results = []
+    for k, cls in enumerate(classes):  # every solid simplified first, then the checks
         specs = specs_from_classification(cls)
         r = simplify(cls.shape, specs, strict_volume=strict_volume)
-        s: dict[str, Any] = {
-            "solid": k,
-            "faces_before": r.faces_before,
-            "faces_after": r.faces_after,
-            "found": len(r.blends_removed) + len(r.blends_kept),
-            "removed": len(r.blends_removed),
-            "kept": [[f, why] for f, why in r.blends_kept],
-            "valid": r.valid,
-            "volume_rel_change": r.volume_rel_change,
-            "deviation_rel": r.max_deviation / r.diagonal,
-            "simplify_s": r.time_s,
-            "simplify_cpu_s": r.cpu_s,
-        }
+        results.append(r)
+        solids.append(
+            {
+                "solid": k,
+                "faces_before": r.faces_before,
+                "faces_after": r.faces_after,
+                "found": len(r.blends_removed) + len(r.blends_kept),
+                "removed": len(r.blends_removed),
+                "kept": [[f, why] for f, why in r.blends_kept],
+                "valid": r.valid,
+                "volume_rel_change": r.volume_rel_change,
+                "deviation_rel": r.max_deviation / r.diagonal,
+                "simplify_s": r.time_s,
+                "simplify_cpu_s": r.cpu_s,
+            }
+        )
         rec["job_cpu_s"] = time.process_time()
         # what simplify did, before the file checks (which can take longer on big parts)
-        partial = {**rec, "solids": [*solids, s], "time_s": time.perf_counter() - t0}
+        partial = {**rec, "solids": list(solids), "time_s": time.perf_counter() - t0}
         print(json.dumps({**partial, "partial": True}), flush=True)
+    for k, (cls, r, s) in enumerate(zip(classes, results, solids, strict=True)):
+        print(json.dumps({"checks": k}), flush=True)  # the parent times each solid's checks
         path = Path(out_dir) / f"{Path(part).stem}.{k}.step"
         write_step(r.shape, path)
         back = read_part(path, unify=False).solids[0]
@@ -210,8 +216,6 @@ def child(part: str, out_dir: str, strict_volume: bool = False) -> dict[str, Any
         stem = Path(out_dir) / f"{Path(part).stem}.{k}"
         s.update(round_trip_changes(cls.shape, stem, (v_out, n_out), (v_in, n_in)))
         s["defeaturing"] = _defeature(cls.shape, sorted(r.blends_removed))
-        solids.append(s)
-        print(json.dumps({"checked": k}), flush=True)
     rec["solids"] = solids
     rec["time_s"] = time.perf_counter() - t0
     return rec
@@ -226,9 +230,10 @@ def run_part(
     strict_volume: bool = False,
 ) -> dict[str, Any]:
     """The record of ``part`` from a child process (``status`` says how it ended): the part
-    has ``timeout`` CPU seconds to be simplified, the file checks of each solid ``checks``
-    more; the child is stopped after ``wall_factor * (timeout + checks)`` wall seconds in
-    all, or ``wall_factor * checks`` after a solid's file checks began."""
+    has ``timeout`` CPU seconds to be simplified (all its solids first), the file checks of
+    each solid ``checks`` more; the child is stopped after ``wall_factor * (timeout +
+    checks)`` wall seconds in all, or ``wall_factor * checks`` after a solid's file checks
+    began."""
     t0 = time.perf_counter()
     cmd = [sys.executable, __file__, "--child", str(part), str(out_dir)]
     proc = subprocess.Popen(
@@ -259,14 +264,12 @@ def run_part(
             return _stopped(part, out, timeout, checks)
         if ln is None:
             break
-        if ln.startswith("{"):
+        if ln.startswith('{"checks": '):  # a solid's file checks begin
+            checks_end = time.perf_counter() + wall_factor * checks
+        elif ln.startswith("{"):
             out.append(ln)
-            if '"partial": true' in ln:  # a solid simplified: its file checks begin
-                checks_end = time.perf_counter() + wall_factor * checks
-            elif '"checked"' in ln:
-                checks_end = float("inf")
     proc.wait()
-    records = [ln for ln in out if '"checked"' not in ln]
+    records = out
     if proc.returncode != 0 or not records:
         tail = (errors or ["no output"])[-1]
         return {"part": part.name, "status": f"exit {proc.returncode}: {tail[:200]}"}
