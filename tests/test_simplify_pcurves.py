@@ -169,9 +169,10 @@ def _graph_surface(heights):  # type: ignore[no-untyped-def]
     """A cubic B-spline graph ``o + u ex + v ey + c(u, v) n`` in a tilted frame: poles at
     the Greville abscissae of non-uniform knots, heights ``heights(gu, gv)``."""
     import numpy as np
-    from OCP.collections import Array1_double, Array1_int, Array2_gp_Pnt
+    from OCP.collections import Array2_gp_Pnt
     from OCP.Geom import Geom_BSplineSurface
 
+    from medax.cad.simplify.occ import knot_arrays
     from medax.geometry.tensor_fit import greville
 
     o = np.array([1.0, -2.0, 0.5])
@@ -189,15 +190,7 @@ def _graph_surface(heights):  # type: ignore[no-untyped-def]
         for j, b in enumerate(gv):
             poles.SetValue(i + 1, j + 1, gp_Pnt(*map(float, o + a * ex + b * ey + c[i, j] * n)))
 
-    def knots(t):  # type: ignore[no-untyped-def]
-        u, m = np.unique(t, return_counts=True)
-        ak, am = Array1_double(1, len(u)), Array1_int(1, len(u))
-        for k, (kv, mult) in enumerate(zip(u, m, strict=True)):
-            ak.SetValue(k + 1, float(kv))
-            am.SetValue(k + 1, int(mult))
-        return ak, am
-
-    (uk, um), (vk, vm) = knots(tu), knots(tv)
+    (uk, um), (vk, vm) = knot_arrays(tu), knot_arrays(tv)
     return Geom_BSplineSurface(poles, uk, vk, um, vm, 3, 3), (o, ex, ey, n)
 
 

@@ -45,6 +45,7 @@ from medax.cad.simplify.occ import (
     edges_of,
     face_inside_point,
     face_normal_at,
+    knot_arrays,
     xyz,
 )
 from medax.cad.simplify.ring import periodic_surface
@@ -427,7 +428,7 @@ def _periodic_volume(fit: PeriodicFit, points: Any, fld: _Field) -> float:
 
 def _clamped_surface(fit: PointFit) -> Any:
     """``Geom_BSplineSurface`` of a clamped point fit: ``u = s``, ``v = z``."""
-    from OCP.collections import Array1_double, Array1_int, Array2_gp_Pnt
+    from OCP.collections import Array2_gp_Pnt
     from OCP.Geom import Geom_BSplineSurface
     from OCP.gp import gp_Pnt
 
@@ -437,14 +438,6 @@ def _clamped_surface(fit: PointFit) -> Any:
         for j in range(nz):
             poles.SetValue(i + 1, j + 1, gp_Pnt(*map(float, fit.coef[i, j])))
 
-    def knots(t: Array) -> tuple[Any, Any]:
-        u, m = np.unique(t, return_counts=True)
-        ak, am = Array1_double(1, len(u)), Array1_int(1, len(u))
-        for k, (kv, mult) in enumerate(zip(u, m, strict=True)):
-            ak.SetValue(k + 1, float(kv))
-            am.SetValue(k + 1, int(mult))
-        return ak, am
-
-    uk, um = knots(fit.ts)
-    vk, vm = knots(fit.tz)
+    uk, um = knot_arrays(fit.ts)
+    vk, vm = knot_arrays(fit.tz)
     return Geom_BSplineSurface(poles, uk, vk, um, vm, DEGREE, DEGREE)

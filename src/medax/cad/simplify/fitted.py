@@ -46,6 +46,7 @@ from medax.cad.simplify.occ import (
     edges_of,
     face_inside_point,
     face_normal_at,
+    knot_arrays,
     uv_bounds,
     xyz,
 )
@@ -714,7 +715,7 @@ def _outward_sign(plane_face: Any, n: Array) -> float:
 
 def _bspline_surface(fit: TensorFit, o: Array, ex: Array, ey: Array, n: Array) -> Any:
     """``Geom_BSplineSurface`` of the fit: poles ``o + gx ex + gy ey + c n``."""
-    from OCP.collections import Array1_double, Array1_int, Array2_gp_Pnt
+    from OCP.collections import Array2_gp_Pnt
     from OCP.Geom import Geom_BSplineSurface
     from OCP.gp import gp_Pnt
 
@@ -727,14 +728,6 @@ def _bspline_surface(fit: TensorFit, o: Array, ex: Array, ey: Array, n: Array) -
             p = base + gy[j] * ey + fit.coef[i, j] * n
             poles.SetValue(i + 1, j + 1, gp_Pnt(*map(float, p)))
 
-    def knots(t: Array) -> tuple[Any, Any]:
-        u, m = np.unique(t, return_counts=True)
-        ak, am = Array1_double(1, len(u)), Array1_int(1, len(u))
-        for k, (kv, mult) in enumerate(zip(u, m, strict=True)):
-            ak.SetValue(k + 1, float(kv))
-            am.SetValue(k + 1, int(mult))
-        return ak, am
-
-    uk, um = knots(fit.tx)
-    vk, vm = knots(fit.ty)
+    uk, um = knot_arrays(fit.tx)
+    vk, vm = knot_arrays(fit.ty)
     return Geom_BSplineSurface(poles, uk, vk, um, vm, 3, 3)

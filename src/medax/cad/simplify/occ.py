@@ -217,3 +217,16 @@ def reader_spans(surf: Any) -> Any:
         for t in a + (b - a) * np.arange(1, n) / n:
             out.InsertVKnot(float(t), 1, 0.0, True)
     return out
+
+
+def knot_arrays(t: Array) -> tuple[Any, Any]:
+    """OCCT's distinct knots and multiplicities (``TColStd_Array1OfReal``,
+    ``TColStd_Array1OfInteger``) of a full knot vector ``t`` (n,)."""
+    from OCP.collections import Array1_double, Array1_int
+
+    u, m = np.unique(np.asarray(t, dtype=np.float64), return_counts=True)
+    ak, am = Array1_double(1, len(u)), Array1_int(1, len(u))
+    for k, (kv, mult) in enumerate(zip(u, m, strict=True)):
+        ak.SetValue(k + 1, float(kv))
+        am.SetValue(k + 1, int(mult))
+    return ak, am
