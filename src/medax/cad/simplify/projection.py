@@ -243,18 +243,13 @@ def graph_frame(surf: Any) -> tuple[Array, Array] | None:
     poles = emb.poles.reshape(-1, 3)
     coef, *_ = np.linalg.lstsq(design, poles, rcond=None)
     rest = poles - design @ coef
-    sv = np.linalg.svd(rest, compute_uv=False)
-    size = float(np.abs(poles - poles.mean(axis=0)).max())
-    if not sv[1] <= GRAPH_RTOL * size * np.sqrt(len(poles)):
+    _, sv, vt = np.linalg.svd(rest, full_matrices=False)
+    limit = GRAPH_RTOL * float(np.abs(poles - poles.mean(axis=0)).max()) * np.sqrt(len(poles))
+    if not sv[1] <= limit:  # the residuals are no multiples of one direction: no graph
         return None
     a, x, y = coef
-    if sv[0] > GRAPH_RTOL * size * np.sqrt(len(poles)):
-        n = np.linalg.svd(rest, full_matrices=False)[2][0]
-    else:  # a plane: any direction off it
-        n = np.cross(x, y)
+    n = vt[0] if sv[0] > limit else np.cross(x, y)  # (a plane: any direction off it)
     basis = np.column_stack([x, y, n])
-    if abs(np.linalg.det(basis)) <= 1e-9 * np.linalg.norm(x) * np.linalg.norm(y) * np.linalg.norm(
-        n
-    ):
+    if abs(np.linalg.det(basis)) <= 1e-9 * float(np.prod(np.linalg.norm(basis, axis=0))):
         return None
     return a, np.linalg.inv(basis)[:2]
