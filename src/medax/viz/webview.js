@@ -228,6 +228,7 @@ void main() { gl_FragColor = vec4(uCol, 1.0); }`;
         root.dataset.firstCamera = root.dataset.camera;
         replay(b);
         root.dataset.status = 'rendered';
+        if (queued) draw();  // the replayed input's frame now, not at the next animation frame
       }
     }
 
@@ -329,6 +330,7 @@ void main() { gl_FragColor = vec4(uCol, 1.0); }`;
     if (select) select.addEventListener('change', () => load(+select.value));
     root.medaxShow = (k) => { if (select) select.value = String(k); load(k); root.scrollIntoView(); };
     load(0);
+    draw();  // the first frame now: a headless or busy browser may hold animation frames back
   }
 
   function record(text) {
