@@ -130,3 +130,67 @@ def test_a_loose_smooth_edge_lets_the_medial_curve_end_within_its_tolerance():
     assert _reach(edge, tol) == 7e-5
     BRep_Builder().UpdateEdge(edge, 4e-3)
     assert _reach(edge, tol) == LOOSE_REACH * tol
+
+
+def test_a_bridge_is_taken_within_the_build_tolerance_and_refused_beyond():
+    """A bridge off the bisector of its base's supports by less than twice the build
+    tolerance is taken, as a medial curve is (a loose input: customblend_04's riders were
+    2e-7 - 1.9e-6 off, build tolerance 2.6e-6); farther off it is refused. One support of
+    the rounded box's base fillet is moved by ``delta`` along its normal, so every point of
+    the bridge (on the bisector of the unmoved pair) is ``delta`` nearer one than the other:
+    the measured error is ``delta``."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.gp import gp_Trsf, gp_Vec
+
+    from medax.cad.classify import classify_solid
+    from medax.cad.parts import rounded_box_chain
+    from medax.cad.reader import heal
+    from medax.cad.simplify.bridge import bridge_edge
+    from medax.cad.simplify.corner import plane_normal
+    from medax.cad.simplify.medial import medial_curve
+    from medax.cad.simplify.occ import diagonal
+    from medax.cad.simplify.specs import specs_from_classification
+    from medax.tolerances import BUILD_TOL
+
+    cls = classify_solid(heal(rounded_box_chain().shape))
+    faces = shape_map(cls.shape, TopAbs_FACE)
+    edges = shape_map(cls.shape, TopAbs_EDGE)
+    face = lambda i: TopoDS.Face(faces.FindKey(i + 1))  # noqa: E731
+    by_face = {s.face: s for s in specs_from_classification(cls).fillets}
+
+    def medial(spec):
+        sides = ([TopoDS.Edge(edges.FindKey(i + 1)) for i in spec.side_edges(k)] for k in (0, 1))
+        return medial_curve(face(spec.face), *sides, tol=tol)
+
+    tol = BUILD_TOL * diagonal(cls.shape)
+    rider, base, edge = next(
+        (s, by_face[b], e)
+        for s in by_face.values()
+        for b, e in zip(s.supporting, s.smooth_edges, strict=True)
+        if b in by_face
+    )
+    supports = [face(i) for i in base.supporting]
+    normal = plane_normal(supports[0])
+
+    def bridge(delta):
+        move = gp_Trsf()
+        move.SetTranslation(gp_Vec(*map(float, delta * normal)))
+        moved = TopoDS.Face(BRepBuilderAPI_Transform(supports[0], move, True).Shape())
+        return bridge_edge(
+            face(rider.face),
+            medial(rider),
+            medial(base),
+            TopoDS.Edge(edges.FindKey(edge + 1)),
+            (moved, supports[1]),
+            tol,
+        )
+
+    _, err = bridge(0.0)
+    assert err <= 1e-12
+    for delta in (0.5 * tol, 1.5 * tol):
+        r = bridge(delta)
+        assert not isinstance(r, str), r
+        assert r[1] == pytest.approx(delta, abs=1e-12)
+    r = bridge(3.0 * tol)
+    assert isinstance(r, str) and "not equidistant" in r
+    assert f"{3.0 * tol:.2e}" in r

@@ -49,8 +49,10 @@ def bridge_edge(
 
     ``smooth_edge``: the rider's smooth edge on the base fillet; ``supports``: the base
     fillet's two supporting faces; ``tol``: length tolerance for the bridge's start on
-    ``smooth_edge`` (up to the edge's own, looser tolerance: :func:`_reach`). Returns a
-    one-line reason when there is no such bridge.
+    ``smooth_edge`` (up to the edge's own, looser tolerance: :func:`_reach`). The bridge is
+    taken when it is equidistant to ``rel_tol x radius`` or to twice the larger of ``tol``
+    and the smooth edge's tolerance, the rule the medial curves follow
+    (:func:`.medial.medial_curve`). Returns a one-line reason when there is no such bridge.
     """
     if rider_medial.iso not in ("u", "v"):
         return "the rider's medial curve is traced, not an iso-line (no bridge along it)"
@@ -78,7 +80,8 @@ def bridge_edge(
         return "the bridge has zero length"
     lo, hi = min(a, b), max(a, b)
     err = _equidistance(curve, lo, hi, supports)
-    if err > rel_tol * rider_medial.radius:
+    slack = max(tol, BRep_Tool.Tolerance_s(smooth_edge))
+    if err > max(rel_tol * rider_medial.radius, 2.0 * slack):
         return f"the bridge is not equidistant from the two supporting faces ({err:.2e})"
     mk = BRepBuilderAPI_MakeEdge(curve, lo, hi)
     if not mk.IsDone():
