@@ -106,6 +106,15 @@ def round_trip_changes(
     reader), measured by the same two: on inputs whose edges lie loosely on their faces the
     round trip alone moves the integrals (the reader recomputes what the file does not
     carry), so the file is compared with the input as the file format holds it."""
+    rt = _round_trip(shape, stem)
+    return {
+        **_round_trip_default(_volume_default(rt), file_volumes[0], input_volumes[0]),
+        **_round_trip_nurbs(_volume_nurbs(rt), file_volumes[1], input_volumes[1]),
+    }
+
+
+def _round_trip(shape: Any, stem: Path) -> Any:
+    """``shape`` written to ``stem.input.step`` and read back (the file is removed)."""
     from medax.cad.reader import read_part
     from medax.cad.simplify.step_out import write_step
 
@@ -113,13 +122,15 @@ def round_trip_changes(
     write_step(shape, path)
     rt = read_part(path, unify=False).solids[0]
     path.unlink()
-    v_rt, n_rt = _volume_default(rt), _volume_nurbs(rt)
-    return {
-        "file_dv_default_rt": file_volumes[0] / v_rt - 1.0,
-        "file_dv_nurbs_rt": file_volumes[1] / n_rt - 1.0,
-        "input_rt_dv_default": v_rt / input_volumes[0] - 1.0,
-        "input_rt_dv_nurbs": n_rt / input_volumes[1] - 1.0,
-    }
+    return rt
+
+
+def _round_trip_default(v_rt: float, v_file: float, v_in: float) -> dict[str, float]:
+    return {"file_dv_default_rt": v_file / v_rt - 1.0, "input_rt_dv_default": v_rt / v_in - 1.0}
+
+
+def _round_trip_nurbs(n_rt: float, n_file: float, n_in: float) -> dict[str, float]:
+    return {"file_dv_nurbs_rt": n_file / n_rt - 1.0, "input_rt_dv_nurbs": n_rt / n_in - 1.0}
 
 
 def round_trip_child(part: str, out_dir: str) -> list[dict[str, float]]:
@@ -194,8 +205,7 @@ def child(part: str, out_dir: str, strict_volume: bool = False) -> dict[str, Any
         )
         rec["job_cpu_s"] = time.process_time()
         # what simplify did, before the file checks (which can take longer on big parts)
-        partial = {**rec, "solids": list(solids), "time_s": time.perf_counter() - t0}
-        print(json.dumps({**partial, "partial": True}), flush=True)
+        _partial(rec, solids, t0)
     for k, (cls, r, s) in enumerate(zip(classes, results, solids, strict=True)):
         print(json.dumps({"checks": k}), flush=True)  # the parent times each solid's checks
         path = Path(out_dir) / f"{Path(part).stem}.{k}.step"
@@ -204,8 +214,14 @@ def child(part: str, out_dir: str, strict_volume: bool = False) -> dict[str, Any
         s["file_valid"] = bool(BRepCheck_Analyzer(back).IsValid())
         s["file_shells"] = count(back, TopAbs_SHELL)
         s["input_shells"] = count(cls.shape, TopAbs_SHELL)  # an outer one and one per cavity
+        # the checks from the fastest to the slowest, each recorded as it ends: a part whose
+        # checks run past their time keeps those that ended
         v_in, v_out = _volume_default(cls.shape), _volume_default(back)
         s["file_dv_default"] = (v_out - v_in) / v_in
+        stem = Path(out_dir) / f"{Path(part).stem}.{k}"
+        rt = _round_trip(cls.shape, stem)
+        s.update(_round_trip_default(_volume_default(rt), v_out, v_in))
+        _partial(rec, solids, t0)
         n_in, n_out = _volume_nurbs(cls.shape), _volume_nurbs(back)
         s["file_dv_nurbs"] = (n_out - n_in) / n_in
         # the default integrator can be off on the input itself (0071's first solid: -9.6e-3
@@ -213,12 +229,19 @@ def child(part: str, out_dir: str, strict_volume: bool = False) -> dict[str, Any
         # and the input's own error, so that neither is taken for the other
         s["file_dv_default_exact"] = (v_out - n_in) / n_in
         s["input_dv_default"] = (v_in - n_in) / n_in
-        stem = Path(out_dir) / f"{Path(part).stem}.{k}"
-        s.update(round_trip_changes(cls.shape, stem, (v_out, n_out), (v_in, n_in)))
+        s.update(_round_trip_nurbs(_volume_nurbs(rt), n_out, n_in))
+        _partial(rec, solids, t0)
         s["defeaturing"] = _defeature(cls.shape, sorted(r.blends_removed))
     rec["solids"] = solids
     rec["time_s"] = time.perf_counter() - t0
     return rec
+
+
+def _partial(rec: dict[str, Any], solids: list[dict[str, Any]], t0: float) -> None:
+    """Print the record as it stands (the parent keeps the last one when it stops the
+    child)."""
+    partial = {**rec, "solids": solids, "time_s": time.perf_counter() - t0, "partial": True}
+    print(json.dumps(partial), flush=True)
 
 
 def run_part(
@@ -290,79 +313,81 @@ def _stopped(part: Path, out: list[str], timeout: float, checks: float) -> dict[
     return rec
 
 
+def _num(s: dict[str, Any], key: str, spec: str = "+.1e") -> str:
+    """Field ``key`` of solid record ``s`` formatted by ``spec``; blank when its check did
+    not end."""
+    return format(s[key], spec) if key in s else ""
+
+
+def _defeaturing_cell(s: dict[str, Any]) -> str:
+    d = s.get("defeaturing")
+    if d is None:
+        return ""
+    if d["status"] != "done":
+        return str(d["status"])
+    valid = "valid" if d["valid"] else "INVALID"
+    return f"{d['faces']}, {valid}, {d['volume_rel_change']:+.1e}, {d['time_s']:.1f} s"
+
+
+def _valid_cell(s: dict[str, Any]) -> str:
+    if "file_valid" not in s:
+        return ""
+    ok = s["file_valid"] and s["file_shells"] == s.get("input_shells", 1)
+    return "yes" if ok else "NO"
+
+
 def _row(rec: dict[str, Any]) -> list[str]:
-    if rec["status"] != "done":
-        return [rec["part"][:40], rec["status"]]
+    if not rec.get("solids"):
+        return [f"{rec['part'][:40]:40s} {rec['status']}"]
     rows = []
     for s in rec["solids"]:
-        d = s["defeaturing"]
-        dfe = (
-            f"{d['faces']:4d} {d['valid']!s:5s} {d['volume_rel_change']:+.1e} {d['time_s']:6.1f}"
-            if d["status"] == "done"
-            else d["status"]
-        )
         rows.append(
             f"{rec['part'][:40]:40s} {s['faces_before']:4d} -> {s['faces_after']:4d} "
-            f"{s['found']:4d} {s['removed']:4d} {s['file_valid']!s:5s} {s['file_shells']:2d} "
-            f"{s['file_dv_default']:+.1e} {s['file_dv_nurbs']:+.1e} {s['deviation_rel']:.1e} "
-            f"{rec['job_cpu_s']:6.1f} | {dfe}"
+            f"{s['found']:4d} {s['removed']:4d} {_valid_cell(s):3s} "
+            f"{_num(s, 'file_dv_default'):8s} {_num(s, 'file_dv_nurbs'):8s} "
+            f"{s['deviation_rel']:.1e} {rec['job_cpu_s']:6.1f} | {_defeaturing_cell(s)}"
         )
+    if rec["status"] != "done":
+        rows.append(f"{'':40s} {rec['status']}")
     return rows
 
 
 def markdown(records: list[dict[str, Any]]) -> None:
-    """Print the table as Markdown (the one in ``docs/benchmarks.md``)."""
+    """Print the table as Markdown (the one in ``docs/benchmarks.md``): the checks that
+    ended, blank cells for the others (the status says when they ran past their time)."""
     print(
         "| part | faces | found | removed | valid | dV file (default) | dV file (NURBS, GK) "
         "| the same against the input's round trip | deviation | CPU time | defeaturing |"
     )
     print("|---|---|---|---|---|---|---|---|---|---|---|")
     for rec in records:
-        if rec["status"] != "done":
-            for s in rec.get("solids", []):  # simplified, the file checks not finished
-                print(
-                    f"| {rec['part']} | {s['faces_before']} -> {s['faces_after']} "
-                    f"| {s['found']} | {s['removed']} | {rec['status']} | | | | "
-                    f"{s['deviation_rel']:.1e} | {rec['job_cpu_s']:.0f} s | |"
-                )
-            if not rec.get("solids"):
-                print(f"| {rec['part']} | {rec['status'][:70]} | | | | | | | | | |")
+        if not rec.get("solids"):
+            print(f"| {rec['part']} | {rec['status'][:70]} | | | | | | | | | |")
             continue
+        late = "" if rec["status"] == "done" else " (file checks past their time)"
         for s in rec["solids"]:
-            d = s["defeaturing"]
-            dfe = (
-                f"{d['faces']}, {'valid' if d['valid'] else 'INVALID'}, "
-                f"{d['volume_rel_change']:+.1e}, {d['time_s']:.1f} s"
-                if d["status"] == "done"
-                else d["status"]
+            rt = ", ".join(
+                v for v in (_num(s, "file_dv_default_rt"), _num(s, "file_dv_nurbs_rt")) if v
             )
-            rt = (
-                f"{s['file_dv_default_rt']:+.1e}, {s['file_dv_nurbs_rt']:+.1e}"
-                if "file_dv_nurbs_rt" in s
-                else ""
-            )
-            ok = "yes" if s["file_valid"] and s["file_shells"] == s.get("input_shells", 1) else "NO"
             print(
-                f"| {rec['part']} | {s['faces_before']} -> {s['faces_after']} | {s['found']} "
-                f"| {s['removed']} | {ok} "
-                f"| {s['file_dv_default']:+.1e} | {s['file_dv_nurbs']:+.1e} | {rt} "
-                f"| {s['deviation_rel']:.1e} | {rec['job_cpu_s']:.0f} s | {dfe} |"
+                f"| {rec['part']}{late} | {s['faces_before']} -> {s['faces_after']} "
+                f"| {s['found']} | {s['removed']} | {_valid_cell(s)} "
+                f"| {_num(s, 'file_dv_default')} | {_num(s, 'file_dv_nurbs')} | {rt} "
+                f"| {s['deviation_rel']:.1e} | {rec['job_cpu_s']:.0f} s | {_defeaturing_cell(s)} |"
             )
 
 
 def report(records: list[dict[str, Any]]) -> None:
-    """Print the table, the totals and the kept reasons grouped."""
+    """Print the table, the totals (every part simplified, its file checks ended or not)
+    and the kept reasons grouped."""
     print(
-        f"{'part':40s} faces before -> after, blends found, removed, file valid, shells, "
+        f"{'part':40s} faces before -> after, blends found, removed, file valid, "
         "dV (default integrator, file), dV (NURBS copy), deviation x diag, CPU s "
         "| defeaturing: faces valid dV time"
     )
     found = removed = 0
     reasons: dict[str, int] = {}
     for rec in records:
-        if rec["status"] != "done":  # totals over parts checked to the end
-            print(f"{rec['part'][:40]:40s} {rec['status']}")
-            continue
         for line in _row(rec):
             print(line)
         for s in rec.get("solids", []):
@@ -371,10 +396,12 @@ def report(records: list[dict[str, Any]]) -> None:
             for _, why in s["kept"]:
                 key = reason_kind(why)[:140]
                 reasons[key] = reasons.get(key, 0) + 1
-    bad = [r["part"] for r in records if r["status"] != "done"]
+    bad = [r["part"] for r in records if not r.get("solids")]
+    late = [r["part"] for r in records if r.get("solids") and r["status"] != "done"]
     share = removed / found if found else 0.0
     print(f"\n{len(records)} parts, {found} blends found, {removed} removed ({share:.1%})")
-    print(f"not finished: {len(bad)} {bad}")
+    print(f"not simplified: {len(bad)} {bad}")
+    print(f"file checks past their time: {len(late)} {late}")
     print("kept reasons (grouped, most frequent first):")
     for why, n in sorted(reasons.items(), key=lambda kv: -kv[1]):
         print(f"  {n:5d}  {why}")
