@@ -205,3 +205,37 @@ def test_isolation_never_splits_a_chain(bad):
     assert all(chain <= c or not chain & c for c in calls)
     lost = chain | bad if bad & chain else bad
     assert set(kept) == lost and set(accepted) == set(specs) - lost
+
+
+def test_a_kept_member_splits_its_chain_into_runs():
+    """When a member of a chain is kept after the setup (its merged face fails), the
+    members on either side go on as chains of their own ending on it, or, alone between
+    kept faces, as plain fillets with their own two supports (truth: the chain's order and
+    the definition of a chain's specs: a whole member has the one support on its side)."""
+    from medax.cad.simplify.chains import Chain, chain_specs
+    from medax.cad.simplify.merging import cascade
+    from medax.cad.simplify.specs import FilletSpec
+
+    # faces 0 (end A) - 11 - 12 - 13 - 14 - 15 - 16 (end B), fillet i between i-1 and i+1
+    order = (11, 12, 13, 14, 15)
+    orig = {
+        f: FilletSpec(f, (2 * f, 2 * f + 1), (f - 1 if f > 11 else 0, f + 1 if f < 15 else 16))
+        for f in order
+    }
+    chain = Chain(order, (0, 16), tuple(orig[f] for f in order))
+    chains = [chain]
+    specs = dict(chain_specs(chain))
+    specs.pop(12)  # kept: its merged face failed
+    kept = {12: "supporting face 11: ..."}
+    cascade(specs, {}, kept, chains)
+    # 11 alone between end A and kept 12: a plain fillet with both its supports
+    assert specs[11] == orig[11]
+    # 13 - 14 - 15 from kept 12 to end B: a chain of three, 14 split by its medial curve
+    assert [(c.members, c.ends) for c in chains] == [((13, 14, 15), (12, 16))]
+    assert specs[14] == orig[14]
+    assert specs[13].supporting == (12,) and specs[15].supporting == (16,)
+    assert set(specs) == {11, 13, 14, 15} and set(kept) == {12}
+    # then the middle of that chain goes: two plain fillets, 13 between 12 and 14 (kept)
+    specs.pop(14)
+    cascade(specs, {}, kept, chains)
+    assert chains == [] and specs[13] == orig[13] and specs[15] == orig[15]

@@ -23,13 +23,12 @@ from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBndLib import BRepBndLib
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
-from OCP.gp import gp_Pnt2d
-from OCP.IntTools import IntTools_FClass2d
-from OCP.TopAbs import TopAbs_OUT, TopAbs_REVERSED
+from OCP.TopAbs import TopAbs_REVERSED
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS
 
 from medax.cad.face_region import exact_embedding
+from medax.cad.simplify.face_classifier import FaceClassifier
 from medax.cad.simplify.occ import Array, uv_bounds, xyz
 from medax.cad.simplify.validate import _edge_tolerance, _project
 from medax.errors import CadError
@@ -69,17 +68,18 @@ def gap_volume(new: Any, old: Sequence[Any]) -> tuple[float, float] | None:
         rows = np.flatnonzero(np.all((pts >= lo) & (pts <= hi), axis=1))
         if rows.size == 0:
             continue
-        uv, dist = np.zeros((len(pts), 2)), np.full(len(pts), np.inf)
-        uv[rows], dist[rows] = _project(face, pts[rows])
-        cls = IntTools_FClass2d(face, _edge_tolerance(face))
-        surf = BRepAdaptor_Surface(face)
-        for i in np.flatnonzero((dist < best) | (dist < nearest)).tolist():
-            u, v = float(uv[i, 0]), float(uv[i, 1])
-            q = surf.Value(u, v).XYZ().Coord()
-            if dist[i] < nearest[i]:
-                nearest[i], near[i] = dist[i], q
-            if dist[i] < best[i] and cls.Perform(gp_Pnt2d(u, v)) != TopAbs_OUT:
-                best[i], foot[i] = dist[i], q
+        uv, dist = _project(face, pts[rows])
+        keep = (dist < best[rows]) | (dist < nearest[rows])
+        rows, uv, dist = rows[keep], uv[keep], dist[keep]
+        if rows.size == 0:
+            continue
+        q = _surface_points(face, uv)
+        closer = dist < nearest[rows]
+        nearest[rows[closer]], near[rows[closer]] = dist[closer], q[closer]
+        better = np.flatnonzero(dist < best[rows])
+        if better.size:
+            better = better[FaceClassifier(face, _edge_tolerance(face)).inside(uv[better])]
+            best[rows[better]], foot[rows[better]] = dist[better], q[better]
     # a point whose feet fall outside the old faces along their boundary (where the new
     # face runs a little past them) takes the nearest old surface, continued, when no foot
     # inside is as near (seen: 2.2 mm away on a far piece, against 1e-5 just outside)
@@ -90,6 +90,16 @@ def gap_volume(new: Any, old: Sequence[Any]) -> tuple[float, float] | None:
         return None
     gap = np.einsum("ij,ij->i", pts[found] - foot[found], normals[found])
     return float(gap @ weights[found]), float(weights.sum())
+
+
+def _surface_points(face: Any, uv: Array) -> Array:
+    """Points (n, 3) of ``face``'s surface at ``uv`` (n, 2), in numpy where the surface
+    has an exact numpy copy, else one OCCT evaluation each."""
+    try:
+        return np.asarray(exact_embedding(face).evaluate(uv), dtype=np.float64).reshape(-1, 3)
+    except CadError:
+        surf = BRepAdaptor_Surface(face)
+        return np.array([surf.Value(u, v).XYZ().Coord() for u, v in uv.tolist()]).reshape(-1, 3)
 
 
 def _quadrature(face: Any) -> tuple[Array, Array, Array]:

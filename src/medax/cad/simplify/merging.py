@@ -14,7 +14,7 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 from OCP.GeomAbs import GeomAbs_Cylinder, GeomAbs_Plane
 from OCP.TopoDS import TopoDS
 
-from medax.cad.simplify.chains import Chain, chain_arcs
+from medax.cad.simplify.chains import Chain, chain_arcs, chain_specs, sub_chains
 from medax.cad.simplify.cylinder_field import cylinder_surface
 from medax.cad.simplify.fitted import (
     FittedSurface,
@@ -43,21 +43,24 @@ from medax.errors import CadError
 def cascade(  # type: ignore[no-untyped-def]
     specs: dict[int, FilletSpec], corners: dict[int, CornerSpec], kept, chains: list[Chain]
 ) -> None:
-    """A corner blend goes only with all its fillets, and a fillet only with its corners;
-    a chain of fillets goes whole or not at all: drop until nothing changes."""
+    """A corner blend goes only with all its fillets, and a fillet only with its corners; a
+    chain of fillets one of whose members is kept falls into the runs of the others between
+    the kept ones (:func:`.chains.sub_chains`: chains of their own, or plain fillets with
+    their original specs): drop and split until nothing changes. ``chains`` is updated in
+    place."""
     changed = True
     while changed:
         changed = False
-        for ch in chains:
-            gone = [f for f in ch.members if f not in specs]
-            if gone and len(gone) < len(ch.members):
-                for f in ch.members:
-                    if f in specs:
-                        specs.pop(f)
-                        kept.setdefault(
-                            f, f"in a chain of tangent fillets with fillet {gone[0]}, which is kept"
-                        )
-                changed = True
+        for k, ch in enumerate(chains):
+            if all(f in specs for f in ch.members):
+                continue
+            subs, single = sub_chains(ch, set(specs))
+            for sub in subs:
+                specs.update(chain_specs(sub))
+            specs.update({s.face: s for s in single})
+            chains[k : k + 1] = subs
+            changed = True
+            break
         for c, cs in list(corners.items()):
             gone = [f for f in cs.fillets if f not in specs]
             if gone:

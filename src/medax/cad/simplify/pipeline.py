@@ -26,7 +26,7 @@ from OCP.TopoDS import TopoDS
 
 from medax._progress import log_progress
 from medax.cad.simplify.bridge import bridge_edge
-from medax.cad.simplify.chains import Chain, chain_specs, find_chains
+from medax.cad.simplify.chains import chain_specs, find_chains, sub_chains
 from medax.cad.simplify.corner import corner_arcs, plane_normal
 from medax.cad.simplify.gap_measure import gap_volume
 from medax.cad.simplify.groups import Group, GroupError
@@ -316,20 +316,7 @@ def _chains(job: Job, blends: BlendInput) -> None:
     # the riders' rules (:func:`_bridges`, :func:`_readmit_riders`)
     chains, _ = find_chains(by_face)
     for ch in chains:
-        runs: list[list[int]] = [[]]
-        for i in range(len(ch.members)):
-            if ch.members[i] in job.medials:
-                runs[-1].append(i)
-            elif runs[-1]:
-                runs.append([])
-        for run in runs:
-            if len(run) < 2:
-                continue
-            i, j = run[0], run[-1]
-            ends = (ch.toward(i, 0), ch.toward(j, 1))
-            job.chains.append(
-                Chain(tuple(ch.members[k] for k in run), ends, tuple(ch.specs[k] for k in run))
-            )
+        job.chains += sub_chains(ch, set(job.medials))[0]
     for ch in job.chains:
         for f, g in zip(ch.members[:-1], ch.members[1:], strict=True):
             job.chain_links |= {(f, g), (g, f)}

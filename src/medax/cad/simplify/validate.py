@@ -26,8 +26,9 @@ from OCP.BRepGProp import BRepGProp
 from OCP.gp import gp_Pnt, gp_Pnt2d
 from OCP.GProp import GProp_GProps
 from OCP.IntTools import IntTools_FClass2d
-from OCP.TopAbs import TopAbs_IN, TopAbs_OUT, TopAbs_SHELL
+from OCP.TopAbs import TopAbs_IN, TopAbs_SHELL
 
+from medax.cad.simplify.face_classifier import FaceClassifier
 from medax.cad.simplify.occ import Array, compound, count, edges_of, faces_of, uv_bounds, xyz
 from medax.cad.simplify.projection import GridProjection, batch_projection
 
@@ -392,29 +393,28 @@ def max_distance(points: Array, faces: Sequence[Any], enough: float = 0.0) -> fl
     Each point is projected on each face's surface: all points at once in numpy on planes,
     cylinders and extrusions (:func:`.projection.batch_projection`), else one by one
     (``GeomAPI_ProjectPointOnSurf``; from a grid start on B-spline surfaces:
-    :class:`.projection.GridProjection`); a foot inside the face (face classifier, to the
-    face's edge tolerance) gives the distance. A point with no foot inside any face, or
-    whose nearest foot is farther than ``enough`` and 1e-6 of the points' extent (a foot
-    exactly on a shared edge may be OUT of both faces there, so only a far face answers), is
-    measured exactly with ``BRepExtrema_DistShapeShape`` against all ``faces``, the
-    farthest first, until no point left can raise the maximum (their bounds are no more
-    than a distance measured: the same result as measuring them all). A point
-    whose distance to some face is ``<= enough`` is not tried on the later faces (the
-    result is then an upper bound, exact whenever it is above ``enough``).
+    :class:`.projection.GridProjection`); a foot inside the face (to the face's edge
+    tolerance, :class:`.face_classifier.FaceClassifier`: all feet at once) gives the
+    distance. A point with no foot inside any face, or whose nearest foot is farther than
+    ``enough`` and 1e-6 of the points' extent (a foot exactly on a shared edge may be OUT of
+    both faces there, so only a far face answers), is measured exactly with
+    ``BRepExtrema_DistShapeShape`` against all ``faces``, the farthest first, until no point
+    left can raise the maximum (their bounds are no more than a distance measured: the same
+    result as measuring them all). A point whose distance to some face is ``<= enough`` is
+    not tried on the later faces (the result is then an upper bound, exact whenever it is
+    above ``enough``).
     """
     points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     best = np.full(len(points), np.inf)
     for f in faces:
-        cls = IntTools_FClass2d(f, _edge_tolerance(f))
         rows = np.flatnonzero(best > enough)
         if rows.size == 0:
             break
         uv, dist = _project(f, points[rows])
         closer = np.flatnonzero(dist < best[rows])
-        cand = rows[closer].tolist()
-        for r, (u, v), d in zip(cand, uv[closer].tolist(), dist[closer].tolist(), strict=True):
-            if cls.Perform(gp_Pnt2d(u, v)) != TopAbs_OUT:  # one point at a time
-                best[r] = d
+        if closer.size:
+            closer = closer[FaceClassifier(f, _edge_tolerance(f)).inside(uv[closer])]
+            best[rows[closer]] = dist[closer]
     extent = float(np.ptp(points, axis=0).max()) if len(points) else 0.0
     confirm = max(enough, 1e-6 * extent)
     far = np.flatnonzero(best > confirm)
