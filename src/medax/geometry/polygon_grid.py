@@ -32,7 +32,21 @@ def inside_grid(xs: FloatArray, ys: FloatArray, polygon: FloatArray) -> NDArray[
         yc = a[:, 1] + (xm - a[:, 0]) * ((b[:, 1] - a[:, 1]) / (b[:, 0] - a[:, 0]))
     yc = np.where(spans, yc, np.inf)
     yc.sort(axis=1)
-    below = np.empty((xs.size, ys.size), dtype=np.int64)
-    for i in range(xs.size):  # one column at a time: a sorted search, not a point loop
-        below[i] = np.searchsorted(yc[i], ys, side="left")
-    return (below % 2) == 1
+    return (_ranks(yc, ys) % 2) == 1
+
+
+def _ranks(yc: FloatArray, ys: FloatArray) -> NDArray[np.int64]:
+    """(nx, ny): how many of column ``i``'s crossings ``yc[i]`` (sorted, ``inf`` past the
+    last) lie below ``ys[j]``. One sorted search for all columns: their crossings laid end
+    to end, each column's values shifted past the previous column's (a point within
+    rounding of the shift of a crossing may fall on either side, as on an edge)."""
+    finite = np.isfinite(yc)
+    if not finite.any() or ys.size == 0:
+        return np.zeros((yc.shape[0], ys.size), dtype=np.int64)
+    lo = min(float(ys.min()), float(yc[finite].min()))
+    hi = max(float(ys.max()), float(yc[finite].max()))
+    shift = np.arange(yc.shape[0], dtype=np.float64)[:, None] * (2.0 * (hi - lo) + 1.0)
+    keys = (yc - lo + shift)[finite]  # row by row: sorted
+    start = np.cumsum(finite.sum(axis=1)) - finite.sum(axis=1)
+    at = np.searchsorted(keys, (ys[None, :] - lo + shift).ravel(), side="left")
+    return at.reshape(yc.shape[0], ys.size) - start[:, None]
