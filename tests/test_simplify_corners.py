@@ -368,3 +368,95 @@ def test_rounded_route_not_taken_on_loose_edges():
     r = simplify(shape, specs_from_blend_faces(shape, part.blends))
     assert (r.faces_before, r.faces_after) == (26, 6) and not r.blends_kept
     assert {g.surface for g in r.face_groups if g.halves} == {"fitted"}
+
+
+def _corner_as_bspline(r: float = 3.0):
+    """A 30 x 20 x 10 box whose three edges at the corner (30, 20, 10) are filleted with
+    radius ``r``, the sphere corner replaced by its exact NURBS copy (a corner blend that is
+    no sphere piece, as other CAD systems write vertex blends): the solid, the sphere
+    face it replaced."""
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+    from OCP.BRepBuilderAPI import (
+        BRepBuilderAPI_MakeSolid,
+        BRepBuilderAPI_NurbsConvert,
+        BRepBuilderAPI_Sewing,
+    )
+    from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.GeomAbs import GeomAbs_Sphere
+
+    from medax.cad.simplify.occ import edges_of, faces_of
+
+    box = BRepPrimAPI_MakeBox(30.0, 20.0, 10.0).Shape()
+    mk = BRepFilletAPI_MakeFillet(box)
+    for e in edges_of(box):
+        ends = edge_points(e, 2)
+        if np.any(np.all(np.abs(ends - [30.0, 20.0, 10.0]) < 1e-9, axis=1)):
+            mk.Add(r, e)
+    rounded = mk.Shape()
+    sphere = next(
+        f for f in faces_of(rounded) if BRepAdaptor_Surface(f).GetType() == GeomAbs_Sphere
+    )
+    nurbs = BRepBuilderAPI_NurbsConvert(sphere, True).Shape()
+    sew = BRepBuilderAPI_Sewing(1e-6)
+    for f in faces_of(rounded):
+        sew.Add(nurbs if f.IsSame(sphere) else f)
+    sew.Perform()
+    return BRepBuilderAPI_MakeSolid(TopoDS.Shell(sew.SewedShape())).Solid(), sphere
+
+
+def test_a_vertex_blend_that_is_no_sphere_is_split_by_its_bisector_sections():
+    """The corner's split edges are its sections by the fillets' bisector planes (truth:
+    on the sphere the NURBS copy stands for, they are the great arcs of
+    :func:`corner_arcs`, from the same end points, every point at the sphere's radius from
+    its centre and equidistant from the fillet's two planes), and the part loses all four
+    blends with its shape (whole-solid distances both ways, volume, OCCT's validity)."""
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+
+    from medax.cad.classify import classify_solid
+    from medax.cad.reader import heal
+    from medax.cad.simplify.corner import corner_arcs, corner_sections, plane_normal
+    from medax.cad.simplify.medial import medial_curve
+    from medax.cad.simplify.occ import diagonal
+    from medax.cad.simplify.specs import specs_from_classification
+    from medax.tolerances import BUILD_TOL
+    from truth import assert_same_solid
+
+    solid, sphere = _corner_as_bspline()
+    cls = classify_solid(heal(solid))
+    blends = specs_from_classification(cls)
+    (cs,) = blends.corners
+    fmap, emap = shape_map(cls.shape, TopAbs_FACE), shape_map(cls.shape, TopAbs_EDGE)
+    face = lambda i: TopoDS.Face(fmap.FindKey(i + 1))  # noqa: E731
+    by_face = {s.face: s for s in blends.fillets}
+    pairs = [by_face[f].supporting for f in cs.fillets]
+    normals = {s: plane_normal(face(s)) for s in cs.supporting}
+    planes = {
+        s: (n, float(n @ np.array(BRepAdaptor_Surface(face(s)).Plane().Location().Coord())))
+        for s, n in normals.items()
+    }
+    medials = []
+    for f in cs.fillets:
+        sides = (
+            [TopoDS.Edge(emap.FindKey(i + 1)) for i in by_face[f].side_edges(k)] for k in (0, 1)
+        )
+        medials.append(medial_curve(face(f), *sides).edge)
+    tol = BUILD_TOL * diagonal(cls.shape)
+    got = corner_sections(face(cs.face), pairs, planes, medials, tol)
+    assert not isinstance(got, str), got
+    edges, centre = got
+    want_edges, want_centre = corner_arcs(sphere, pairs, normals)
+    assert np.linalg.norm(centre - want_centre) <= 1e-6
+    c, r = np.array([27.0, 17.0, 7.0]), 3.0  # the sphere's centre and radius
+    for e, w, (a, b) in zip(edges, want_edges, pairs, strict=True):
+        p = edge_points(e, 25)
+        assert np.max(np.abs(np.linalg.norm(p - c, axis=1) - r)) <= 1e-6
+        da = p @ planes[a][0] - planes[a][1]
+        db = p @ planes[b][0] - planes[b][1]
+        assert np.max(np.abs(da - db)) <= 1e-6
+        ends = {tuple(np.round(q, 5)) for q in edge_points(e, 2)}
+        assert ends == {tuple(np.round(q, 5)) for q in edge_points(w, 2)}
+    r_ = simplify(cls.shape, blends)
+    assert sorted(r_.blends_removed) == sorted([*cs.fillets, cs.face]) and not r_.blends_kept
+    assert (r_.faces_before, r_.faces_after) == (10, 6)
+    assert_same_solid(cls.shape, r_)

@@ -17,8 +17,10 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge
+from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from OCP.GC import GC_MakeArcOfCircle
 from OCP.GeomAbs import GeomAbs_Plane, GeomAbs_Sphere
 from OCP.gp import gp_Ax2, gp_Circ, gp_Dir
@@ -75,5 +77,84 @@ def corner_arcs(
         mk = BRepBuilderAPI_MakeEdge(arc)
         if not mk.IsDone():
             return "corner blend: could not build a split arc"
+        edges.append(mk.Edge())
+    return edges, centre
+
+
+def corner_sections(
+    corner: Any,
+    pairs: Sequence[tuple[int, int]],
+    planes: dict[int, tuple[Array, float]],
+    medial_edges: Sequence[Any],
+    tol: float,
+) -> tuple[list[Any], Array] | str:
+    """Split edges of a corner blend that is no sphere piece (a vertex blend between fillets
+    of several radii: a B-spline patch), one per fillet meeting it, and its centre.
+
+    The points of the corner equidistant from the supporting planes ``a`` and ``b`` of a
+    fillet lie on their bisector plane ``(n_a - n_b) . (X - V) = 0`` (``V`` the planes'
+    common point): the fillet's medial curve lies in it and ends on the corner at ``M``
+    (where ``medial_edges[i]`` meets the corner), and the corner's centre ``P``, the point
+    of the corner equidistant from all its planes, lies on the line ``V + t u`` with
+    ``n_i . u`` equal for all ``i``. Each split edge is the corner's section by the
+    fillet's bisector plane from ``M`` to ``P`` (``GeomAPI_IntSS``, to ``tol``, a length).
+    ``planes``: the outward unit normal and offset ``n . X`` of each supporting plane.
+    Returns the edges and ``P`` (3,), or a one-line reason.
+    """
+    from OCP.Geom import Geom_Line, Geom_Plane, Geom_TrimmedCurve
+    from OCP.GeomAPI import GeomAPI_IntCS, GeomAPI_IntSS, GeomAPI_ProjectPointOnCurve
+    from OCP.gp import gp_Lin, gp_Pln
+
+    from medax.cad.simplify.face_classifier import FaceClassifier
+
+    surf = BRep_Tool.Surface_s(corner)
+    faces = sorted({f for pair in pairs for f in pair})
+    n = np.array([planes[f][0] for f in faces])
+    d = np.array([planes[f][1] for f in faces])
+    u, *_ = np.linalg.lstsq(n, np.ones(len(n)), rcond=None)
+    u /= np.linalg.norm(u)
+    if np.ptp(n @ u) > 1e-9:
+        return "corner blend: no point equidistant from all its supporting planes"
+    vertex, *_ = np.linalg.lstsq(n, d, rcond=None)
+    if np.max(np.abs(n @ vertex - d)) > tol:
+        return "corner blend: its supporting planes have no common point"
+    hits = GeomAPI_IntCS(Geom_Line(gp_Lin(pnt(vertex), gp_Dir(*map(float, u)))), surf)
+    inside = FaceClassifier(corner, tol)
+    centre = None
+    for k in range(1, (hits.NbPoints() if hits.IsDone() else 0) + 1):
+        w, v, _ = hits.Parameters(k)
+        p = xyz(hits.Point(k))
+        if inside.inside(np.array([[w, v]]))[0] and (
+            centre is None or np.linalg.norm(p - vertex) < np.linalg.norm(centre - vertex)
+        ):
+            centre = p
+    if centre is None:
+        return "corner blend: the line of points equidistant from its planes misses it"
+    edges = []
+    for (fa, fb), medial in zip(pairs, medial_edges, strict=True):
+        w = planes[fa][0] - planes[fb][0]
+        if np.linalg.norm(w) < 1e-9:
+            return "corner blend: parallel supporting planes"
+        plane = Geom_Plane(gp_Pln(pnt(vertex), gp_Dir(*map(float, w / np.linalg.norm(w)))))
+        section = GeomAPI_IntSS(surf, plane, tol)
+        found = None
+        for k in range(1, (section.NbLines() if section.IsDone() else 0) + 1):
+            curve = section.Line(k)
+            at_p = GeomAPI_ProjectPointOnCurve(pnt(centre), curve)
+            if at_p.NbPoints() and at_p.LowerDistance() <= 10.0 * tol:
+                found = (curve, at_p.LowerDistanceParameter())
+                break
+        if found is None:
+            return "corner blend: its section by a fillet's bisector plane misses its centre"
+        curve, tp = found
+        ext = BRepExtrema_DistShapeShape(BRepBuilderAPI_MakeEdge(curve).Edge(), medial)
+        if not ext.IsDone() or ext.NbSolution() < 1 or ext.Value() > 10.0 * tol:
+            return "corner blend: a fillet's medial curve does not meet the corner's section"
+        tm = GeomAPI_ProjectPointOnCurve(ext.PointOnShape1(1), curve).LowerDistanceParameter()
+        if abs(tm - tp) < 1e-12:
+            return "corner blend: a fillet's medial curve ends at the corner's centre"
+        mk = BRepBuilderAPI_MakeEdge(Geom_TrimmedCurve(curve, min(tm, tp), max(tm, tp)))
+        if not mk.IsDone():
+            return "corner blend: could not build a split edge"
         edges.append(mk.Edge())
     return edges, centre

@@ -19,15 +19,17 @@ from functools import partial
 from typing import Any
 
 import numpy as np
+from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 from OCP.BRepCheck import BRepCheck_Analyzer
+from OCP.GeomAbs import GeomAbs_Sphere
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_SHELL
 from OCP.TopoDS import TopoDS
 
 from medax._progress import log_progress
 from medax.cad.simplify.bridge import bridge_edge
 from medax.cad.simplify.chains import chain_specs, find_chains, sub_chains
-from medax.cad.simplify.corner import corner_arcs, plane_normal
+from medax.cad.simplify.corner import corner_arcs, corner_sections, plane_normal
 from medax.cad.simplify.gap_measure import gap_volume
 from medax.cad.simplify.groups import Group, GroupError
 from medax.cad.simplify.job import (
@@ -69,7 +71,7 @@ from medax.cad.simplify.merging import (
     surfaces_for,
 )
 from medax.cad.simplify.mitre import mitre_keeps, mitre_pairs
-from medax.cad.simplify.occ import count, diagonal, shape_map
+from medax.cad.simplify.occ import count, diagonal, shape_map, xyz
 from medax.cad.simplify.rebuild import build_solid
 from medax.cad.simplify.result import DEVIATION_SAMPLES, FaceGroup, SimplifyResult
 from medax.cad.simplify.rounded import ROUNDED, RoundedSurface
@@ -300,11 +302,22 @@ def _corners(job: Job, blends: BlendInput) -> None:
             job.kept[cs.face] = "corner blend between faces that are not planes (not supported)"
             continue
         pairs = [(by_face[f].supporting[0], by_face[f].supporting[1]) for f in cs.fillets]
-        r = corner_arcs(job.face(cs.face), pairs, normals)
+        corner = job.face(cs.face)
+        if BRepAdaptor_Surface(corner).GetType() == GeomAbs_Sphere:
+            r = corner_arcs(corner, pairs, normals)
+        else:  # a vertex blend between fillets of several radii
+            planes = {s: (n, float(n @ _plane_point(job.face(s)))) for s, n in normals.items()}
+            medials = [job.medials[f].edge for f in cs.fillets]
+            r = corner_sections(corner, pairs, planes, medials, job.btol)
         if isinstance(r, str):
             job.kept[cs.face] = r
             continue
         job.corners[cs.face], job.arcs[cs.face] = cs, r[0]
+
+
+def _plane_point(face: Any) -> np.ndarray:
+    """A point (3,) of the plane of planar ``face``."""
+    return xyz(BRepAdaptor_Surface(face).Plane().Location())
 
 
 def _chains(job: Job, blends: BlendInput) -> None:
