@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Curve2d, BRepAdaptor_Surface
 from OCP.BRepTools import BRepTools_WireExplorer
+from OCP.GeomAbs import GeomAbs_BSplineCurve
 from OCP.gp import gp_Pnt2d
 from OCP.IntTools import IntTools_FClass2d
 from OCP.TopAbs import TopAbs_OUT, TopAbs_REVERSED, TopAbs_WIRE
@@ -31,8 +32,9 @@ from scipy.spatial import cKDTree
 
 from medax.cad.simplify.occ import Array, uv_bounds
 
-#: Chords per edge of the boundary polygons.
-CHORDS = 48
+#: Chords per edge of the boundary polygons (more on B-splines of many spans, at most
+#: ``MAX_CHORDS``).
+CHORDS, MAX_CHORDS = 48, 4096
 #: Samples of the boundary polygons over the diagonal of their box: a point nearer than
 #: half that spacing plus the band to a sample is asked to OCCT.
 SAMPLES_PER_BOX = 1000
@@ -114,7 +116,7 @@ def _wire_polygons(face: Any) -> tuple[list[Array] | None, float]:
             if BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0) is None:
                 return None, 0.0
             curve = BRepAdaptor_Curve2d(edge, face)
-            t = np.linspace(curve.FirstParameter(), curve.LastParameter(), 2 * CHORDS + 1)
+            t = np.linspace(curve.FirstParameter(), curve.LastParameter(), 2 * _chords(curve) + 1)
             if edge.Orientation() == TopAbs_REVERSED:
                 t = t[::-1]
             p = np.array([curve.Value(x).Coord() for x in t.tolist()])
@@ -131,6 +133,15 @@ def _wire_polygons(face: Any) -> tuple[list[Array] | None, float]:
             loops.append(np.vstack([loop, loop[:1]]))
         exp.Next()
     return (loops or None), sag
+
+
+def _chords(curve: Any) -> int:
+    """Chords for pcurve ``curve``: ``CHORDS``, or four per knot span of a B-spline with
+    more spans (a chord's sag is measured at its middle: within one or two spans the curve
+    does not turn back between), at most ``MAX_CHORDS``."""
+    if curve.GetType() == GeomAbs_BSplineCurve:
+        return int(min(max(CHORDS, 4 * (curve.NbKnots() - 1)), MAX_CHORDS))
+    return CHORDS
 
 
 def _point_chord(p: Array, a: Array, b: Array) -> Array:
