@@ -239,3 +239,12 @@ def test_a_kept_member_splits_its_chain_into_runs():
     specs.pop(14)
     cascade(specs, {}, kept, chains)
     assert chains == [] and specs[13] == orig[13] and specs[15] == orig[15]
+    # a member that a fillet with no bridge rides on stays with the kept one (its rider
+    # goes as a plain fillet on it): 13 kept, 14 - 15 a chain from it to end B
+    specs = dict(chain_specs(chain))
+    specs.pop(12)
+    kept, chains = {12: "supporting face 11: ..."}, [chain]
+    cascade(specs, {}, kept, chains, frozenset({13}))
+    assert set(kept) == {12, 13} and "rides on this one" in kept[13]
+    assert [(c.members, c.ends) for c in chains] == [((14, 15), (13, 16))]
+    assert specs[11] == orig[11] and set(specs) == {11, 14, 15}

@@ -41,19 +41,34 @@ from medax.errors import CadError
 
 
 def cascade(  # type: ignore[no-untyped-def]
-    specs: dict[int, FilletSpec], corners: dict[int, CornerSpec], kept, chains: list[Chain]
+    specs: dict[int, FilletSpec],
+    corners: dict[int, CornerSpec],
+    kept,
+    chains: list[Chain],
+    bases: frozenset[int] = frozenset(),
 ) -> None:
     """A corner blend goes only with all its fillets, and a fillet only with its corners; a
     chain of fillets one of whose members is kept falls into the runs of the others between
     the kept ones (:func:`.chains.sub_chains`: chains of their own, or plain fillets with
     their original specs): drop and split until nothing changes. ``chains`` is updated in
-    place."""
+    place. Members in ``bases`` (fillets that others ride on with no bridge) are kept with
+    the chain's kept member: a rider goes as a plain fillet on a kept base only (seen: the
+    crankshaft's two chain members revived cost their two riders and a third fillet)."""
     changed = True
     while changed:
         changed = False
         for k, ch in enumerate(chains):
             if all(f in specs for f in ch.members):
                 continue
+            out = next(f for f in ch.members if f not in specs)
+            for f in ch.members:
+                if f in specs and f in bases:
+                    specs.pop(f)
+                    kept.setdefault(
+                        f,
+                        f"in a chain of tangent fillets with fillet {out}, which is kept "
+                        "(a fillet with no bridge rides on this one)",
+                    )
             subs, single = sub_chains(ch, set(specs))
             for sub in subs:
                 specs.update(chain_specs(sub))
@@ -80,7 +95,7 @@ def refresh_surfaces(job: Job) -> None:
     runs again whenever fillets are dropped."""
     specs, kept = job.specs, job.kept
     while True:
-        cascade(specs, job.corners, kept, job.chains)
+        cascade(specs, job.corners, kept, job.chains, job.unbridged_bases)
         surfaces, failed = surfaces_for(job, specs, job.corners)
         if not failed:
             job.surfaces = surfaces
@@ -354,7 +369,7 @@ def fit_round(job: Job, probe: bool) -> bool:
         for f in blamed:
             job.specs.pop(f, None)
             job.kept.setdefault(f, f"rebuild failed: {err}")
-        cascade(job.specs, job.corners, job.kept, job.chains)
+        cascade(job.specs, job.corners, job.kept, job.chains, job.unbridged_bases)
         return True
     except CadError:
         return False  # the attempt will report it
@@ -391,7 +406,7 @@ def fit_round(job: Job, probe: bool) -> bool:
                 if f not in job.kept:
                     job.kept[f] = f"supporting face {sup}: {why}"
                     job.no_surface[f] = sup
-    cascade(job.specs, job.corners, job.kept, job.chains)
+    cascade(job.specs, job.corners, job.kept, job.chains, job.unbridged_bases)
     return True
 
 
