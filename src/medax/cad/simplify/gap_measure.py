@@ -93,13 +93,10 @@ def gap_volume(new: Any, old: Sequence[Any]) -> tuple[float, float] | None:
 
 
 def _surface_points(face: Any, uv: Array) -> Array:
-    """Points (n, 3) of ``face``'s surface at ``uv`` (n, 2), in numpy where the surface
-    has an exact numpy copy, else one OCCT evaluation each."""
-    try:
-        return np.asarray(exact_embedding(face).evaluate(uv), dtype=np.float64).reshape(-1, 3)
-    except CadError:
-        surf = BRepAdaptor_Surface(face)
-        return np.array([surf.Value(u, v).XYZ().Coord() for u, v in uv.tolist()]).reshape(-1, 3)
+    """Points (n, 3) of ``face``'s surface at ``uv`` (n, 2), by OCCT (the parameters are
+    OCCT's projections', which on periodic surfaces may lie outside the first period)."""
+    surf = BRepAdaptor_Surface(face)
+    return np.array([surf.Value(u, v).XYZ().Coord() for u, v in uv.tolist()]).reshape(-1, 3)
 
 
 def _quadrature(face: Any) -> tuple[Array, Array, Array]:

@@ -155,11 +155,6 @@ class Job:
         return self.volume_ref
 
     @property
-    def unbridged_bases(self) -> frozenset[int]:
-        """The fillets that riders kept for want of a bridge ride on."""
-        return frozenset(base for base, _, _ in self.unbridged.values())
-
-    @property
     def btol(self) -> float:
         """Length tolerance of the construction."""
         return BUILD_TOL * self.diag

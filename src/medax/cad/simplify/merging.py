@@ -14,7 +14,7 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 from OCP.GeomAbs import GeomAbs_Cylinder, GeomAbs_Plane
 from OCP.TopoDS import TopoDS
 
-from medax.cad.simplify.chains import Chain, chain_arcs, chain_specs, sub_chains
+from medax.cad.simplify.chains import Chain, chain_arcs
 from medax.cad.simplify.cylinder_field import cylinder_surface
 from medax.cad.simplify.fitted import (
     FittedSurface,
@@ -41,41 +41,23 @@ from medax.errors import CadError
 
 
 def cascade(  # type: ignore[no-untyped-def]
-    specs: dict[int, FilletSpec],
-    corners: dict[int, CornerSpec],
-    kept,
-    chains: list[Chain],
-    bases: frozenset[int] = frozenset(),
+    specs: dict[int, FilletSpec], corners: dict[int, CornerSpec], kept, chains: list[Chain]
 ) -> None:
-    """A corner blend goes only with all its fillets, and a fillet only with its corners; a
-    chain of fillets one of whose members is kept falls into the runs of the others between
-    the kept ones (:func:`.chains.sub_chains`: chains of their own, or plain fillets with
-    their original specs): drop and split until nothing changes. ``chains`` is updated in
-    place. Members in ``bases`` (fillets that others ride on with no bridge) are kept with
-    the chain's kept member: a rider goes as a plain fillet on a kept base only (seen: the
-    crankshaft's two chain members revived cost their two riders and a third fillet)."""
+    """A corner blend goes only with all its fillets, and a fillet only with its corners;
+    a chain of fillets goes whole or not at all: drop until nothing changes."""
     changed = True
     while changed:
         changed = False
-        for k, ch in enumerate(chains):
-            if all(f in specs for f in ch.members):
-                continue
-            out = next(f for f in ch.members if f not in specs)
-            for f in ch.members:
-                if f in specs and f in bases:
-                    specs.pop(f)
-                    kept.setdefault(
-                        f,
-                        f"in a chain of tangent fillets with fillet {out}, which is kept "
-                        "(a fillet with no bridge rides on this one)",
-                    )
-            subs, single = sub_chains(ch, set(specs))
-            for sub in subs:
-                specs.update(chain_specs(sub))
-            specs.update({s.face: s for s in single})
-            chains[k : k + 1] = subs
-            changed = True
-            break
+        for ch in chains:
+            gone = [f for f in ch.members if f not in specs]
+            if gone and len(gone) < len(ch.members):
+                for f in ch.members:
+                    if f in specs:
+                        specs.pop(f)
+                        kept.setdefault(
+                            f, f"in a chain of tangent fillets with fillet {gone[0]}, which is kept"
+                        )
+                changed = True
         for c, cs in list(corners.items()):
             gone = [f for f in cs.fillets if f not in specs]
             if gone:
@@ -95,7 +77,7 @@ def refresh_surfaces(job: Job) -> None:
     runs again whenever fillets are dropped."""
     specs, kept = job.specs, job.kept
     while True:
-        cascade(specs, job.corners, kept, job.chains, job.unbridged_bases)
+        cascade(specs, job.corners, kept, job.chains)
         surfaces, failed = surfaces_for(job, specs, job.corners)
         if not failed:
             job.surfaces = surfaces
@@ -369,7 +351,7 @@ def fit_round(job: Job, probe: bool) -> bool:
         for f in blamed:
             job.specs.pop(f, None)
             job.kept.setdefault(f, f"rebuild failed: {err}")
-        cascade(job.specs, job.corners, job.kept, job.chains, job.unbridged_bases)
+        cascade(job.specs, job.corners, job.kept, job.chains)
         return True
     except CadError:
         return False  # the attempt will report it
@@ -406,7 +388,7 @@ def fit_round(job: Job, probe: bool) -> bool:
                 if f not in job.kept:
                     job.kept[f] = f"supporting face {sup}: {why}"
                     job.no_surface[f] = sup
-    cascade(job.specs, job.corners, job.kept, job.chains, job.unbridged_bases)
+    cascade(job.specs, job.corners, job.kept, job.chains)
     return True
 
 

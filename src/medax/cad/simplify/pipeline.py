@@ -180,7 +180,7 @@ def simplify(
     for f, why in mitre_keeps(mitre_pairs(work, fmap, job.specs), job.corners).items():
         job.specs.pop(f)
         kept[f] = why
-    cascade(job.specs, job.corners, kept, job.chains, job.unbridged_bases)
+    cascade(job.specs, job.corners, kept, job.chains)
     refresh_surfaces(job)
     n_fit = sum(1 for v in job.surfaces.values() if v == FITTED)
     say(f"{len(job.specs)} fillets on {len(job.surfaces)} merged faces ({n_fit} fitted)")
