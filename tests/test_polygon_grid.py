@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from matplotlib.path import Path
 
 from medax.geometry.polygon_grid import inside_grid
@@ -14,13 +15,15 @@ def _star(n: int, rng: np.random.Generator) -> np.ndarray:
     return np.column_stack([rad * np.cos(ang), rad * np.sin(ang)])
 
 
-def test_matches_contains_points_on_random_polygons():
+@pytest.mark.parametrize("scale", [1e-4, 1.0, 1e4])
+def test_matches_contains_points_on_random_polygons(scale):
+    """At any scale: the columns' searches are one search over shifted values."""
     rng = np.random.default_rng(3)
-    xs, ys = np.linspace(-1.1, 1.1, 157), np.linspace(-1.05, 1.05, 143)
+    xs, ys = np.linspace(-1.1, 1.1, 157) * scale, np.linspace(-1.05, 1.05, 143) * scale
     gx, gy = np.meshgrid(xs, ys, indexing="ij")
     pts = np.column_stack([gx.ravel(), gy.ravel()])
     for n in (3, 7, 40, 300):
-        poly = _star(n, rng)
+        poly = _star(n, rng) * scale
         ref = Path(poly).contains_points(pts).reshape(gx.shape)
         got = inside_grid(xs, ys, poly)
         assert np.count_nonzero(got != ref) == 0

@@ -45,8 +45,10 @@ def _ranks(yc: FloatArray, ys: FloatArray) -> NDArray[np.int64]:
         return np.zeros((yc.shape[0], ys.size), dtype=np.int64)
     lo = min(float(ys.min()), float(yc[finite].min()))
     hi = max(float(ys.max()), float(yc[finite].max()))
-    shift = np.arange(yc.shape[0], dtype=np.float64)[:, None] * (2.0 * (hi - lo) + 1.0)
+    step = 2.0 * (hi - lo) if hi > lo else 1.0  # past any column's range, at its scale
+    shift = np.arange(yc.shape[0], dtype=np.float64)[:, None] * step
     keys = (yc - lo + shift)[finite]  # row by row: sorted
-    start = np.cumsum(finite.sum(axis=1)) - finite.sum(axis=1)
+    count = finite.sum(axis=1)
+    start = np.cumsum(count) - count
     at = np.searchsorted(keys, (ys[None, :] - lo + shift).ravel(), side="left")
     return at.reshape(yc.shape[0], ys.size) - start[:, None]

@@ -118,27 +118,23 @@ def find_chains(
     return chains, refused
 
 
-def sub_chains(chain: Chain, present: set[int]) -> tuple[list[Chain], list[FilletSpec]]:
-    """The runs of ``chain``'s members in ``present`` between the others, which are faces
-    like any other once kept: the runs of two or more as chains of their own (their end
-    faces the kept members or the chain's ends), and the original specs of the runs of
-    one (a plain fillet between such faces)."""
+def sub_chains(chain: Chain, present: set[int]) -> list[Chain]:
+    """The runs of two or more of ``chain``'s members in ``present`` as chains of their own,
+    between the others, which are faces like any other once kept (their end faces the kept
+    members or the chain's ends; a run of one is a plain fillet)."""
     runs: list[list[int]] = [[]]
     for i, f in enumerate(chain.members):
         if f in present:
             runs[-1].append(i)
         elif runs[-1]:
             runs.append([])
-    chains, single = [], []
-    for run in runs:
-        if len(run) == 1:
-            single.append(chain.specs[run[0]])
-        elif len(run) > 1:
-            i, j = run[0], run[-1]
-            ends = (chain.toward(i, 0), chain.toward(j, 1))
-            members = tuple(chain.members[k] for k in run)
-            chains.append(Chain(members, ends, tuple(chain.specs[k] for k in run)))
-    return chains, single
+    chains = []
+    for run in (r for r in runs if len(r) > 1):
+        i, j = run[0], run[-1]
+        ends = (chain.toward(i, 0), chain.toward(j, 1))
+        members = tuple(chain.members[k] for k in run)
+        chains.append(Chain(members, ends, tuple(chain.specs[k] for k in run)))
+    return chains
 
 
 def chain_specs(chain: Chain) -> dict[int, FilletSpec]:

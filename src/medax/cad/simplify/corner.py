@@ -36,6 +36,15 @@ def plane_normal(face: Any) -> Array | None:
     return None if p is None else face_normal_at(face, p)
 
 
+def _equidistant_direction(n: Array) -> Array | None:
+    """Unit ``u`` (3,) with ``n_i . u`` equal for every row of the unit normals ``n``
+    (k, 3): along it a point moves equally far from all their planes; None when there is
+    none (least squares misses it)."""
+    sol, *_ = np.linalg.lstsq(n, np.ones(len(n)), rcond=None)
+    u: Array = sol / np.linalg.norm(sol)
+    return None if np.ptp(n @ u) > 1e-9 else u
+
+
 def corner_arcs(
     corner: Any, pairs: Sequence[tuple[int, int]], normals: dict[int, Array]
 ) -> tuple[list[Any], Array] | str:
@@ -56,10 +65,8 @@ def corner_arcs(
         return "corner blend: no inside point"
     s = 1.0 if float(n_in @ (inside - c)) > 0 else -1.0
     faces = sorted({f for pair in pairs for f in pair})
-    n = np.array([normals[f] for f in faces])
-    u, *_ = np.linalg.lstsq(n, np.ones(len(n)), rcond=None)
-    u /= np.linalg.norm(u)
-    if np.ptp(n @ u) > 1e-9:
+    u = _equidistant_direction(np.array([normals[f] for f in faces]))
+    if u is None:
         return "corner blend: no point equidistant from all its supporting planes"
     centre = c + s * r * u
     edges = []
@@ -103,28 +110,27 @@ def corner_sections(
     """
     from OCP.Geom import Geom_Line, Geom_Plane, Geom_TrimmedCurve
     from OCP.GeomAPI import GeomAPI_IntCS, GeomAPI_IntSS, GeomAPI_ProjectPointOnCurve
-    from OCP.gp import gp_Lin, gp_Pln
-
-    from medax.cad.simplify.face_classifier import FaceClassifier
+    from OCP.gp import gp_Lin, gp_Pln, gp_Pnt2d
+    from OCP.IntTools import IntTools_FClass2d
+    from OCP.TopAbs import TopAbs_OUT
 
     surf = BRep_Tool.Surface_s(corner)
     faces = sorted({f for pair in pairs for f in pair})
     n = np.array([planes[f][0] for f in faces])
     d = np.array([planes[f][1] for f in faces])
-    u, *_ = np.linalg.lstsq(n, np.ones(len(n)), rcond=None)
-    u /= np.linalg.norm(u)
-    if np.ptp(n @ u) > 1e-9:
+    u = _equidistant_direction(n)
+    if u is None:
         return "corner blend: no point equidistant from all its supporting planes"
     vertex, *_ = np.linalg.lstsq(n, d, rcond=None)
     if np.max(np.abs(n @ vertex - d)) > tol:
         return "corner blend: its supporting planes have no common point"
     hits = GeomAPI_IntCS(Geom_Line(gp_Lin(pnt(vertex), gp_Dir(*map(float, u)))), surf)
-    inside = FaceClassifier(corner, tol)
+    inside = IntTools_FClass2d(corner, tol)
     centre = None
     for k in range(1, (hits.NbPoints() if hits.IsDone() else 0) + 1):
-        w, v, _ = hits.Parameters(k)
+        su, sv, _ = hits.Parameters(k)  # on the surface, on the line
         p = xyz(hits.Point(k))
-        if inside.inside(np.array([[w, v]]))[0] and (
+        if inside.Perform(gp_Pnt2d(su, sv)) != TopAbs_OUT and (
             centre is None or np.linalg.norm(p - vertex) < np.linalg.norm(centre - vertex)
         ):
             centre = p

@@ -31,6 +31,7 @@ from OCP.TopoDS import TopoDS
 from scipy.spatial import cKDTree
 
 from medax.cad.simplify.occ import Array, uv_bounds
+from medax.cad.topology import edge_uv
 
 #: Chords per edge of the boundary polygons (more on B-splines of many spans, at most
 #: ``MAX_CHORDS``).
@@ -119,7 +120,7 @@ def _wire_polygons(face: Any) -> tuple[list[Array] | None, float]:
             t = np.linspace(curve.FirstParameter(), curve.LastParameter(), 2 * _chords(curve) + 1)
             if edge.Orientation() == TopAbs_REVERSED:
                 t = t[::-1]
-            p = np.array([curve.Value(x).Coord() for x in t.tolist()])
+            p, _ = edge_uv(edge, face, t)
             ends, mids = p[::2], p[1::2]
             sag = max(sag, float(np.max(_point_chord(mids, ends[:-1], ends[1:]))))
             if pts and np.linalg.norm(ends[0] - pts[-1][-1]) > gap_limit:

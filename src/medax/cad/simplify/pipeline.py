@@ -329,7 +329,7 @@ def _chains(job: Job, blends: BlendInput) -> None:
     # the riders' rules (:func:`_bridges`, :func:`_readmit_riders`)
     chains, _ = find_chains(by_face)
     for ch in chains:
-        job.chains += sub_chains(ch, set(job.medials))[0]
+        job.chains += sub_chains(ch, set(job.medials))
     for ch in job.chains:
         for f, g in zip(ch.members[:-1], ch.members[1:], strict=True):
             job.chain_links |= {(f, g), (g, f)}
