@@ -15,7 +15,7 @@ Kronecker design matrix and SuperLU (the fits here are a few thousand unknowns).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -36,6 +36,9 @@ from medax.geometry.tensor_fit import (
 )
 
 PERIOD = 2.0 * np.pi
+#: ``outside(theta, s) -> values``: what a fit returns to where it has no data (the shape of
+#: the data's values on the grid).
+PriorFn = Callable[[FloatArray, FloatArray], FloatArray]
 
 
 def periodic_knots(n: int) -> FloatArray:
@@ -109,17 +112,20 @@ def _fit_once(
     n_theta: int,
     step: float,
     zero_last: int | None = None,
+    outside: PriorFn | None = None,
 ) -> PeriodicFit:
     ts = knot_vector(s_range[0], s_range[1], sb, fine, step)
     tt = np.unique(periodic_knots(n_theta)[DEGREE : n_theta + DEGREE + 1])
     th = span_samples(tt, SAMPLES_PER_SPAN)
     ss = span_samples(ts, SAMPLES_PER_SPAN)
-    z, ok, _ = h(*np.meshgrid(th, ss, indexing="ij"))
+    grid = np.meshgrid(th, ss, indexing="ij")
+    z, ok, _ = h(*grid)
+    prior = None if outside is None else outside(*grid)
     bt = periodic_design(th, n_theta)
     bs = BSpline.design_matrix(ss, ts, DEGREE).tocsr()
     cyclic = _periodic_second_diff(n_theta)
     if zero_last is None:
-        coef = _solve_superlu(bt, bs, ok, z, diff_x=cyclic)
+        coef = _solve_superlu(bt, bs, ok, z, diff_x=cyclic, prior=prior)
     else:
         # the component ``zero_last`` held at zero on the last interval: the s functions
         # whose support meets it are not solved for (zero there, so exactly zero)
@@ -154,6 +160,7 @@ def fit_radial_height(
     levels: int = 5,
     s_fine: Sequence[bool] | None = None,
     zero_last: int | None = None,
+    outside: PriorFn | None = None,
 ) -> PeriodicFit | None:
     """Fit the radial height ``h(theta, s)`` to ``tol`` (length unit) over the full turn and
     ``s_range``, spans of at most ``spacing`` (length: in theta arc length at ``radius``),
@@ -167,7 +174,9 @@ def fit_radial_height(
     points of a surface: :mod:`medax.geometry.ring_heights`); they share the knots and the
     factorisation, and the error is the largest distance. ``zero_last``: a component that
     is zero on the last interval between the breaks (a height off the support), fitted with
-    its coefficients there held at zero, so it is exactly zero there (it needs a break)."""
+    its coefficients there held at zero, so it is exactly zero there (it needs a break).
+    ``outside(theta, s)``: the values the fit returns to where ``h`` has no data (the
+    supporting surface's, taken at ``PRIOR_WEIGHT``; not with ``zero_last``)."""
     s0, s1 = s_range
     sb = sorted(b for b in set(s_breaks) if s0 < b < s1)
     fine = [True] * (len(sb) + 1) if s_fine is None else list(s_fine)
@@ -181,6 +190,6 @@ def fit_radial_height(
         ns = knot_vector(s0, s1, sb, fine, step_s).size - DEGREE - 1
         if n_theta * ns > MAX_COEFFICIENTS:
             return None
-        return _fit_once(s_range, sb, fine, h, n_theta, step_s, zero_last)
+        return _fit_once(s_range, sb, fine, h, n_theta, step_s, zero_last, outside)
 
     return refine_both(fit_at, spacing, tol, levels)

@@ -401,7 +401,13 @@ def _periodic(
     def by_angle(th: Array, zz: Array) -> tuple[Array, np.ndarray, np.ndarray]:
         return points(np.asarray(th) * r, zz)
 
-    return fit_radial_height((z0, z1), zb, by_angle, tol, spacing, r, levels=levels, s_fine=fine)
+    def on_cylinder(th: Array, zz: Array) -> Array:  # where the fit has no data
+        s = np.asarray(th) * r
+        return fld.frame.point(s.ravel(), np.asarray(zz).ravel()).reshape((*s.shape, 3))
+
+    return fit_radial_height(
+        (z0, z1), zb, by_angle, tol, spacing, r, levels=levels, s_fine=fine, outside=on_cylinder
+    )
 
 
 def _rims(fld: _Field) -> Array:
