@@ -309,7 +309,7 @@ class PointFitter:
         bz = BSpline.design_matrix(zs, tz, DEGREE).tocsr()
         # outside the face (no data) the points return to the cylinder itself
         on_cylinder = self.frame.point(grid[0].ravel(), grid[1].ravel()).reshape(pts.shape)
-        coef = solve_masked(bs, bz, ok, np.where(ok[..., None], pts, 0.0), on_cylinder)
+        coef = solve_masked(bs, bz, ok, pts, on_cylinder)  # (pts without data: replaced)
         fit = PointFit(ts, tz, coef, 0.0, min(ss, sz))
         sc, zc = span_samples(ts, CHECK_PER_SPAN), span_samples(tz, CHECK_PER_SPAN)
         pc, okc, inside = self.points(*np.meshgrid(sc, zc, indexing="ij"))

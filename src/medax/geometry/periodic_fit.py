@@ -133,9 +133,10 @@ def _fit_once(
         k = z.shape[2]
         rest = [c for c in range(k) if c != zero_last]
         coef = np.zeros((n_theta, ts.size - DEGREE - 1, k))
-        coef[:, :, rest] = _solve_superlu(bt, bs, ok, z[..., rest], diff_x=cyclic)
+        part = (None, None) if prior is None else (prior[..., rest], prior[..., zero_last])
+        coef[:, :, rest] = _solve_superlu(bt, bs, ok, z[..., rest], diff_x=cyclic, prior=part[0])
         coef[:, :, zero_last] = _solve_superlu(
-            bt, bs, ok, z[..., zero_last], diff_x=cyclic, free_y=free
+            bt, bs, ok, z[..., zero_last], diff_x=cyclic, free_y=free, prior=part[1]
         )
     fit = PeriodicFit(n_theta, ts, coef, 0.0)
     thc, sc = span_samples(tt, CHECK_PER_SPAN), span_samples(ts, CHECK_PER_SPAN)
@@ -176,7 +177,7 @@ def fit_radial_height(
     is zero on the last interval between the breaks (a height off the support), fitted with
     its coefficients there held at zero, so it is exactly zero there (it needs a break).
     ``outside(theta, s)``: the values the fit returns to where ``h`` has no data (the
-    supporting surface's, taken at ``PRIOR_WEIGHT``; not with ``zero_last``)."""
+    supporting surface's, taken at ``PRIOR_WEIGHT``)."""
     s0, s1 = s_range
     sb = sorted(b for b in set(s_breaks) if s0 < b < s1)
     fine = [True] * (len(sb) + 1) if s_fine is None else list(s_fine)
