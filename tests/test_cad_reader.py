@@ -10,16 +10,17 @@ pytest.importorskip("OCP")
 
 from OCP.BRep import BRep_Builder  # noqa: E402
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge  # noqa: E402
+from OCP.BRepCheck import BRepCheck_Analyzer  # noqa: E402
 from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox  # noqa: E402
 from OCP.BRepTools import BRepTools  # noqa: E402
 from OCP.gp import gp_Pnt  # noqa: E402
 from OCP.IGESControl import IGESControl_Writer  # noqa: E402
 from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer  # noqa: E402
-from OCP.TopAbs import TopAbs_FACE, TopAbs_SHELL  # noqa: E402
+from OCP.TopAbs import TopAbs_FACE, TopAbs_SHELL, TopAbs_SOLID  # noqa: E402
 from OCP.TopExp import TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Shell  # noqa: E402
 
-from medax.cad import parts  # noqa: E402
+from medax.cad import parts, reader  # noqa: E402
 from medax.cad.classify import classify_file, classify_solid  # noqa: E402
 from medax.cad.reader import count, read_part  # noqa: E402
 from medax.errors import CadError  # noqa: E402
@@ -70,6 +71,70 @@ def test_unify_same_domain_merges_split_faces(tmp_path):
     path = write_step(fused, tmp_path / "fused.step")
     assert count(read_part(path).solids[0], TopAbs_FACE) == 6
     assert count(read_part(path, unify=False).solids[0], TopAbs_FACE) == 10
+
+
+def _inside_out_box():
+    """A 10 mm box with one face reversed in its shell: invalid to OCCT's analyzer, and
+    ``ShapeFix_Shape`` mends it."""
+    from OCP.TopoDS import TopoDS_Solid
+
+    box = BRepPrimAPI_MakeBox(10.0, 10.0, 10.0).Shape()
+    b = BRep_Builder()
+    shell = TopoDS_Shell()
+    b.MakeShell(shell)
+    e = TopExp_Explorer(box, TopAbs_FACE)
+    first = True
+    while e.More():
+        b.Add(shell, e.Current().Reversed() if first else e.Current())
+        first = False
+        e.Next()
+    solid = TopoDS_Solid()
+    b.MakeSolid(solid)
+    b.Add(solid, shell)
+    assert not BRepCheck_Analyzer(solid).IsValid()
+    return solid
+
+
+def test_healing_mends_an_invalid_solid():
+    notes: list[str] = []
+    healed = reader.heal(_inside_out_box(), notes=notes)
+    assert BRepCheck_Analyzer(healed).IsValid() and notes == []
+
+
+def test_a_merge_that_breaks_the_solid_is_left_out(monkeypatch):
+    """Merging edges left a real part (MVE_100-3) with an invalid cone face: the faces are
+    then merged without the edges. The broken merge is stood in for by a real invalid solid."""
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Fuse
+
+    a = BRepPrimAPI_MakeBox(10.0, 10.0, 10.0).Shape()
+    b = BRepPrimAPI_MakeBox(gp_Pnt(10.0, 0.0, 0.0), 10.0, 10.0, 10.0).Shape()
+    fused = TopoDS.Solid(TopExp_Explorer(BRepAlgoAPI_Fuse(a, b).Shape(), TopAbs_SOLID).Current())
+    merge = reader._unify
+
+    def broken(s, edges, keep=()):
+        out, history = merge(s, edges, keep)
+        return (_inside_out_box() if edges else out), history
+
+    monkeypatch.setattr(reader, "_unify", broken)
+    notes: list[str] = []
+    healed = reader.heal(fused, notes=notes)
+    assert BRepCheck_Analyzer(healed).IsValid()
+    assert count(healed, TopAbs_FACE) == 6  # the faces merged all the same
+    assert notes == ["edges on one curve left unmerged (merging them left the solid invalid)"]
+
+
+def test_healing_that_breaks_a_valid_solid_is_not_kept(monkeypatch, tmp_path):
+    """Seen on a written part: ``ShapeFix_Shape`` left three B-spline faces of a valid
+    solid open in their parameters. The broken healing is stood in for by a real invalid
+    solid; the file's own solid is read instead, and the part's notes say so."""
+    built = parts.plate_with_boss()
+    path = write_step(built.shape, tmp_path / "boss.step")
+    monkeypatch.setattr(reader, "_fixed", lambda s, where: _inside_out_box())
+    part = read_part(path)
+    (solid,) = part.solids
+    assert BRepCheck_Analyzer(solid).IsValid()
+    assert count(solid, TopAbs_FACE) == count(built.shape, TopAbs_FACE)
+    assert part.notes == ("read as in the file, not healed (healing left the valid solid invalid)",)
 
 
 def test_several_solids_each_classified(tmp_path):

@@ -3,14 +3,15 @@
 Every OCCT failure is caught here and re-raised as a one-line
 [CadError][medax.errors.CadError] naming the file. Healing: ``ShapeFix_Shape``, then
 ``ShapeUpgrade_UnifySameDomain`` merges faces (and edges) lying on the same surface so split
-faces do not inflate counts. STEP and IGES shapes
+faces do not inflate counts; a step that would leave the solid invalid is left out
+(``Part.notes`` says which). STEP and IGES shapes
 are converted by OCCT to millimetres; ``Part.file_unit`` is the unit named in the file.
 """
 
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -123,13 +124,17 @@ def read_part(path: str | Path, unify: bool = True) -> Part:
         raise CadError(f"{p}: no shape could be read (truncated or not a {fmt.upper()} file?)")
     notes: list[str] = []
     solids = _solids(shape, p, notes)
-    healed = tuple(heal(s, p, unify=unify) for s in solids)
+    healed = []
+    for k, s in enumerate(solids):
+        said: list[str] = []
+        healed.append(heal(s, p, unify=unify, notes=said))
+        notes += [f"solid {k + 1}: {n}" if len(solids) > 1 else n for n in said]
     if len(healed) > 1:
         notes.append(f"{len(healed)} solids; each is classified separately")
     for n in notes:
         log.info("%s: %s", p, n)
     unit = "mm" if fmt in ("step", "iges") else "model"
-    return Part(str(p), healed, unit, file_unit, tuple(notes))
+    return Part(str(p), tuple(healed), unit, file_unit, tuple(notes))
 
 
 @contextmanager
@@ -152,8 +157,17 @@ def quiet_occt() -> Iterator[None]:
             messenger.AddPrinter(pr)
 
 
-def heal(solid: Any, where: str | Path = "shape", unify: bool = True) -> Any:
-    """Heal a solid with ``ShapeFix_Shape``, then merge same-surface faces.
+def heal(
+    solid: Any, where: str | Path = "shape", unify: bool = True, notes: list[str] | None = None
+) -> Any:
+    """Heal a solid with ``ShapeFix_Shape``, then merge same-surface faces and edges; never
+    return an invalid solid where a valid one was at hand.
+
+    Merging can leave a valid solid invalid (seen: one cone face of a real part), and so
+    can healing (seen: B-spline faces sharing one surface, their wires left open in their
+    parameters). The first valid of: the healed solid merged (:func:`_merged`); the healed
+    solid unmerged; the solid as given, merged when that stays valid. When none is valid
+    (an invalid input healing does not mend), the healed and merged solid.
 
     Parameters
     ----------
@@ -162,7 +176,9 @@ def heal(solid: Any, where: str | Path = "shape", unify: bool = True) -> Any:
     where : str or Path
         Names the source in error messages.
     unify : bool
-        Then run ``ShapeUpgrade_UnifySameDomain`` (faces and edges on the same surface).
+        Merge faces and edges on the same surface (``ShapeUpgrade_UnifySameDomain``).
+    notes : list of str, optional
+        Receives a line for each fallback taken (which, and why).
 
     Returns
     -------
@@ -175,19 +191,101 @@ def heal(solid: Any, where: str | Path = "shape", unify: bool = True) -> Any:
         Healing failed or lost the solid.
     """
     try:
-        fix = ShapeFix_Shape(solid)
-        fix.Perform()
-        shape = fix.Shape()
-        if unify:
-            u = ShapeUpgrade_UnifySameDomain(shape, True, True, False)
-            u.Build()
-            shape = u.Shape()
+        fixed = _fixed(solid, where)
+        said: list[str] = []
+        merged = _merged(fixed, said) if unify else None
+        if merged is not None:
+            _note(notes, where, *said)
+            return merged
+        if _valid(fixed):
+            if unify:
+                _note(
+                    notes,
+                    where,
+                    "faces on one surface left unmerged (merging them left the solid invalid)",
+                )
+            return fixed
+        if not _valid(solid):
+            return _unify(fixed, True)[0] if unify else fixed
+        said = []
+        plain = (_merged(solid, said) if unify else None) or solid
+    except CadError:
+        raise
     except Exception as err:
         raise CadError(f"{where}: healing failed ({err})") from err
+    _note(
+        notes,
+        where,
+        "read as in the file, not healed (healing left the valid solid invalid)",
+        *said,
+    )
+    return plain
+
+
+def _merged(solid: Any, notes: list[str]) -> Any | None:
+    """``solid`` with its faces on one surface merged, and its edges on one curve, valid;
+    None when no merge stays valid. Where merging the edges leaves faces invalid, the
+    edges of the faces those came from stay as they are; else the edges all stay."""
+    out, history = _unify(solid, True)
+    if _valid(out):
+        return out
+    bad = [f for f in _all(out, TopAbs_FACE) if not _valid(f)]
+    sources = [
+        f
+        for f in _all(solid, TopAbs_FACE)
+        if any(f.IsSame(b) or any(m.IsSame(b) for m in history.Modified(f)) for b in bad)
+    ]
+    if sources:
+        out, _ = _unify(solid, True, [v for f in sources for v in _all(f, TopAbs_VERTEX)])
+        if _valid(out):
+            notes.append(
+                f"edges around {len(bad)} face{'s' * (len(bad) > 1)} left unmerged (merging them left the solid invalid)"
+            )
+            return out
+    out, _ = _unify(solid, False)
+    if _valid(out):
+        notes.append("edges on one curve left unmerged (merging them left the solid invalid)")
+        return out
+    return None
+
+
+def _fixed(solid: Any, where: str | Path) -> Any:
+    """``solid`` healed by ``ShapeFix_Shape``."""
+    fix = ShapeFix_Shape(solid)
+    fix.Perform()
+    return _solid_of(fix.Shape(), where)
+
+
+def _unify(solid: Any, edges: bool, keep: Sequence[Any] = ()) -> tuple[Any, Any]:
+    """``solid`` with its faces on one surface merged, and its edges on one curve when
+    ``edges`` but at the vertices ``keep``; and the merge's history."""
+    u = ShapeUpgrade_UnifySameDomain(solid, edges, True, False)
+    for v in keep:
+        u.KeepShape(v)
+    u.Build()
+    return _solid_of(u.Shape(), ""), u.History()
+
+
+def _solid_of(shape: Any, where: str | Path) -> Any:
+    """The first solid of ``shape``."""
     out = _first(shape, TopAbs_SOLID)
     if out is None:
         raise CadError(f"{where}: healing lost the solid")
     return TopoDS.Solid(out)
+
+
+def _valid(shape: Any) -> bool:
+    """OCCT's validity check (``BRepCheck_Analyzer``)."""
+    return bool(BRepCheck_Analyzer(shape).IsValid())
+
+
+def _note(notes: list[str] | None, where: str | Path, *what: str) -> None:
+    """Add the lines ``what`` to ``notes``, or log them when there are none."""
+    for w in what:
+        if notes is None:
+            log.info("%s: %s", where, w)
+        else:
+            notes.append(w)
 
 
 def count(shape: Any, kind: Any) -> int:
