@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from OCP.BRep import BRep_Builder, BRep_Tool
-from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeSolid
+from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy, BRepBuilderAPI_MakeSolid
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepTools import BRepTools
 from OCP.IFSelect import IFSelect_RetDone
@@ -250,8 +250,9 @@ def _merged(solid: Any, notes: list[str]) -> Any | None:
 
 
 def _fixed(solid: Any, where: str | Path) -> Any:
-    """``solid`` healed by ``ShapeFix_Shape``."""
-    fix = ShapeFix_Shape(solid)
+    """A copy of ``solid`` healed by ``ShapeFix_Shape`` (which changes the edges and curves
+    it is given in place, shared with the solid: seen breaking a valid solid)."""
+    fix = ShapeFix_Shape(BRepBuilderAPI_Copy(solid, True, False).Shape())
     fix.Perform()
     return _solid_of(fix.Shape(), where)
 
