@@ -239,7 +239,8 @@ def _merged(solid: Any, notes: list[str]) -> Any | None:
         out, _ = _unify(solid, True, [v for f in sources for v in _all(f, TopAbs_VERTEX)])
         if _valid(out):
             notes.append(
-                f"edges around {len(bad)} face{'s' * (len(bad) > 1)} left unmerged (merging them left the solid invalid)"
+                f"edges around {len(bad)} face{'s' * (len(bad) > 1)} left unmerged "
+                "(merging them left the solid invalid)"
             )
             return out
     out, _ = _unify(solid, False)
