@@ -149,6 +149,7 @@ def contributions(
     tol: float,
     origins: np.ndarray | None = None,
     cache: Measures | None = None,
+    skip: np.ndarray | None = None,
 ) -> np.ndarray:
     """Each face's signed share of the volume change relative to ``before``, shape
     ``(len(new) + len(old),)``: the new faces' contributions, then minus the old ones', by
@@ -156,14 +157,18 @@ def contributions(
     (``(len(new) + len(old), 3)``; default: one common point, the faces' centre). Faces
     that together bound the same region before and after (a connected set of changed
     faces) must share a point: their shares then sum to their own change, the point
-    cancels. ``cache``: each face's value kept by its geometry and point."""
+    cancels. ``cache``: each face's value kept by its geometry and point. ``skip``
+    (``(len(new) + len(old),)`` bool): faces not measured, their shares 0."""
     faces = [*new, *old]
     sign = np.array([1.0] * len(new) + [-1.0] * len(old))
     o = _origins(faces, origins)
     eps = 1e-2 * tol
+    off = np.zeros(len(faces), dtype=bool) if skip is None else np.asarray(skip, dtype=bool)
     return (
         sign
-        * np.array([_measured(f, o[i], eps, False, cache) for i, f in enumerate(faces)])
+        * np.array(
+            [0.0 if off[i] else _measured(f, o[i], eps, False, cache) for i, f in enumerate(faces)]
+        )
         / before
     )
 
