@@ -165,9 +165,11 @@ def heal(
 
     Merging can leave a valid solid invalid (seen: one cone face of a real part), and so
     can healing (seen: B-spline faces sharing one surface, their wires left open in their
-    parameters). The first valid of: the healed solid merged (:func:`_merged`); the healed
-    solid unmerged; the solid as given, merged when that stays valid. When none is valid
-    (an invalid input healing does not mend), the healed and merged solid.
+    parameters). The first valid of: the healed solid merged (faces and edges; where
+    merging the edges breaks faces, the edges of the faces they came from left as they
+    are; else faces only); the healed solid unmerged; the solid as given, merged when that
+    stays valid. When none is valid (an invalid input healing does not mend), the healed
+    and merged solid.
 
     Parameters
     ----------
