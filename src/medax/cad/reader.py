@@ -210,7 +210,7 @@ def heal(
         if not _valid(solid):
             return _unify(fixed, True)[0] if unify else fixed
         said = []
-        plain = (_merged(solid, said) if unify else None) or solid
+        plain = (_merged(_copy(solid), said) if unify else None) or solid
     except CadError:
         raise
     except Exception as err:
@@ -255,9 +255,14 @@ def _merged(solid: Any, notes: list[str]) -> Any | None:
 def _fixed(solid: Any, where: str | Path) -> Any:
     """A copy of ``solid`` healed by ``ShapeFix_Shape`` (which changes the edges and curves
     it is given in place, shared with the solid: seen breaking a valid solid)."""
-    fix = ShapeFix_Shape(BRepBuilderAPI_Copy(solid, True, False).Shape())
+    fix = ShapeFix_Shape(_copy(solid))
     fix.Perform()
     return _solid_of(fix.Shape(), where)
+
+
+def _copy(solid: Any) -> Any:
+    """A copy of ``solid`` with its own geometry."""
+    return BRepBuilderAPI_Copy(solid, True, False).Shape()
 
 
 def _unify(solid: Any, edges: bool, keep: Sequence[Any] = ()) -> tuple[Any, Any]:
