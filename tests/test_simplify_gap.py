@@ -12,7 +12,7 @@ from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox, BRepPrimAPI_MakeCylinder
 from OCP.GeomAbs import GeomAbs_BSplineSurface, GeomAbs_Cylinder, GeomAbs_Plane
 from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt
 
-from medax.cad.simplify import pipeline as P
+from medax.cad.simplify import attempt_checks as P
 from medax.cad.simplify.gap_measure import gap_volume
 from medax.cad.simplify.occ import faces_of
 
@@ -104,7 +104,7 @@ def test_fitted_faces_measured_from_the_gap_when_the_integrators_are_off(monkeyp
     ],
 )
 def test_fitted_gap_and_fits_settle_a_change_both_put_well_within(gap, expected, settled):
-    assert P._fits_agree(gap, expected, 0.1 * P.VOLUME_TOL) is settled
+    assert P.fits_agree(gap, expected, 0.1 * P.VOLUME_TOL) is settled
 
 
 def test_gap_and_fits_apart_but_both_small_still_settle_it(monkeypatch):

@@ -60,7 +60,7 @@ def test_search_reuses_the_measures_without_changing_the_result(box4, monkeypatc
     rebuilds as before from the cache, and gives the same solid and numbers as without it."""
     part, _ = box4
     specs = specs_from_blend_faces(part.shape, part.blends)
-    real = pipeline._validated
+    real = pipeline.validated
     jobs: list = []
 
     def first_refused(job, *args):  # type: ignore[no-untyped-def]
@@ -68,7 +68,7 @@ def test_search_reuses_the_measures_without_changing_the_result(box4, monkeypatc
         jobs.append(job)
         return Failure("refused (test)", {part.blends[0]}) if len(jobs) == 1 else out
 
-    monkeypatch.setattr(pipeline, "_validated", first_refused)
+    monkeypatch.setattr(pipeline, "validated", first_refused)
     r = simplify(part.shape, specs)
     assert sorted(r.blends_removed) == sorted(part.blends[1:]) and r.valid
     assert jobs[-1].measures.hits > 0

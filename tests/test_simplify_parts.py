@@ -250,17 +250,17 @@ def test_box4_area_matches_closed_form(box4):
 def test_area_change_keeps_the_fillets(monkeypatch):
     """A rebuilt solid whose boundary area is off (as a pcurve bump between the sampled
     deviations makes it) is not accepted: the fillets are kept, the input is returned."""
-    from medax.cad.simplify import pipeline, validate
+    from medax.cad.simplify import attempt_checks, validate
 
     true_area = validate.area
 
     def inflated(shape, nurbs=None):  # every measure of a rebuilt solid 1e-5 too large
         return true_area(shape, nurbs) * (1.0 + 1e-5)
 
-    # (the input's area is measured through the pipeline's own name: unchanged); the
+    # (the input's area is measured through the checks' own name: unchanged); the
     # measure on the changed faces alone cannot settle it, the whole solid's decides
     monkeypatch.setattr(validate, "area", inflated)
-    monkeypatch.setattr(pipeline, "local_area_change", lambda *args, **kwargs: None)
+    monkeypatch.setattr(attempt_checks, "local_area_change", lambda *args, **kwargs: None)
     part = P.box_vertical_fillets(40.0, 30.0, 20.0, 5.0)
     r = _run(part)
     assert (r.faces_before, r.faces_after) == (10, 10) and not r.blends_removed
@@ -274,7 +274,7 @@ def test_area_measures_of_opposite_signs_do_not_refuse(monkeypatch):
     """The two area measures of a rebuilt solid with swept faces (its NURBS copy, the faces
     as built), both beyond the tolerance but on opposite sides are the integrators' own
     error: the fillets go (a real change has one sign in both: the test above)."""
-    from medax.cad.simplify import pipeline, validate
+    from medax.cad.simplify import attempt_checks, validate
 
     true_area = validate.area
 
@@ -282,7 +282,7 @@ def test_area_measures_of_opposite_signs_do_not_refuse(monkeypatch):
         return true_area(shape, nurbs) * (1.0 + (1e-5 if nurbs else -2e-5))
 
     monkeypatch.setattr(validate, "area", split)
-    monkeypatch.setattr(pipeline, "local_area_change", lambda *args, **kwargs: None)
+    monkeypatch.setattr(attempt_checks, "local_area_change", lambda *args, **kwargs: None)
     # (the merged box faces are planes: taken for swept faces, so both measures are made)
     monkeypatch.setattr(validate, "_has_swept_faces", lambda shape: True)
     r = _run(P.box_vertical_fillets(40.0, 30.0, 20.0, 5.0))
@@ -294,11 +294,11 @@ def test_area_measures_of_opposite_signs_do_not_refuse(monkeypatch):
 def test_search_stops_within_the_run_budget(monkeypatch):
     """When one more attempt, as long as the first, would end past the run's budget, the
     search starts none: the fillets are kept with that reason and the input is returned."""
-    from medax.cad.simplify import pipeline, validate
+    from medax.cad.simplify import attempt_checks, pipeline, validate
 
     true_area = validate.area
     monkeypatch.setattr(validate, "area", lambda s, nurbs=None: true_area(s, nurbs) * 1.00001)
-    monkeypatch.setattr(pipeline, "local_area_change", lambda *args, **kwargs: None)
+    monkeypatch.setattr(attempt_checks, "local_area_change", lambda *args, **kwargs: None)
     monkeypatch.setattr(pipeline, "RUN_BUDGET", 0.0)
     r = _run(P.box_vertical_fillets(40.0, 30.0, 20.0, 5.0))
     assert not r.blends_removed and len(r.blends_kept) == 4

@@ -61,7 +61,7 @@ def _run(part, monkeypatch, cached: bool):  # type: ignore[no-untyped-def]
     fillet: the search rebuilds the others as before); the result, the projections made,
     and the jobs seen."""
     specs = specs_from_blend_faces(part.shape, part.blends)
-    real_validated, real_projected = pipeline._validated, rebuild._projected_pcurve
+    real_validated, real_projected = pipeline.validated, rebuild._projected_pcurve
     jobs: list = []
     calls: list = []
 
@@ -74,7 +74,7 @@ def _run(part, monkeypatch, cached: bool):  # type: ignore[no-untyped-def]
         calls.append(len(jobs))
         return real_projected(*args)
 
-    monkeypatch.setattr(pipeline, "_validated", first_refused)
+    monkeypatch.setattr(pipeline, "validated", first_refused)
     monkeypatch.setattr(rebuild, "_projected_pcurve", projected)
     if not cached:
         monkeypatch.setattr(L.Measures, "get", lambda self, key, compute: compute())
