@@ -230,9 +230,9 @@ def test_an_area_refusal_is_traced_to_the_group_that_changed_it():
     fillets only (truth: the rectangles' areas)."""
     from types import SimpleNamespace
 
+    from medax.cad.simplify.attempt_checks import _area_refused
     from medax.cad.simplify.groups import Group
     from medax.cad.simplify.job import AREA_TOL
-    from medax.cad.simplify.attempt_checks import _area_refused
 
     pieces = {0: _rect(0, 0, 0.5, 1), 1: _rect(0.5, 0, 1, 1), 2: _rect(2, 0, 3, 1)}
     changed = [
