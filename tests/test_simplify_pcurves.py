@@ -237,3 +237,40 @@ def test_a_curve_on_a_graph_surface_has_its_affine_image_as_pcurve():
     bent = surf.Copy()
     bent.SetPole(3, 2, bent.Pole(3, 2).Translated(gp_Vec(*(1e-6 * ex))))
     assert graph_frame(bent) is None
+
+
+def test_an_oblique_circle_near_a_fitted_surface_needs_no_occt_projection(monkeypatch):
+    """A circle oblique to a fitted (graph) surface, lying 2e-6 off it along the normal
+    (as a fitted face's edges lie off its surface within the fit's error): its pcurve comes
+    from the grid's feet, OCCT's projection is never called (it fails here if it is), and
+    the pcurve's error is within NEAR_FLOOR of the circle's own distance from the surface
+    (no pcurve is nearer), measured independently by OCCT's point projection."""
+    import numpy as np
+    from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
+
+    from medax.cad.simplify.projection import GridProjection, graph_frame
+
+    flat, (o, ex, ey, n) = _graph_surface(lambda u, v: 0.25 + 0 * u)
+    frame = graph_frame(flat)
+    assert frame is not None
+    centre = o + 2.0 * ex + 1.5 * ey + (0.25 + 2e-6) * n
+    tilted = Geom_Circle(gp_Ax2(gp_Pnt(*centre), gp_Dir(*(n + 1e-5 * ex))), 0.8)
+
+    def no_projection(*args):  # type: ignore[no-untyped-def]
+        raise AssertionError("OCCT's projection was called")
+
+    monkeypatch.setattr(rebuild.GeomProjLib, "Curve2d_s", no_projection)
+    u0, u1, v0, v1 = (float(x) for x in flat.Bounds())
+    grid = GridProjection.of(flat, (u0, u1, v0, v1))
+    pc, err = rebuild._edge_pcurve(tilted, 0.3, 2.9, flat, 1e-7, lambda: grid, lambda: frame)
+    assert pc is not None
+    gaps = []
+    for t in np.linspace(0.3, 2.9, 41):
+        p = tilted.Value(float(t))
+        gaps.append(GeomAPI_ProjectPointOnSurf(p, flat).LowerDistance())
+    assert 1e-6 < max(gaps) < 1e-5
+    assert err <= rebuild.NEAR_FLOOR * max(gaps) * (1 + 1e-6)
+    for t in np.linspace(0.3, 2.9, 7):  # on the circle's own parameter
+        uv = pc.Value(float(t))
+        q = np.array(flat.Value(uv.X(), uv.Y()).Coord())
+        assert np.linalg.norm(q - np.array(tilted.Value(float(t)).Coord())) <= err * 1.01

@@ -55,9 +55,8 @@ STALL = 0.25
 #: the fits that reached the tolerance on five corpus parts were the same as at 100, and
 #: a 229-face bracket took 156 s CPU instead of 191; at 25 a part lost five accepted fits.
 HOPELESS = 50.0
-#: Largest number of coefficients of one fit (a finer level is not tried): 8e4 unknowns (too
-#: wide a band for MAX_BAND_ENTRIES: SuperLU) take about a second; a plate under many bosses
-#: would otherwise ask for 10^6.
+#: Largest number of coefficients of one fit (a finer level is not tried): 8e4 unknowns take
+#: about 2 s (banded Cholesky); a plate under many bosses would otherwise ask for 10^6.
 MAX_COEFFICIENTS = 80_000
 #: Long (flat) spans are sampled at most this many spacings apart, so that a span over a
 #: hole keeps data on both sides of it, and checked at half that.
@@ -94,8 +93,10 @@ WEAK_PENALTY = 1e-10
 #: enough not to bias the data: 1e-10 x a height difference on the coefficients that meet both.
 PRIOR_WEIGHT = 1e-10
 #: Largest banded normal matrix (entries: (band + 1) x unknowns) solved by banded Cholesky;
-#: larger ones go to SuperLU (memory: 2.5e7 entries are 200 MB).
-MAX_BAND_ENTRIES = 25_000_000
+#: larger ones go to SuperLU. Every fit within MAX_COEFFICIENTS fits (at most 6.9e7 entries,
+#: 550 MB): on 283 x 283 unknowns banded Cholesky took 2.2 s and 550 MB more than the
+#: process had, SuperLU 15.7 s and 1160 MB (its Kronecker design matrix and fill).
+MAX_BAND_ENTRIES = 70_000_000
 
 #: ``h(X, Y) -> (Z, defined, inside)``: heights on a grid (arrays of one shape), where they
 #: are defined (data rows of the fit) and where the fit error counts (the face itself).
@@ -581,9 +582,10 @@ def solve_masked(
     the per-direction products of neighbouring basis functions) instead of forming the
     (samples x unknowns) Kronecker design matrix. With the smaller direction inner it is
     banded (half-width ``3 n_inner + 3``) and symmetric positive definite, and LAPACK's
-    banded Cholesky solves it 4 - 5x faster than SuperLU's general sparse LU (0.85 s
-    against 3.7 s for 127 x 330 unknowns, the variable-radius box; the same fit error).
-    SuperLU stays the fallback for bands too large to store or a failed factorisation."""
+    banded Cholesky solves it 4 - 7x faster than SuperLU's general sparse LU (0.85 s
+    against 3.7 s for 127 x 330 unknowns, the variable-radius box, the same fit error;
+    2.2 s against 15.7 s and half the memory for 283 x 283). SuperLU stays the fallback
+    for bands too large to store or a failed factorisation."""
     nx, ny = bx.shape[1], by.shape[1]
     w, z = _weighted(ok, z, prior)
     comps = z.shape[2:]  # values with components (sx, sy, k): one factorisation, k sides
@@ -605,7 +607,7 @@ def solve_masked(
         ab = _banded_normal(b_in, b_out, w)
         try:
             with _one_lapack_thread():
-                factor = cholesky_banded(ab, check_finite=False)
+                factor = cholesky_banded(ab, overwrite_ab=True, check_finite=False)
                 c = cho_solve_banded(
                     (factor, False), rhs.reshape(n_out * n_in, -1), check_finite=False
                 )

@@ -721,12 +721,13 @@ def _bspline_surface(fit: TensorFit, o: Array, ex: Array, ey: Array, n: Array) -
 
     gx, gy = greville(fit.tx), greville(fit.ty)
     nx, ny = fit.coef.shape
+    xyz = (
+        o + gx[:, None, None] * ex + gy[None, :, None] * ey + fit.coef[:, :, None] * n
+    ).tolist()  # (nx, ny, 3), as Python floats for OCCT
     poles = Array2_gp_Pnt(1, nx, 1, ny)
-    for i in range(nx):
-        base = o + gx[i] * ex
-        for j in range(ny):
-            p = base + gy[j] * ey + fit.coef[i, j] * n
-            poles.SetValue(i + 1, j + 1, gp_Pnt(*map(float, p)))
+    for i, row in enumerate(xyz, start=1):
+        for j, (x, y, z) in enumerate(row, start=1):
+            poles.SetValue(i, j, gp_Pnt(x, y, z))
 
     uk, um = knot_arrays(fit.tx)
     vk, vm = knot_arrays(fit.ty)

@@ -23,6 +23,7 @@ from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBndLib import BRepBndLib
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
+from OCP.GeomAbs import GeomAbs_BSplineSurface
 from OCP.TopAbs import TopAbs_REVERSED
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS
@@ -93,9 +94,17 @@ def gap_volume(new: Any, old: Sequence[Any]) -> tuple[float, float] | None:
 
 
 def _surface_points(face: Any, uv: Array) -> Array:
-    """Points (n, 3) of ``face``'s surface at ``uv`` (n, 2), by OCCT (the parameters are
-    OCCT's projections', which on periodic surfaces may lie outside the first period)."""
+    """Points (n, 3) of ``face``'s surface at ``uv`` (n, 2): by its numpy copy in OCCT's
+    parameters (:func:`.face_region.exact_embedding`), else by OCCT point by point. The
+    parameters are OCCT's projections', which on periodic surfaces may lie outside the
+    first period: the analytic copies are periodic themselves, a periodic B-spline's copy
+    is not (OCCT evaluates it)."""
     surf = BRepAdaptor_Surface(face)
+    if surf.GetType() != GeomAbs_BSplineSurface or not (surf.IsUPeriodic() or surf.IsVPeriodic()):
+        try:
+            return exact_embedding(face).evaluate(uv)
+        except CadError:
+            pass
     return np.array([surf.Value(u, v).XYZ().Coord() for u, v in uv.tolist()]).reshape(-1, 3)
 
 

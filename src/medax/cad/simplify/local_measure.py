@@ -38,6 +38,7 @@ from OCP.GProp import GProp_GProps
 from OCP.TopAbs import TopAbs_EDGE
 from OCP.TopoDS import TopoDS
 
+from medax.cad.face_area import bspline_face_area
 from medax.cad.simplify.occ import (
     ShapeMap,
     compound,
@@ -69,9 +70,12 @@ def volume_delta(
 def area_delta(
     new: Sequence[Any], old: Sequence[Any], eps: float, cache: Measures | None = None
 ) -> float:
-    """Area of the new faces minus that of the old ones (length squared), adaptive to
-    ``eps`` relative; each face's area through ``cache`` when given (the sum is the same
-    to the bit: OCCT adds the faces' areas in order)."""
+    """Area of the new faces minus that of the old ones (length squared): faces on
+    polynomial B-spline surfaces by :func:`.face_area.bspline_face_area` (to about 1e-11;
+    OCCT's adaptive integrator took 2 - 16 s on each fitted face of hundreds of knot
+    spans), the others by OCCT's, adaptive to ``eps`` relative; each face's area through
+    ``cache`` when given (the sum is the same to the bit: OCCT adds the faces' areas in
+    order)."""
     return _area(new, eps, cache) - _area(old, eps, cache)
 
 
@@ -398,9 +402,12 @@ def _area(faces: Sequence[Any], eps: float, cache: Measures | None = None) -> fl
             key = ("area", eps, *cache.face_key(f, _ZERO))
             total += float(cache.get(key, partial(_area, [f], eps)))
         return total
+    own = [bspline_face_area(f) for f in faces]  # (B-spline faces: medax's own rule)
+    rest = [f for f, a in zip(faces, own, strict=True) if a is None]
     props = GProp_GProps()
-    BRepGProp.SurfaceProperties_s(compound(faces), props, eps, False)
-    return float(props.Mass())
+    if rest:
+        BRepGProp.SurfaceProperties_s(compound(rest), props, eps, False)
+    return sum(a for a in own if a is not None) + float(props.Mass())
 
 
 def _centre(faces: Sequence[Any]) -> np.ndarray:

@@ -59,6 +59,24 @@ def _surface_normal(surf: Any, p: np.ndarray) -> np.ndarray | None:
     return n / size if size > 1e-12 else None
 
 
+#: A fitted pcurve on a fitted face is taken without OCCT's projection when its error is
+#: within this factor of the 3-D curve's own largest distance from the surface (no pcurve
+#: can be nearer): on a 555-face part OCCT projected 412 circles onto fitted faces in 25 s.
+NEAR_FLOOR = 1.05
+
+
+def _curve_gap(c: Any, f: float, l: float, grid: GridProjection) -> float:
+    """Largest distance of the 3-D curve ``c`` on ``[f, l]`` from the grid's surface, at the
+    samples :func:`_pcurve_error` takes. The grid's feet are never nearer than the true
+    ones: a foot found on another part of the surface overstates it, so the caller takes
+    it only when it is small (within the fits' tolerances)."""
+    spans = c.NbKnots() - 1 if hasattr(c, "NbKnots") else 1
+    n = int(np.clip(4 * spans + 1, 41, 2001))
+    pts = np.array([xyz(c.Value(float(t))) for t in np.linspace(f, l, n)])
+    _, dist = grid.project_many(pts)
+    return float(dist.max())
+
+
 def _pcurve_error(pc: Any, c: Any, surf: Any, f: float, l: float, n: int = 0) -> float:
     """Largest distance between the 3-D curve ``c`` and ``surf`` along the pcurve ``pc`` at
     ``n`` samples of ``[f, l]``: by default 41, or 4 per knot span of ``c`` when it has
@@ -235,14 +253,25 @@ def _edge_pcurve(
     """(pcurve, its error) of the 3-D curve ``c`` on ``[f, l]`` on ``surf``: its affine
     image when ``surf`` is a graph over its parameter plane (``frame``:
     :func:`.projection.graph_frame`) and the curve has one on its own parameter; else, or
-    when that is farther than a tenth of ``tol``, OCCT's projection, replaced by a fitted
-    one when that is closer (None, inf: all failed)."""
+    when that is farther than a tenth of ``tol``, on such a surface a 2-D B-spline through
+    the feet of the curve's samples (:func:`_fitted_pcurve`) when it is as near as the
+    curve's own distance from the surface allows (``NEAR_FLOOR``, that distance within
+    ``100 tol``); else OCCT's projection,
+    replaced by the fitted one when that is closer (None, inf: all failed)."""
     g = frame()
     pc = None if g is None else _affine_pcurve(c, f, l, *g)
     if pc is not None:
         err = _pcurve_error(pc, c, surf, f, l)
         if err <= 0.1 * tol:
             return pc, err
+    near = None if g is None else grid()
+    if near is not None:  # a fitted face: the grid's feet first (OCCT's projection: 60 ms)
+        fit = _fitted_pcurve(c, surf, f, l, tol, near)
+        if fit is not None:
+            err = _pcurve_error(fit, c, surf, f, l)
+            floor = _curve_gap(c, f, l, near)
+            if floor <= 100 * tol and err <= max(0.1 * tol, NEAR_FLOOR * floor):
+                return fit, err
     pc = _projected_pcurve(c, f, l, surf, tol)
     err = float("inf") if pc is None else _pcurve_error(pc, c, surf, f, l)
     if err > 0.1 * tol:
