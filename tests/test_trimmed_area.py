@@ -206,3 +206,64 @@ def test_occt_faces_it_does_not_take():
     surf = _occt_surface(s)
     surf.SetWeight(4, 4, 2.0)
     assert bspline_face_area(_disk_face(surf, 1.0)) is None
+
+
+def test_pcurves_of_a_built_face_meet_and_a_gap_is_closed():
+    """A face built by OCCT has pcurves meeting end to end (no gap); a loop with a gap
+    closed by a straight piece (as ``face_area`` closes a loose face's) encloses the
+    region of the closed polygon: two half circles shrunk apart by 1e-3 in v, whose
+    straight closing pieces add the strip between them, checked against the disk's area
+    plus the strip's by scipy."""
+    from medax.cad.face_area import pcurve_gap
+
+    s = paraboloid(30)
+    assert pcurve_gap(_disk_face(_occt_surface(s), 1.2)) <= 1e-12
+    r, d = 1.2, 1e-3
+    top = _arc(r, 0.0, math.pi, d)  # the upper half moved up by d
+    bottom = _arc(r, math.pi, 2 * math.pi, -d)
+    ends = [top.evaluate(np.array([1.0]))[0], bottom.evaluate(np.array([0.0]))[0]]
+    starts = [bottom.evaluate(np.array([1.0]))[0], top.evaluate(np.array([0.0]))[0]]
+    loop = [top, Line(ends[0], ends[1]), bottom, Line(starts[0], starts[1])]
+
+    def element(v: float, u: float) -> float:
+        return math.sqrt(1.0 + u * u + v * v)
+
+    strip, _ = integrate.dblquad(element, -r, r, -d, d, epsrel=1e-13)
+    half, _ = integrate.dblquad(
+        lambda rho, th: rho * math.sqrt(1 + rho * rho + 2 * d * rho * math.sin(th) + d * d),
+        0.0, math.pi, 0.0, r, epsabs=1e-13, epsrel=1e-13,
+    )  # fmt: skip
+    assert _area(s, loop) == pytest.approx(2 * half + strip, rel=1e-11)
+
+
+def _arc(r: float, a0: float, a1: float, dv: float) -> BSpline:
+    """The arc of radius ``r`` about (0, dv) from angle ``a0`` to ``a1`` (< pi apart plus
+    a bit: two rational quadratic pieces)."""
+    mid = 0.5 * (a0 + a1)
+    pts, w = [], []
+    for lo, hi in ((a0, mid), (mid, a1)):
+        half = 0.5 * (hi - lo)
+        c = np.array([math.cos(lo + half), math.sin(lo + half)]) * r / math.cos(half)
+        p0 = np.array([math.cos(lo), math.sin(lo)]) * r
+        pts += [p0, c]
+        w += [1.0, math.cos(half)]
+    pts.append(np.array([math.cos(a1), math.sin(a1)]) * r)
+    w.append(1.0)
+    ctrl = np.array(pts) + np.array([0.0, dv])
+    return BSpline(ctrl, 2, np.array([0, 0, 0, 1, 1, 2, 2, 2], float), np.array(w))
+
+
+def test_a_surface_read_twice_is_copied_once():
+    """``bspline_embedding`` keeps the copy of a surface it read, and reads a changed one
+    again (a pole moved: the stamp's middle pole)."""
+    from OCP.gp import gp_Pnt
+
+    from medax.cad.face_region import bspline_embedding
+
+    surf = _occt_surface(paraboloid(12))
+    first = bspline_embedding(surf)
+    assert bspline_embedding(surf) is first
+    surf.SetPole(7, 7, gp_Pnt(0.0, 0.0, 5.0))
+    again = bspline_embedding(surf)
+    assert again is not first
+    assert np.allclose(again.poles[6, 6], [0.0, 0.0, 5.0])
