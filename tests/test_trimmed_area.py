@@ -121,20 +121,9 @@ def test_a_rational_surface_is_refused():
 
 # ---- OCCT faces -------------------------------------------------------------------------
 def _occt_surface(s: NurbsSurface):  # type: ignore[no-untyped-def]
-    from OCP.collections import Array2_gp_Pnt
-    from OCP.Geom import Geom_BSplineSurface
-    from OCP.gp import gp_Pnt
+    from medax.cad.simplify.occ import bspline_surface
 
-    from medax.cad.simplify.occ import knot_arrays
-
-    nu, nv = s.poles.shape[:2]
-    poles = Array2_gp_Pnt(1, nu, 1, nv)
-    for i in range(nu):
-        for j in range(nv):
-            poles.SetValue(i + 1, j + 1, gp_Pnt(*map(float, s.poles[i, j])))
-    uk, um = knot_arrays(s.uknots)
-    vk, vm = knot_arrays(s.vknots)
-    return Geom_BSplineSurface(poles, uk, vk, um, vm, s.udeg, s.vdeg)
+    return bspline_surface(s.poles, s.uknots, s.vknots, s.udeg, s.vdeg)
 
 
 def _occt_area(face) -> float:  # type: ignore[no-untyped-def]

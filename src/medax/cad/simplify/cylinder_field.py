@@ -41,11 +41,11 @@ from scipy.spatial import cKDTree
 from medax.cad.simplify.fitted import FittedSurface, face_loops, piece_surface
 from medax.cad.simplify.occ import (
     Array,
+    bspline_surface,
     edge_points,
     edges_of,
     face_inside_point,
     face_normal_at,
-    knot_arrays,
     xyz,
 )
 from medax.cad.simplify.ring import periodic_surface
@@ -434,16 +434,4 @@ def _periodic_volume(fit: PeriodicFit, points: Any, fld: _Field) -> float:
 
 def _clamped_surface(fit: PointFit) -> Any:
     """``Geom_BSplineSurface`` of a clamped point fit: ``u = s``, ``v = z``."""
-    from OCP.collections import Array2_gp_Pnt
-    from OCP.Geom import Geom_BSplineSurface
-    from OCP.gp import gp_Pnt
-
-    ns, nz = fit.coef.shape[:2]
-    poles = Array2_gp_Pnt(1, ns, 1, nz)
-    for i in range(ns):
-        for j in range(nz):
-            poles.SetValue(i + 1, j + 1, gp_Pnt(*map(float, fit.coef[i, j])))
-
-    uk, um = knot_arrays(fit.ts)
-    vk, vm = knot_arrays(fit.tz)
-    return Geom_BSplineSurface(poles, uk, vk, um, vm, DEGREE, DEGREE)
+    return bspline_surface(fit.coef, fit.ts, fit.tz, DEGREE, DEGREE)

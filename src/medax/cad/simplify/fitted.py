@@ -42,11 +42,11 @@ from scipy.spatial import cKDTree
 from medax.cad.face_region import bspline_embedding, surface_embedding
 from medax.cad.simplify.occ import (
     Array,
+    bspline_surface,
     edge_points,
     edges_of,
     face_inside_point,
     face_normal_at,
-    knot_arrays,
     uv_bounds,
     xyz,
 )
@@ -715,20 +715,6 @@ def _outward_sign(plane_face: Any, n: Array) -> float:
 
 def _bspline_surface(fit: TensorFit, o: Array, ex: Array, ey: Array, n: Array) -> Any:
     """``Geom_BSplineSurface`` of the fit: poles ``o + gx ex + gy ey + c n``."""
-    from OCP.collections import Array2_gp_Pnt
-    from OCP.Geom import Geom_BSplineSurface
-    from OCP.gp import gp_Pnt
-
     gx, gy = greville(fit.tx), greville(fit.ty)
-    nx, ny = fit.coef.shape
-    xyz = (
-        o + gx[:, None, None] * ex + gy[None, :, None] * ey + fit.coef[:, :, None] * n
-    ).tolist()  # (nx, ny, 3), as Python floats for OCCT
-    poles = Array2_gp_Pnt(1, nx, 1, ny)
-    for i, row in enumerate(xyz, start=1):
-        for j, (x, y, z) in enumerate(row, start=1):
-            poles.SetValue(i, j, gp_Pnt(x, y, z))
-
-    uk, um = knot_arrays(fit.tx)
-    vk, vm = knot_arrays(fit.ty)
-    return Geom_BSplineSurface(poles, uk, vk, um, vm, 3, 3)
+    poles = o + gx[:, None, None] * ex + gy[None, :, None] * ey + fit.coef[:, :, None] * n
+    return bspline_surface(poles, fit.tx, fit.ty, 3, 3)

@@ -230,3 +230,18 @@ def knot_arrays(t: Array) -> tuple[Any, Any]:
         ak.SetValue(k + 1, float(kv))
         am.SetValue(k + 1, int(mult))
     return ak, am
+
+
+def bspline_surface(poles: Array, tu: Array, tv: Array, udeg: int, vdeg: int) -> Any:
+    """The polynomial ``Geom_BSplineSurface`` of ``poles`` (nu, nv, 3) on the full knot
+    vectors ``tu``, ``tv`` (with repeats) of degrees ``udeg``, ``vdeg``."""
+    from OCP.collections import Array2_gp_Pnt
+    from OCP.Geom import Geom_BSplineSurface
+
+    nu, nv = poles.shape[:2]
+    out = Array2_gp_Pnt(1, nu, 1, nv)
+    for i, row in enumerate(np.asarray(poles, dtype=np.float64).tolist(), start=1):
+        for j, (x, y, z) in enumerate(row, start=1):  # (Python floats: one call a pole)
+            out.SetValue(i, j, gp_Pnt(x, y, z))
+    (uk, um), (vk, vm) = knot_arrays(tu), knot_arrays(tv)
+    return Geom_BSplineSurface(out, uk, vk, um, vm, udeg, vdeg)
