@@ -256,30 +256,36 @@ def _edge_pcurve(
     when that is farther than a tenth of ``tol``, on such a surface a 2-D B-spline through
     the feet of the curve's samples (:func:`_fitted_pcurve`) when it is as near as the
     curve's own distance from the surface allows (``NEAR_FLOOR``, that distance within
-    ``100 tol``); else OCCT's projection,
-    replaced by the fitted one when that is closer (None, inf: all failed)."""
+    ``100 tol``); else OCCT's projection, replaced by the fitted one when that is closer
+    (None, inf: all failed)."""
     g = frame()
     pc = None if g is None else _affine_pcurve(c, f, l, *g)
     if pc is not None:
         err = _pcurve_error(pc, c, surf, f, l)
         if err <= 0.1 * tol:
             return pc, err
+    fitted: tuple[Any | None, float] | None = None  # (made once: first here on fitted faces)
     near = None if g is None else grid()
     if near is not None:  # a fitted face: the grid's feet first (OCCT's projection: 60 ms)
-        fit = _fitted_pcurve(c, surf, f, l, tol, near)
-        if fit is not None:
-            err = _pcurve_error(fit, c, surf, f, l)
-            floor = _curve_gap(c, f, l, near)
-            if floor <= 100 * tol and err <= max(0.1 * tol, NEAR_FLOOR * floor):
-                return fit, err
+        fitted = _fitted_with_error(c, surf, f, l, tol, near)
+        floor = _curve_gap(c, f, l, near)
+        if floor <= 100 * tol and fitted[1] <= max(0.1 * tol, NEAR_FLOOR * floor):
+            return fitted
     pc = _projected_pcurve(c, f, l, surf, tol)
     err = float("inf") if pc is None else _pcurve_error(pc, c, surf, f, l)
     if err > 0.1 * tol:
-        alt = _fitted_pcurve(c, surf, f, l, tol, grid())
-        alt_err = float("inf") if alt is None else _pcurve_error(alt, c, surf, f, l)
+        alt, alt_err = fitted or _fitted_with_error(c, surf, f, l, tol, grid())
         if alt_err < err:
             pc, err = alt, alt_err
     return pc, err
+
+
+def _fitted_with_error(
+    c: Any, surf: Any, f: float, l: float, tol: float, grid: GridProjection | None
+) -> tuple[Any | None, float]:
+    """:func:`_fitted_pcurve` and its :func:`_pcurve_error` (None, inf when it failed)."""
+    pc = _fitted_pcurve(c, surf, f, l, tol, grid)
+    return pc, float("inf") if pc is None else _pcurve_error(pc, c, surf, f, l)
 
 
 def _affine_pcurve(c: Any, f: float, l: float, a: np.ndarray, m: np.ndarray) -> Any | None:
